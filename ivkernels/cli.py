@@ -1,0 +1,189 @@
+"""Command line: ``ivkernels decompose INPUT -o OUT``.
+
+Writes into ``OUT``::
+
+    albedo/NNNNN.png      albedo, sRGB 8-bit
+    shading/NNNNN.png     shading, sRGB 8-bit grey
+    flow/NNNNN.png        forward flow, Baker et al. colour wheel
+    occlusion/NNNNN.png   w_occ (white = visible in the next frame)
+    boundary/NNNNN.png    w_bnd (white = near a motion boundary)
+    intrinsics.npz        linear float32 arrays albedo, shading, flow, occlusion, boundary
+    preview.mp4           input | albedo | shading | flow, side by side
+    contact_sheet.png     a few frames of each, labelled
+
+Everything is written into ``OUT.partial`` and renamed to ``OUT`` only when
+complete, so a failed run never leaves output that looks finished.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import sys
+import tempfile
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="ivkernels", description="Intrinsic video: albedo, shading, flow, occlusion and "
+        "motion boundaries of a video (Kong, Gehler & Black, ECCV 2014).")
+    sub = parser.add_subparsers(dest="command", required=True)
+    d = sub.add_parser("decompose", help="decompose a video file or a folder of images")
+    d.add_argument("input", help="video file (mp4, avi, ...) or folder of images (png, jpg, tif)")
+    d.add_argument("-o", "--out", required=True, help="output folder (must not exist, or use --force)")
+    d.add_argument("--backend", default="warp", choices=["warp", "taichi"])
+    d.add_argument("--device", default="cpu", help="'cpu' or 'cuda' (warp only)")
+    d.add_argument("--flow", default=None,
+                   help="flow method (classic_nl_fast, classic_nl, dis, farneback) or a folder of "
+                        ".flo files, one per consecutive pair")
+    d.add_argument("--no-temporal", action="store_true",
+                   help="drop the temporal terms and motion weights (the 'IV w/o flow' ablation)")
+    d.add_argument("--start", type=int, default=0, help="first frame index")
+    d.add_argument("--stop", type=int, default=None, help="stop before this frame index")
+    d.add_argument("--step", type=int, default=1, help="take every STEP-th frame")
+    d.add_argument("--scale", type=float, default=1.0, help="resize frames by this factor first")
+    d.add_argument("--window", type=int, default=None, help="frames per solved window")
+    d.add_argument("--fps", type=float, default=10.0, help="frame rate of preview.mp4")
+    d.add_argument("--force", action="store_true", help="replace OUT if it exists")
+    d.add_argument("--quiet", action="store_true", help="no progress bars")
+    return parser
+
+
+def _read_flo_folder(folder: Path, n_pairs: int, start: int, step: int) -> np.ndarray:
+    from ivkernels.flowio import read_flo
+
+    files = sorted(folder.glob("*.flo"))
+    if step != 1:
+        raise ValueError("--flow with a folder of .flo files needs --step 1")
+    files = files[start:start + n_pairs]
+    if len(files) != n_pairs:
+        raise ValueError(f"{folder} holds {len(files)} .flo files from frame {start}; "
+                         f"{n_pairs} are needed (one per consecutive pair)")
+    return np.stack([read_flo(f) for f in files])
+
+
+class _NpzWriter:
+    """Builds ``intrinsics.npz`` window by window through memory-mapped .npy files."""
+
+    def __init__(self, folder: Path, shapes: dict):
+        from numpy.lib.format import open_memmap
+
+        self.folder = folder
+        self.arrays = {name: open_memmap(folder / f"{name}.npy", mode="w+", dtype=np.float32,
+                                         shape=shape) for name, shape in shapes.items()}
+
+    def close(self, path: Path) -> None:
+        for array in self.arrays.values():
+            array.flush()
+        with zipfile.ZipFile(path, "w", zipfile.ZIP_STORED, allowZip64=True) as z:
+            for name in self.arrays:
+                z.write(self.folder / f"{name}.npy", arcname=f"{name}.npy")
+        self.arrays.clear()
+        for npy in self.folder.glob("*.npy"):
+            npy.unlink()
+
+
+def run_decompose(args) -> Path:
+    import imageio.v2 as imageio
+
+    from ivkernels import Params, iter_decompose
+    from ivkernels.io import read_frames, write_png_sequence
+    from ivkernels.viz import albedo_to_srgb8, contact_sheet, flow_to_color, gray_to_rgb8, \
+        shading_to_srgb8
+
+    src = Path(args.input)
+    if not src.exists():
+        raise ValueError(f"input {src} does not exist; expected a video file or a folder of images")
+    out = Path(args.out)
+    if out.exists() and not args.force:
+        raise ValueError(f"output {out} already exists; choose another folder or pass --force")
+    frames = read_frames(src, start=args.start, stop=args.stop, step=args.step, scale=args.scale)
+    T, H, W, _ = frames.shape
+    flow = args.flow
+    if flow is not None and Path(flow).is_dir():
+        flow = _read_flo_folder(Path(flow), T - 1, args.start, args.step)
+    params = Params() if args.window is None else Params(window=args.window)
+
+    tmp = Path(tempfile.mkdtemp(prefix=out.name + ".", suffix=".partial", dir=out.parent.resolve()))
+    try:
+        shapes = {"albedo": (T, H, W, 3), "shading": (T, H, W)}
+        if T > 1 and not (args.no_temporal and flow is None):
+            shapes.update(flow=(T - 1, H, W, 2), occlusion=(T - 1, H, W), boundary=(T - 1, H, W))
+        npz = _NpzWriter(tmp, shapes)
+        preview = imageio.get_writer(tmp / "preview.mp4", fps=args.fps, macro_block_size=1,
+                                     ffmpeg_log_level="error")
+        sheet_rows = {"input": [], "albedo": [], "shading": [], "flow": []}
+        sheet_frames = set(np.linspace(0, T - 1, min(T, 4)).round().astype(int).tolist())
+        flow_max = None
+        for res in iter_decompose(frames, flow=flow, temporal=not args.no_temporal,
+                                  backend=args.backend, device=args.device, params=params,
+                                  progress=not args.quiet):
+            new = slice(res.n_carried, res.stop - res.start)       # frames not written yet
+            first = res.start + res.n_carried
+            albedo8 = albedo_to_srgb8(res.albedo[new])
+            shading8 = shading_to_srgb8(res.shading[new])
+            write_png_sequence(tmp / "albedo", albedo8, start_index=first)
+            write_png_sequence(tmp / "shading", shading8, start_index=first)
+            npz.arrays["albedo"][res.start + res.n_carried:res.stop] = res.albedo[new]
+            npz.arrays["shading"][res.start + res.n_carried:res.stop] = res.shading[new]
+            flow8 = None
+            if res.flow is not None and "flow" in npz.arrays:
+                pairs = slice(max(res.n_carried - 1, 0), res.stop - res.start - 1)
+                first_pair = res.start + pairs.start
+                if flow_max is None:
+                    flow_max = float(np.linalg.norm(res.flow, axis=-1).max()) or 1.0
+                flow8 = flow_to_color(res.flow[pairs], max_magnitude=flow_max)
+                write_png_sequence(tmp / "flow", flow8, start_index=first_pair)
+                write_png_sequence(tmp / "occlusion", gray_to_rgb8(res.occlusion[pairs]),
+                                   start_index=first_pair)
+                write_png_sequence(tmp / "boundary", gray_to_rgb8(res.boundary[pairs]),
+                                   start_index=first_pair)
+                stop_pair = first_pair + flow8.shape[0]
+                npz.arrays["flow"][first_pair:stop_pair] = res.flow[pairs]
+                npz.arrays["occlusion"][first_pair:stop_pair] = res.occlusion[pairs]
+                npz.arrays["boundary"][first_pair:stop_pair] = res.boundary[pairs]
+            input8 = albedo_to_srgb8(frames[first:res.stop])
+            for i in range(albedo8.shape[0]):
+                t = first + i
+                panels = [input8[i], albedo8[i], shading8[i]]
+                if flow8 is not None:
+                    j = t - (res.start + max(res.n_carried - 1, 0))
+                    panels.append(flow8[j] if 0 <= j < flow8.shape[0] else np.zeros_like(input8[i]))
+                preview.append_data(np.concatenate(panels, axis=1))
+                if t in sheet_frames:
+                    sheet_rows["input"].append(input8[i])
+                    sheet_rows["albedo"].append(albedo8[i])
+                    sheet_rows["shading"].append(shading8[i])
+                    if flow8 is not None:
+                        sheet_rows["flow"].append(panels[3])
+        preview.close()
+        npz.close(tmp / "intrinsics.npz")
+        rows = [(name, np.stack(images)) for name, images in sheet_rows.items() if images]
+        imageio.imwrite(tmp / "contact_sheet.png", contact_sheet(rows))
+        if out.exists():
+            shutil.rmtree(out)
+        os.replace(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return out
+
+
+def main(argv=None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        if args.command == "decompose":
+            out = run_decompose(args)
+            print(f"wrote {out}")
+    except (ValueError, TypeError, FileNotFoundError, OSError) as err:
+        print(f"ivkernels: error: {err}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,283 @@
+"""Public entry point: :func:`decompose` a video into its intrinsic video.
+
+Long videos are solved in overlapping windows of ``params.window`` frames;
+the first ``params.overlap`` frames of each window after the first are the
+previous window's last frames, held fixed, so albedo is carried forward and
+memory is bounded by the window (:func:`iter_decompose` yields the windows one
+by one; :func:`decompose` collects them).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Iterator
+
+import numpy as np
+
+from ivkernels.params import Params
+
+#: Flow method used when ``flow=None``.
+DEFAULT_FLOW_METHOD = "classic_nl_fast"
+
+
+@dataclass
+class IntrinsicVideo:
+    """The intrinsic video of ``T`` frames of size ``H x W``.
+
+    Attributes
+    ----------
+    albedo : (T, H, W, 3) float32, linear RGB reflectance; its 99th
+        percentile (over the first window's pixels and channels) is 1.
+    shading : (T, H, W) float32, linear grey shading;
+        ``albedo * shading[..., None]`` reconstructs the linear input.
+    flow : (T-1, H, W, 2) float32 forward flow t -> t+1 in pixels (dx, dy),
+        or ``None`` when solved with ``temporal=False`` and no flow given.
+    occlusion : (T-1, H, W) float32, the paper's w_occ (Eq. 6): 1 = visible
+        in t+1 (temporal terms on), 0 = occluded or leaves the image.
+    boundary : (T-1, H, W) float32, the paper's w_bnd: 1 = near a motion boundary.
+    diagnostics : dict with ``energy`` (rows of window, level, outer
+        iteration, L-BFGS iteration, energy), ``terms`` (each term's energy
+        after each level), ``seconds`` (per stage), ``windows`` (frame ranges).
+    """
+
+    albedo: np.ndarray
+    shading: np.ndarray
+    flow: np.ndarray | None
+    occlusion: np.ndarray | None
+    boundary: np.ndarray | None
+    diagnostics: dict = field(default_factory=dict)
+
+    def reconstruct(self) -> np.ndarray:
+        """Linear RGB frames ``albedo * shading`` (T, H, W, 3)."""
+        return self.albedo * self.shading[..., None]
+
+
+@dataclass
+class WindowResult:
+    """One solved window: frames ``[start, stop)`` of the video, of which the
+    first ``n_carried`` repeat the previous window's output."""
+
+    start: int
+    stop: int
+    n_carried: int
+    albedo: np.ndarray       # (stop-start, H, W, 3) linear
+    shading: np.ndarray      # (stop-start, H, W) linear
+    flow: np.ndarray | None  # (stop-start-1, H, W, 2)
+    occlusion: np.ndarray | None
+    boundary: np.ndarray | None
+
+
+def window_ranges(n_frames: int, window: int, overlap: int) -> list[tuple[int, int, int]]:
+    """``(start, stop, n_carried)`` of each window covering ``n_frames`` frames.
+
+    Windows have ``window`` frames (fewer only if the video is shorter) and
+    share ``overlap`` frames with the previous one (at least 1 whenever there
+    is a previous window, so the temporal terms link every pair of frames);
+    the last window is moved back to stay full, sharing more frames instead.
+    """
+    if n_frames <= window:
+        return [(0, n_frames, 0)]
+    overlap = max(1, overlap)
+    out = [(0, window, 0)]
+    while out[-1][1] < n_frames:
+        prev_stop = out[-1][1]
+        start = min(prev_stop - overlap, n_frames - window)
+        out.append((start, start + window, prev_stop - start))
+    return out
+
+
+def _as_flow(flow, n_frames: int, height: int, width: int) -> np.ndarray:
+    flow = np.asarray(flow)
+    expected = (n_frames - 1, height, width, 2)
+    if flow.shape != expected:
+        raise ValueError(f"flow must have shape (T-1, H, W, 2) = {expected}, got {flow.shape}")
+    if not np.issubdtype(flow.dtype, np.floating):
+        raise TypeError(f"flow must be a float array, got dtype {flow.dtype}")
+    if not np.isfinite(flow).all():
+        raise ValueError("flow contains NaN or infinite values")
+    return np.ascontiguousarray(flow, dtype=np.float32)
+
+
+def iter_decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
+                   device: str = "cpu", params: Params | None = None,
+                   progress: bool = False) -> Iterator[WindowResult]:
+    """Decompose window by window; see :func:`decompose` for the arguments.
+
+    Yields :class:`WindowResult` objects in order; memory stays bounded by one
+    window whatever the length of the video (the command line writes each
+    window to disk as it arrives).  Use :func:`decompose` for diagnostics.
+    """
+    yield from _Decomposer(frames, flow, temporal, backend, device, params, progress).windows()
+
+
+class _Decomposer:
+    """Host-side schedule of a decomposition: flow, maps, then the window solves."""
+
+    def __init__(self, frames, flow, temporal, backend, device, params, progress):
+        from ivkernels.backends import get_backend
+        from ivkernels.io import to_linear_float
+        from ivkernels.priors import load_albedo_prior
+        from ivkernels.solver.window_solver import SolveLog
+
+        self.frames = to_linear_float(frames)
+        T, H, W, _ = self.frames.shape
+        if T < 1:
+            raise ValueError("frames must hold at least one frame")
+        if min(H, W) < 8:
+            raise ValueError(f"frames must be at least 8x8 pixels, got {H}x{W}")
+        if params is None:
+            params = Params()
+        if not isinstance(params, Params):
+            raise TypeError(f"params must be an ivkernels.Params, got {type(params).__name__}")
+        if not isinstance(temporal, bool):
+            raise TypeError(f"temporal must be True or False, got {temporal!r}")
+        self.params = params
+        self.temporal = temporal
+        self.be = get_backend(backend, device)
+        self.prior = load_albedo_prior()
+        self.progress = progress
+        self.log = SolveLog()
+        self.flow_method = None
+        self.flow = None
+        if isinstance(flow, str):
+            self.flow_method = flow
+        elif flow is None:
+            self.flow_method = DEFAULT_FLOW_METHOD if temporal else None
+        else:
+            self.flow = _as_flow(flow, T, H, W)
+        if self.flow_method is not None:
+            from ivkernels.flow import FLOW_METHODS
+
+            if self.flow_method not in FLOW_METHODS:
+                raise ValueError(f"unknown flow method {self.flow_method!r}; expected one of {FLOW_METHODS}")
+        self.scale = None
+
+    def _flow_for(self, start: int, stop: int, cached: dict) -> np.ndarray | None:
+        if self.flow is not None:
+            return self.flow[start:stop - 1]
+        if self.flow_method is None or stop - start < 2:
+            return None
+        from ivkernels.flow import estimate_flow
+
+        missing = [t for t in range(start, stop - 1) if t not in cached]
+        if missing:
+            t0 = time.perf_counter()
+            lo, hi = missing[0], missing[-1] + 2
+            new = estimate_flow(self.frames[lo:hi], method=self.flow_method,
+                                backend=self.be.name, device=self.be.device)
+            for i, t in enumerate(range(lo, hi - 1)):
+                cached[t] = new[i]
+            self.log.add_time("flow", time.perf_counter() - t0)
+        for t in [t for t in cached if t < start]:
+            del cached[t]
+        return np.stack([cached[t] for t in range(start, stop - 1)])
+
+    def windows(self) -> Iterator[WindowResult]:
+        from ivkernels.solver.motion_maps import motion_maps
+        from ivkernels.solver.pyramid import level_shapes
+        from ivkernels.solver.window_solver import solve_window
+
+        be, p = self.be, self.params
+        T, H, W, _ = self.frames.shape
+        ranges = window_ranges(T, int(p.window), int(p.overlap))
+        n_levels = len(level_shapes(H, W, p.pyramid_scale, p.pyramid_min_size))
+        bar = None
+        if self.progress:
+            from tqdm.auto import tqdm
+
+            bar = tqdm(total=len(ranges) * n_levels, desc="solve (window x level)", unit="level")
+        cached_flow: dict = {}
+        carried = None
+        try:
+            for index, (start, stop, n_carried) in enumerate(ranges):
+                frames_np = self.frames[start:stop]
+                flow_np = self._flow_for(start, stop, cached_flow)
+                occ_np = bnd_np = None
+                t0 = time.perf_counter()
+                frames_be = be.asarray(frames_np)
+                flow_be = occ_be = bnd_be = None
+                if flow_np is not None:
+                    flow_be = be.asarray(flow_np)
+                    occ_be, bnd_be = motion_maps(be, frames_be, flow_be, p)
+                    occ_np = np.array(be.numpy(occ_be), copy=True)
+                    bnd_np = np.array(be.numpy(bnd_be), copy=True)
+                self.log.add_time("maps", time.perf_counter() - t0)
+                use_flow = self.temporal and flow_be is not None
+                A, S = solve_window(
+                    be, frames_be, flow_be if use_flow else None, occ_be if use_flow else None,
+                    bnd_be if use_flow else None, p, self.prior,
+                    carried=None if carried is None else
+                    (carried[0][-n_carried:], carried[1][-n_carried:]) if n_carried else None,
+                    window_index=index, log=self.log,
+                    progress=None if bar is None else bar.update)
+                carried = (A, S)
+                albedo, shading = np.exp(A), np.exp(S)
+                if self.scale is None:
+                    # Scale ambiguity of A + S: albedo's 99th percentile = 1 (DESIGN sec. 2).
+                    self.scale = float(np.percentile(albedo, 99.0)) or 1.0
+                albedo /= self.scale
+                shading *= self.scale
+                yield WindowResult(start, stop, n_carried, albedo.astype(np.float32),
+                                   shading.astype(np.float32), flow_np, occ_np, bnd_np)
+        finally:
+            if bar is not None:
+                bar.close()
+
+
+def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
+              device: str = "cpu", params: Params | None = None,
+              progress: bool = False) -> IntrinsicVideo:
+    """Decompose a video into albedo, shading, flow, occlusion and boundaries.
+
+    Minimises Eq. 2 of Kong, Gehler & Black (ECCV 2014) coarse to fine over
+    windows of frames.
+
+    Parameters
+    ----------
+    frames : (T, H, W, 3) array: uint8 or uint16 sRGB, or float linear RGB in
+        [0, 1].  A single frame (H, W, 3) is treated as T = 1.
+    flow : ``None`` (estimate with :data:`DEFAULT_FLOW_METHOD`), the name of
+        a method of :func:`ivkernels.estimate_flow`, or a (T-1, H, W, 2)
+        float array of forward flow in pixels (e.g. ground truth).
+    temporal : ``False`` drops the temporal terms and the motion weights (the
+        paper's "IV w/o flow" ablation); no flow is estimated then.
+    backend : ``"warp"`` (default) or ``"taichi"``.
+    device : ``"cpu"`` or ``"cuda"`` (Warp only).
+    params : :class:`ivkernels.Params`; defaults are the paper's weights.
+    progress : show a progress bar per stage.
+
+    Returns
+    -------
+    IntrinsicVideo
+
+    Examples
+    --------
+    >>> import ivkernels as iv
+    >>> seq = iv.synthetic.render_sequence("static_moving_light", n_frames=3, size=(48, 64))
+    >>> video = iv.decompose(seq.frames, flow=seq.flow)          # doctest: +SKIP
+    >>> video.albedo.shape, video.shading.shape
+    ((3, 48, 64, 3), (3, 48, 64))
+    """
+    job = _Decomposer(frames, flow, temporal, backend, device, params, progress)
+    T, H, W, _ = job.frames.shape
+    albedo = np.empty((T, H, W, 3), np.float32)
+    shading = np.empty((T, H, W), np.float32)
+    flow_out = occ_out = bnd_out = None
+    windows = []
+    for res in job.windows():
+        albedo[res.start:res.stop] = res.albedo
+        shading[res.start:res.stop] = res.shading
+        if res.flow is not None:
+            if flow_out is None:
+                flow_out = np.zeros((T - 1, H, W, 2), np.float32)
+                occ_out = np.zeros((T - 1, H, W), np.float32)
+                bnd_out = np.zeros((T - 1, H, W), np.float32)
+            flow_out[res.start:res.stop - 1] = res.flow
+            occ_out[res.start:res.stop - 1] = res.occlusion
+            bnd_out[res.start:res.stop - 1] = res.boundary
+        windows.append((res.start, res.stop))
+    diagnostics = {"energy": job.log.energy, "terms": job.log.terms,
+                   "seconds": dict(job.log.seconds), "windows": windows,
+                   "flow_method": job.flow_method if job.flow is None else "given",
+                   "albedo_scale": job.scale}
+    return IntrinsicVideo(albedo, shading, flow_out, occ_out, bnd_out, diagnostics)

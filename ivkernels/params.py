@@ -1,0 +1,132 @@
+"""Parameters of the intrinsic video energy (Eq. 2) and of its optimiser.
+
+Every weight of the paper is a default here, with the equation it belongs to.
+Weights the paper does not give are marked "chosen" with the reason.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Params:
+    """Weights and settings of :func:`ivkernels.decompose`.
+
+    Energy (log domain, Eq. 2 = data + temporal + shading prior + albedo prior)
+    ---------------------------------------------------------------------------
+    lam_data, eps_data, lum_eps
+        Eq. 3: ``lam_data * sum rho_charb(w_lum * (I - A - S))`` with
+        ``rho_charb(z) = sqrt(z^2 + eps_data^2)`` and ``w_lum = lum(i) + lum_eps``.
+    lam_temporal_albedo, lam_temporal_shading, tukey_alpha
+        Eq. 4, 5, 8: ``lam * sum w_occ * rho_tukey(X_{t+1}(x+u) - X_t(x))``,
+        continuous Tukey saturating at 1/3 (see DESIGN notes in the kernel).
+    sigma_e, sigma_d, occlusion_threshold
+        Eq. 6-7: occlusion from Lab difference (sigma_e, Lab units) and the
+        negative part of the flow divergence (sigma_d, pixels / pixel).
+    boundary_threshold, boundary_radius
+        w_bnd (Sec. 3.3): Sobel magnitude of the flow (pixels / pixel, Sobel
+        normalised by 1/8) above ``boundary_threshold``, dilated by a square of
+        radius ``boundary_radius``.  Chosen: 0.25 marks flow jumps of about half
+        a pixel or more (a step of d pixels gives a magnitude of about d/2),
+        the smallest jump a flow method resolves reliably; radius 3 covers the
+        half-width of the 7-pixel smoothing a flow estimator puts on a motion
+        edge, so the true surface boundary lies inside the band.
+    lam_shading_local, eps_shading
+        Eq. 9 local term: Charbonnier over the 3x3 neighbourhood.
+    lam_shading_nonlocal, lam_coupling, sigma_s, nonlocal_radius
+        Eq. 9-10, 13: 15x15 (radius 7) weighted L1 near motion boundaries,
+        minimised through the coupling variable S~.
+    lam_albedo_smooth
+        Eq. 11 first term (GSM over 5x5 differences).  Chosen on the
+        MIT-Berkeley training objects and on synthetic sequences with seeds
+        disjoint from the evaluation seeds (see ``perf/choose_albedo_weights.py``).
+    lam_albedo_sparsity
+        Eq. 12 global sparsity (quadratic entropy), chosen the same way.
+
+    Optimiser (Sec. 4)
+    ------------------
+    pyramid_scale, pyramid_min_size
+        Coarse to fine: each level is ``pyramid_scale`` times the next finer
+        one; the coarsest level's shorter side is at least ``pyramid_min_size``.
+    outer_iterations
+        Alternations per level of (a) minimising over (A, S) with S~ fixed and
+        (b) the S~ weighted-median update.
+    lbfgs_iterations, lbfgs_memory
+        L-BFGS iterations per alternation, and the number of correction pairs.
+    init_blur
+        Coarsest-level start: S = log luminance blurred with a Gaussian whose
+        sigma is ``init_blur`` times the shorter side; A = I - S.
+    log_floor
+        Floor of the linear input before the log (avoids log 0 on black pixels).
+
+    Long videos
+    -----------
+    window, overlap
+        Frames per solved window and frames shared with the previous window;
+        the shared frames keep the previous window's albedo and shading fixed,
+        which carries albedo forward and bounds memory by the window.
+    """
+
+    # Eq. 3
+    lam_data: float = 10.0
+    eps_data: float = 0.001
+    lum_eps: float = 0.001
+    # Eq. 4, 5, 8
+    lam_temporal_albedo: float = 10.0
+    lam_temporal_shading: float = 1.0
+    tukey_alpha: float = 5.0
+    # Eq. 6-7
+    sigma_e: float = 20.0
+    sigma_d: float = 0.3
+    occlusion_threshold: float = 0.5
+    # w_bnd
+    boundary_threshold: float = 0.25
+    boundary_radius: int = 3
+    # Eq. 9, 10, 13
+    lam_shading_local: float = 2.0
+    eps_shading: float = 0.001
+    lam_shading_nonlocal: float = 10000.0
+    lam_coupling: float = 10.0
+    sigma_s: float = 7.0
+    nonlocal_radius: int = 7
+    # Eq. 11, 12
+    lam_albedo_smooth: float = 1.0
+    lam_albedo_sparsity: float = 0.0
+    # optimiser
+    pyramid_scale: float = 0.5
+    pyramid_min_size: int = 24
+    outer_iterations: int = 3
+    lbfgs_iterations: int = 40
+    lbfgs_memory: int = 6
+    init_blur: float = 0.1
+    log_floor: float = 1e-4
+    # long videos
+    window: int = 8
+    overlap: int = 2
+
+    def __post_init__(self):
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise TypeError(f"Params.{f.name} must be a number, got {v!r}")
+            if v < 0:
+                raise ValueError(f"Params.{f.name} must be >= 0, got {v!r}")
+        if not 0.0 < self.pyramid_scale < 1.0:
+            raise ValueError(f"Params.pyramid_scale must lie in (0, 1), got {self.pyramid_scale}")
+        if self.window < 2:
+            raise ValueError(f"Params.window must be >= 2 frames, got {self.window}")
+        if not 0 <= self.overlap < self.window:
+            raise ValueError(
+                f"Params.overlap must satisfy 0 <= overlap < window ({self.window}), got {self.overlap}")
+        if self.tukey_alpha <= 0 or self.sigma_e <= 0 or self.sigma_d <= 0 or self.sigma_s <= 0:
+            raise ValueError("tukey_alpha, sigma_e, sigma_d and sigma_s must be > 0")
+        if self.lbfgs_memory < 1:
+            raise ValueError(f"Params.lbfgs_memory must be >= 1, got {self.lbfgs_memory}")
+
+    def replace(self, **changes) -> "Params":
+        """A copy with some fields changed (``dataclasses.replace``), validated."""
+        unknown = set(changes) - {f.name for f in dataclasses.fields(self)}
+        if unknown:
+            raise TypeError(f"unknown parameter(s) {sorted(unknown)}; see help(ivkernels.Params)")
+        return dataclasses.replace(self, **changes)

@@ -1,0 +1,147 @@
+"""The energy of Eq. 2 over one window of frames at one pyramid level.
+
+The unknowns live in one flat backend vector ``X`` of length ``4 * T*h*w``:
+``X[:3n]`` is the log albedo ``A`` (T, h, w, 3) and ``X[3n:]`` the log shading
+``S`` (T, h, w), n = T*h*w.  Evaluating the energy zeroes the gradient ``G``
+(same layout) and lets each term add its part; the terms are kernels of the
+backend, called one after the other:
+
+=========================  ===========  ==========================================
+term                       paper        kernel
+=========================  ===========  ==========================================
+data                       Eq. 3        ``energy_data.data_term``
+temporal albedo            Eq. 4-5      ``energy_temporal.temporal_term`` on A
+temporal shading           Eq. 8        ``energy_temporal.temporal_term`` on S
+local shading smoothness   Eq. 9        ``energy_shading.shading_smoothness``
+coupling to S~             Eq. 13       ``energy_shading.coupling_term``
+albedo GSM smoothness      Eq. 11       ``energy_albedo_gsm.gsm_smoothness``
+albedo global sparsity     Eq. 12       ``energy_albedo_entropy.entropy_term``
+=========================  ===========  ==========================================
+
+The non-local shading term of Eq. 9 is handled through the coupling variable
+``S~`` (Eq. 13): with ``S~`` fixed it is constant, and :meth:`update_coupling`
+sets ``S~`` to the 15x15 weighted median of ``S`` near motion boundaries.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ivkernels.params import Params
+
+
+class WindowEnergy:
+    """Eq. 2 for a window of ``T`` frames of size ``h x w``.
+
+    Parameters
+    ----------
+    be : backend.
+    log_image : (T, h, w, 3) backend array, ``I = log i``.
+    w_lum : (T, h, w) backend array, ``lum(i) + eps`` (Eq. 3).
+    flow, occlusion, boundary : (T-1, h, w, 2), (T-1, h, w), (T-1, h, w)
+        backend arrays at this level, or ``None`` for the ablation without
+        temporal terms and motion weights ("IV w/o flow").
+    params : :class:`ivkernels.Params`.
+    prior : :class:`ivkernels.priors.AlbedoPrior` (GSM table, whitening).
+    n_fixed : the first ``n_fixed`` frames are held fixed (their gradient is
+        zeroed): frames carried over from the previous window.
+    level_scale : size of this pyramid level relative to the input (1 = full
+        resolution); the non-local window radius and sigma_s shrink with it.
+    """
+
+    def __init__(self, be, log_image, w_lum, flow, occlusion, boundary, params: Params, prior,
+                 n_fixed: int = 0, level_scale: float = 1.0):
+        T, h, w, _ = log_image.shape
+        self.be, self.params, self.prior = be, params, prior
+        self.shape = (T, h, w)
+        self.n_fixed = n_fixed
+        self.level_scale = level_scale
+        self.I, self.w_lum = log_image, w_lum
+        self.flow, self.occlusion, self.boundary = flow, occlusion, boundary
+        n = T * h * w
+        self.n = n
+        self.X = be.zeros((4 * n,))
+        self.G = be.zeros((4 * n,))
+        self.A, self.S = self.X[: 3 * n].reshape((T, h, w, 3)), self.X[3 * n:].reshape((T, h, w))
+        self.gA, self.gS = self.G[: 3 * n].reshape((T, h, w, 3)), self.G[3 * n:].reshape((T, h, w))
+        self.S_tilde = be.empty((T, h, w))
+        self._rows_shape = (T * h,)
+        self._gsm = None
+        if params.lam_albedo_smooth > 0:
+            self._gsm = (be.asarray(prior.sigma_inv.astype(np.float32)),
+                         be.asarray(prior.table_g.astype(np.float32)),
+                         be.asarray(prior.table_dg.astype(np.float32)),
+                         float(prior.r2_max))
+        self._entropy = None
+
+    @property
+    def temporal(self) -> bool:
+        return self.flow is not None and self.shape[0] > 1
+
+    # ------------------------------------------------------------------ terms
+    def _add_terms(self, rows, terms=None) -> None:
+        """Add every term's gradient into G and energy into ``rows``."""
+        be, p = self.be, self.params
+        T, h, w = self.shape
+        want = (lambda name: True) if terms is None else (lambda name: name in terms)
+        if want("data"):
+            be.energy_data.data_term(self.I, self.A, self.S, self.w_lum, self.gA, self.gS, rows,
+                                     lam=p.lam_data, eps=p.eps_data)
+        if self.temporal:
+            if want("temporal_albedo") and p.lam_temporal_albedo > 0:
+                be.energy_temporal.temporal_term(self.A, self.flow, self.occlusion, self.gA, rows,
+                                                 lam=p.lam_temporal_albedo, alpha=p.tukey_alpha)
+            if want("temporal_shading") and p.lam_temporal_shading > 0:
+                be.energy_temporal.temporal_term(self.S.reshape((T, h, w, 1)), self.flow,
+                                                 self.occlusion, self.gS.reshape((T, h, w, 1)), rows,
+                                                 lam=p.lam_temporal_shading, alpha=p.tukey_alpha)
+            if want("coupling") and p.lam_coupling > 0:
+                be.energy_shading.coupling_term(self.S, self.S_tilde, self.boundary, self.gS, rows,
+                                                lam=p.lam_coupling)
+        if want("shading_local") and p.lam_shading_local > 0:
+            be.energy_shading.shading_smoothness(self.S, self.gS, rows, lam=p.lam_shading_local,
+                                                 eps=p.eps_shading)
+        if want("albedo_smooth") and self._gsm is not None:
+            sigma_inv, table_g, table_dg, r2_max = self._gsm
+            be.energy_albedo_gsm.gsm_smoothness(self.A, sigma_inv, table_g, table_dg, r2_max,
+                                                self.gA, rows, lam=p.lam_albedo_smooth)
+        if want("albedo_sparsity") and self._entropy is not None:
+            self._entropy.add(self.A, self.gA, rows, lam=p.lam_albedo_sparsity)
+
+    def __call__(self, X, G) -> float:
+        """Energy at ``X`` (must be ``self.X``); writes dE/dX into ``G`` (``self.G``)."""
+        if X is not self.X or G is not self.G:
+            raise ValueError("WindowEnergy evaluates its own buffers X and G only")
+        be = self.be
+        be.vecops.fill(self.G, 0.0)
+        rows = be.zeros(self._rows_shape, dtype=np.float64)
+        self._add_terms(rows)
+        if self.n_fixed:
+            k = self.n_fixed * self.n // self.shape[0]
+            be.vecops.fill(self.G[: 3 * k], 0.0)
+            be.vecops.fill(self.G[3 * self.n: 3 * self.n + k], 0.0)
+        return float(be.numpy(rows).sum())
+
+    def term_energies(self) -> dict[str, float]:
+        """Each term's energy at the current ``X`` (diagnostics; leaves ``G`` dirty)."""
+        out = {}
+        names = ["data", "temporal_albedo", "temporal_shading", "coupling", "shading_local",
+                 "albedo_smooth", "albedo_sparsity"]
+        for name in names:
+            rows = self.be.zeros(self._rows_shape, dtype=np.float64)
+            self._add_terms(rows, terms={name})
+            out[name] = float(self.be.numpy(rows).sum())
+        self.be.vecops.fill(self.G, 0.0)
+        return out
+
+    # --------------------------------------------------------------- S~ step
+    def update_coupling(self) -> None:
+        """S~ <- 15x15 weighted median of S near motion boundaries (Eq. 9-10, 13)."""
+        be, p = self.be, self.params
+        if not self.temporal:
+            be.vecops.copy(self.S.reshape((self.n,)), self.S_tilde.reshape((self.n,)))
+            return
+        radius = max(2, int(round(p.nonlocal_radius * self.level_scale)))
+        sigma_s = max(1.0, p.sigma_s * self.level_scale)
+        ratio = p.lam_coupling / p.lam_shading_nonlocal if p.lam_shading_nonlocal > 0 else 0.0
+        be.median.weighted_median_shading(self.S, self.flow, self.boundary, self.S_tilde,
+                                          radius=radius, sigma_s=sigma_s, lam=ratio)

@@ -1,0 +1,53 @@
+"""The flow's intrinsic images: occlusion w_occ (Eq. 6-7) and motion boundaries w_bnd.
+
+Both are computed once per window at full resolution on the backend and
+resampled per pyramid level.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ivkernels.params import Params
+
+
+def motion_maps(be, frames_linear, flow, params: Params):
+    """Occlusion and motion-boundary weights of a window.
+
+    Parameters
+    ----------
+    be : backend.
+    frames_linear : (T, H, W, 3) backend array, linear RGB in [0, 1].
+    flow : (T-1, H, W, 2) backend array, forward flow in pixels (x, y).
+
+    Returns
+    -------
+    occlusion : (T-1, H, W) backend array, Eq. 6: 1 where ``x + u`` stays in
+        the image and ``o(x) >= params.occlusion_threshold`` (Eq. 7), else 0.
+    boundary : (T-1, H, W) backend array, 1 within ``params.boundary_radius``
+        pixels of a flow Sobel magnitude above ``params.boundary_threshold``.
+    """
+    T, H, W, _ = frames_linear.shape
+    n = flow.shape[0]
+    lab = be.empty((T, H, W, 3))
+    be.colour.linear_rgb_to_lab(frames_linear, lab)
+    div_neg = be.empty((n, H, W))
+    be.derivatives.divergence_negative(flow, div_neg)
+    occlusion = be.empty((n, H, W))
+    be.maps.occlusion_binary(lab, flow, div_neg, occlusion, sigma_e=params.sigma_e,
+                             sigma_d=params.sigma_d, threshold=params.occlusion_threshold)
+    sobel = be.empty((n, H, W))
+    be.derivatives.flow_sobel_magnitude(flow, sobel)
+    boundary = be.empty((n, H, W))
+    be.maps.motion_boundary(sobel, boundary, params.boundary_threshold, int(params.boundary_radius))
+    return occlusion, boundary
+
+
+def resample_mask(be, mask, shape: tuple[int, int]):
+    """Bilinear resize of a (T, H, W) 0/1 map to ``shape``, re-binarised at 0.5."""
+    from ivkernels.solver.pyramid import resize
+
+    if tuple(mask.shape[1:]) == tuple(shape):
+        return mask
+    small = resize(be, mask.reshape((*mask.shape, 1)), shape)
+    values = be.numpy(small)[..., 0]
+    return be.asarray((values >= 0.5).astype(np.float32))

@@ -1,0 +1,159 @@
+"""Coarse-to-fine minimisation of Eq. 2 over one window of frames (Sec. 4).
+
+At each pyramid level, starting from the up-sampled coarser solution, the
+solver alternates (a) L-BFGS over all ``(A_t, S_t)`` of the window at once
+with the coupling variable ``S~`` fixed and (b) the ``S~`` weighted-median
+update (Eq. 13).  The coarsest level starts from ``S`` = heavily blurred log
+luminance and ``A = I - S``.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ivkernels.params import Params
+from ivkernels.solver.energy import WindowEnergy
+from ivkernels.solver.lbfgs import LBFGS
+from ivkernels.solver.motion_maps import resample_mask
+from ivkernels.solver.pyramid import (coarse_to_fine, image_pyramid, level_shapes, resize,
+                                      resize_flow)
+
+
+@dataclass
+class SolveLog:
+    """Diagnostics of a solve: energy per iteration and level, and seconds per stage."""
+
+    energy: list = field(default_factory=list)     # (window, level, outer, iteration, E)
+    terms: list = field(default_factory=list)      # (window, level, {term: E}) after each level
+    seconds: dict = field(default_factory=dict)    # stage -> seconds
+
+    def add_time(self, stage: str, seconds: float) -> None:
+        self.seconds[stage] = self.seconds.get(stage, 0.0) + seconds
+
+
+def _log_and_weight(be, frames_linear, params: Params):
+    """``I = log max(i, floor)`` (T, h, w, 3) and ``w_lum = lum(i) + eps`` (T, h, w) (Eq. 3)."""
+    T, h, w, _ = frames_linear.shape
+    log_image = be.empty((T, h, w, 3))
+    be.colour.log_floor(frames_linear, log_image, params.log_floor)
+    w_lum = be.empty((T, h, w))
+    be.colour.luminance(frames_linear, w_lum)
+    w_lum_np = be.numpy(w_lum)
+    if params.lum_eps:
+        w_lum = be.asarray(w_lum_np + np.float32(params.lum_eps))
+    return log_image, w_lum
+
+
+def _initial_shading(be, log_image, params: Params):
+    """Coarsest-level start: S = log luminance of the input, heavily blurred."""
+    T, h, w, _ = log_image.shape
+    lum = be.numpy(log_image).mean(axis=3, keepdims=True).astype(np.float32)
+    src = be.asarray(lum)
+    out, scratch = be.empty(src.shape), be.empty(src.shape)
+    be.pyramid.gaussian_blur(src, out, scratch, params.init_blur * min(h, w))
+    return out.reshape((T, h, w))
+
+
+def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, prior, *,
+                 carried=None, window_index: int = 0, log: SolveLog | None = None,
+                 progress=None):
+    """Minimise Eq. 2 over one window; returns full-resolution log ``(A, S)``.
+
+    Parameters
+    ----------
+    be : backend.
+    frames_linear : (T, H, W, 3) backend array, linear RGB in [0, 1].
+    flow, occlusion, boundary : (T-1, H, W[, 2]) backend arrays, or all
+        ``None`` for the ablation without temporal terms.
+    params : :class:`ivkernels.Params`.
+    prior : :class:`ivkernels.priors.AlbedoPrior`.
+    carried : optional ``(A, S)`` NumPy arrays (k, H, W, 3), (k, H, W) of log
+        albedo and shading for the first ``k`` frames, solved by the previous
+        window; they are held fixed and carry albedo forward.
+    log : :class:`SolveLog` collecting energies and timings.
+    progress : optional callable ``progress(n_done_levels)``.
+
+    Returns
+    -------
+    A : (T, H, W, 3) float32 NumPy array, log albedo.
+    S : (T, H, W) float32 NumPy array, log shading.
+    """
+    log = log if log is not None else SolveLog()
+    T, H, W, _ = frames_linear.shape
+    shapes = level_shapes(H, W, params.pyramid_scale, params.pyramid_min_size)
+    n_fixed = 0 if carried is None else carried[0].shape[0]
+    t0 = time.perf_counter()
+    pyramid = image_pyramid(be, frames_linear, shapes)
+    carried_pyr = None
+    if carried is not None:
+        carried_pyr = (image_pyramid(be, be.asarray(carried[0]), shapes),
+                       image_pyramid(be, be.asarray(carried[1][..., None]), shapes))
+    log.add_time("pyramid", time.perf_counter() - t0)
+
+    def make_energy(level, shape):
+        t = time.perf_counter()
+        log_image, w_lum = _log_and_weight(be, pyramid[level], params)
+        lflow = locc = lbnd = None
+        if flow is not None:
+            lflow = flow if level == 0 else resize_flow(be, flow, shape)
+            locc = resample_mask(be, occlusion, shape)
+            lbnd = resample_mask(be, boundary, shape)
+        energy = WindowEnergy(be, log_image, w_lum, lflow, locc, lbnd, params, prior,
+                              n_fixed=n_fixed, level_scale=shape[0] / H)
+        log.add_time("levels", time.perf_counter() - t)
+        return energy
+
+    def init(shape):
+        energy = make_energy(len(shapes) - 1, shape)
+        S0 = _initial_shading(be, energy.I, params)
+        I_np, S_np = be.numpy(energy.I), be.numpy(S0)
+        _set(be, energy, I_np - S_np[..., None], S_np)
+        return energy
+
+    def upsample(energy, shape):
+        A_up = resize(be, energy.A, shape)
+        S_up = resize(be, energy.S.reshape((*energy.shape, 1)), shape)
+        level = shapes.index(shape)
+        finer = make_energy(level, shape)
+        _set(be, finer, be.numpy(A_up), be.numpy(S_up)[..., 0])
+        return finer
+
+    def solve_level(level, shape, energy):
+        if carried_pyr is not None:
+            A_fixed = be.numpy(carried_pyr[0][level])
+            S_fixed = be.numpy(carried_pyr[1][level])[..., 0]
+            A_now, S_now = be.numpy(energy.A).copy(), be.numpy(energy.S).copy()
+            A_now[:n_fixed], S_now[:n_fixed] = A_fixed, S_fixed
+            _set(be, energy, A_now, S_now)
+        t = time.perf_counter()
+        lbfgs = LBFGS(be, energy.X.shape[0], memory=int(params.lbfgs_memory))
+        for outer in range(int(params.outer_iterations)):
+            tm = time.perf_counter()
+            energy.update_coupling()
+            log.add_time("median", time.perf_counter() - tm)
+            lbfgs.reset()
+
+            def record(k, e, outer=outer):
+                log.energy.append((window_index, level, outer, k, e))
+
+            lbfgs.minimize(energy, energy.X, energy.G, int(params.lbfgs_iterations),
+                           on_iteration=record)
+        log.terms.append((window_index, level, energy.term_energies()))
+        log.add_time("solve", time.perf_counter() - t)
+        if progress is not None:
+            progress(1)
+        return energy
+
+    final = coarse_to_fine(shapes, solve_level, init, upsample)
+    A = np.array(be.numpy(final.A), dtype=np.float32, copy=True)
+    S = np.array(be.numpy(final.S), dtype=np.float32, copy=True)
+    return A, S
+
+
+def _set(be, energy: WindowEnergy, A: np.ndarray, S: np.ndarray) -> None:
+    """Write NumPy log albedo (T,h,w,3) and shading (T,h,w) into the energy's unknowns."""
+    X = np.concatenate([np.ascontiguousarray(A, np.float32).ravel(),
+                        np.ascontiguousarray(S, np.float32).ravel()])
+    be.vecops.copy(be.asarray(X), energy.X)
