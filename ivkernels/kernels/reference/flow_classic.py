@@ -1,0 +1,166 @@
+"""NumPy reference of :mod:`ivkernels.kernels.warp.flow_classic`, float64.
+
+Vectorised where the operation is a plain map; the red-black sweep is written
+as the two masked Jacobi-like half steps it is.  Each function returns its
+outputs.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+GREY_WEIGHTS = (0.2989, 0.5870, 0.1140)
+
+
+def srgb_encode(c):
+    c = np.clip(np.asarray(c, np.float64), 0.0, 1.0)
+    return np.where(c > 0.0031308, 1.055 * np.power(c, 1.0 / 2.4) - 0.055, 12.92 * c)
+
+
+def robust_weight(z, a=0.45, eps=1e-3, quad_frac=0.0, quad_weight=2e6):
+    """``psi = quad_frac * quad_weight + (1 - quad_frac) * 2 a (z^2 + eps^2)^(a-1)``."""
+    z = np.asarray(z, np.float64)
+    robust = 2.0 * a * np.power(z * z + eps * eps, a - 1.0) if quad_frac < 1.0 else np.zeros_like(z)
+    return quad_frac * quad_weight + (1.0 - quad_frac) * robust
+
+
+def srgb_grey(rgb):
+    """(T, H, W, 3) linear RGB -> (T, H, W) sRGB grey in [0, 255]."""
+    enc = srgb_encode(rgb)
+    return 255.0 * (enc @ np.asarray(GREY_WEIGHTS))
+
+
+def row_min_max(src):
+    """(T, H, W, C) -> (T*H, C, 2) per-row (min, max)."""
+    src = np.asarray(src, np.float64)
+    t, h, w, c = src.shape
+    rows = src.reshape(t * h, w, c)
+    return np.stack([rows.min(axis=1), rows.max(axis=1)], axis=-1)
+
+
+def scale_shift(src, scale, shift):
+    return np.asarray(src, np.float64) * np.asarray(scale, np.float64) + np.asarray(shift, np.float64)
+
+
+def rof_divergence(p):
+    """Backward-difference divergence of (T, H, W, 2), zero outside -> (T, H, W)."""
+    p = np.asarray(p, np.float64)
+    d = p[..., 0] + p[..., 1]
+    d[:, :, 1:] -= p[:, :, :-1, 0]
+    d[:, 1:, :] -= p[:, :-1, :, 1]
+    return d
+
+
+def rof_dual_step(img, p, theta, delta):
+    """One Chambolle projection step; returns the new (T, H, W, 2) dual field."""
+    v = np.asarray(img, np.float64) + theta * rof_divergence(p)
+    gx = np.zeros_like(v)
+    gy = np.zeros_like(v)
+    gx[:, :, :-1] = v[:, :, 1:] - v[:, :, :-1]
+    gy[:, :-1, :] = v[:, 1:, :] - v[:, :-1, :]
+    q = np.asarray(p, np.float64) + delta * np.stack([gx, gy], axis=-1)
+    norm = np.maximum(1.0, np.sqrt((q * q).sum(-1)))
+    return q / norm[..., None]
+
+
+def rof_texture(img, p, theta, alpha):
+    img = np.asarray(img, np.float64)
+    return img - alpha * (img + theta * rof_divergence(p))
+
+
+def pack_image_gradient(img, gx, gy):
+    return np.stack([img, gx, gy], axis=-1).astype(np.float64)
+
+
+def data_coefficients(i1, i1x, i1y, warped, inside, du, blend=0.5, a=0.45, eps=1e-3,
+                      quad_frac=0.0, quad_weight=2e6):
+    """(T, H, W, 5) ``psi * (Ix Ix, Ix Iy, Iy Iy, Ix It, Iy It)``."""
+    warped = np.asarray(warped, np.float64)
+    ok = np.asarray(inside) > 0.5
+    ix = np.where(ok, blend * warped[..., 1] + (1 - blend) * np.asarray(i1x, np.float64), 0.0)
+    iy = np.where(ok, blend * warped[..., 2] + (1 - blend) * np.asarray(i1y, np.float64), 0.0)
+    it = np.where(ok, warped[..., 0] - np.asarray(i1, np.float64), 0.0)
+    du = np.asarray(du, np.float64)
+    psi = robust_weight(it + ix * du[..., 0] + iy * du[..., 1], a, eps, quad_frac, quad_weight)
+    return np.stack([psi * ix * ix, psi * ix * iy, psi * iy * iy, psi * ix * it, psi * iy * it], axis=-1)
+
+
+def smoothness_weights(flow, du, a=0.45, eps=1e-3, quad_frac=0.0, quad_weight=2e6):
+    """(T, H, W, 4): psi of right / down differences of u + du, then of v + dv."""
+    f = np.asarray(flow, np.float64) + np.asarray(du, np.float64)
+    out = np.zeros(f.shape[:3] + (4,))
+    for c in range(2):
+        out[:, :, :-1, 2 * c] = robust_weight(f[:, :, 1:, c] - f[:, :, :-1, c], a, eps, quad_frac, quad_weight)
+        out[:, :-1, :, 2 * c + 1] = robust_weight(f[:, 1:, :, c] - f[:, :-1, :, c], a, eps, quad_frac, quad_weight)
+    return out
+
+
+def _neighbour_sums(flow, du, smooth, lam):
+    """Per pixel: sum of lam * w over neighbours, and sum of lam * w * (u_n + du_n - u), per component."""
+    f = np.asarray(flow, np.float64)
+    d = np.asarray(du, np.float64)
+    s = lam * np.asarray(smooth, np.float64)
+    t, h, w, _ = f.shape
+    diag = np.zeros((t, h, w, 2))
+    rhs = np.zeros((t, h, w, 2))
+    g = f + d
+    for c in range(2):
+        wr, wd = s[..., 2 * c], s[..., 2 * c + 1]
+        # right neighbour
+        diag[:, :, :-1, c] += wr[:, :, :-1]
+        rhs[:, :, :-1, c] += wr[:, :, :-1] * (g[:, :, 1:, c] - f[:, :, :-1, c])
+        # left neighbour (the right edge of the pixel on the left)
+        diag[:, :, 1:, c] += wr[:, :, :-1]
+        rhs[:, :, 1:, c] += wr[:, :, :-1] * (g[:, :, :-1, c] - f[:, :, 1:, c])
+        # neighbour below
+        diag[:, :-1, :, c] += wd[:, :-1, :]
+        rhs[:, :-1, :, c] += wd[:, :-1, :] * (g[:, 1:, :, c] - f[:, :-1, :, c])
+        # neighbour above
+        diag[:, 1:, :, c] += wd[:, :-1, :]
+        rhs[:, 1:, :, c] += wd[:, :-1, :] * (g[:, :-1, :, c] - f[:, 1:, :, c])
+    return diag, rhs
+
+
+def sor_sweep(flow, du, data, smooth, lam, omega, parity):
+    """Returns ``du`` after updating the pixels with ``(x + y) % 2 == parity``."""
+    du = np.array(du, np.float64)
+    data = np.asarray(data, np.float64)
+    diag, rhs = _neighbour_sums(flow, du, smooth, lam)
+    a11 = data[..., 0] + diag[..., 0]
+    a12 = data[..., 1]
+    a22 = data[..., 2] + diag[..., 1]
+    bu = rhs[..., 0] - data[..., 3]
+    bv = rhs[..., 1] - data[..., 4]
+    det = a11 * a22 - a12 * a12
+    ok = det > 1e-20 * (a11 * a22 + 1e-30)
+    safe = np.where(ok, det, 1.0)
+    new_u = (a22 * bu - a12 * bv) / safe
+    new_v = (a11 * bv - a12 * bu) / safe
+    t, h, w, _ = du.shape
+    yy, xx = np.mgrid[0:h, 0:w]
+    colour = np.broadcast_to(((xx + yy) % 2 == parity), (t, h, w)) & ok
+    du[..., 0] = np.where(colour, (1 - omega) * du[..., 0] + omega * new_u, du[..., 0])
+    du[..., 1] = np.where(colour, (1 - omega) * du[..., 1] + omega * new_v, du[..., 1])
+    return du
+
+
+def system_residual(flow, du, data, smooth, lam):
+    """Residual ``b - A du`` of the full IRLS system (T, H, W, 2), for convergence checks."""
+    data = np.asarray(data, np.float64)
+    diag, rhs = _neighbour_sums(flow, du, smooth, lam)
+    d = np.asarray(du, np.float64)
+    # rhs already holds sum w (u_n + du_n - u); the du_p part of the Laplacian is diag * du_p.
+    ru = rhs[..., 0] - data[..., 3] - (data[..., 0] * d[..., 0] + data[..., 1] * d[..., 1] + diag[..., 0] * d[..., 0])
+    rv = rhs[..., 1] - data[..., 4] - (data[..., 1] * d[..., 0] + data[..., 2] * d[..., 1] + diag[..., 1] * d[..., 1])
+    return np.stack([ru, rv], axis=-1)
+
+
+def apply_update(flow, du, limit=1.0):
+    d = np.asarray(du, np.float64)
+    if limit > 0:
+        d = np.clip(d, -limit, limit)
+    return np.asarray(flow, np.float64) + d
+
+
+def select_masked(mask, inside_mask, outside_mask):
+    m = (np.asarray(mask) >= 0.5)[..., None]
+    return np.where(m, np.asarray(inside_mask, np.float64), np.asarray(outside_mask, np.float64))

@@ -1,0 +1,369 @@
+"""Taichi mirror of :mod:`ivkernels.kernels.warp.flow_classic` (same names, same
+signatures, NumPy arrays passed as ``ti.types.ndarray()``).
+
+See the Warp module for the equations.  Each kernel's outermost loop runs
+over the ``T * H`` image rows in parallel and loops over ``x`` inside, like
+the Warp kernels.
+"""
+
+import numpy as np
+import taichi as ti
+
+GREY_WEIGHTS = (0.2989, 0.5870, 0.1140)
+
+nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
+nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
+nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
+
+
+# ----------------------------------------------------------------------------
+# Device helpers
+# ----------------------------------------------------------------------------
+
+@ti.func
+def srgb_encode(c):
+    c = ti.math.clamp(c, 0.0, 1.0)
+    result = 12.92 * c
+    if c > 0.0031308:
+        result = 1.055 * ti.pow(c, 1.0 / 2.4) - 0.055
+    return result
+
+
+@ti.func
+def robust_weight(z, a, eps, quad_frac, quad_weight):
+    robust = 0.0
+    if quad_frac < 1.0:
+        robust = 2.0 * a * ti.pow(z * z + eps * eps, a - 1.0)
+    return quad_frac * quad_weight + (1.0 - quad_frac) * robust
+
+
+@ti.func
+def rof_divergence(p: ti.template(), t, y, x):
+    d = p[t, y, x, 0] + p[t, y, x, 1]
+    if x > 0:
+        d -= p[t, y, x - 1, 0]
+    if y > 0:
+        d -= p[t, y - 1, x, 1]
+    return d
+
+
+# ----------------------------------------------------------------------------
+# Kernels
+# ----------------------------------------------------------------------------
+
+@ti.kernel
+def _srgb_grey(rgb: nd4, out: nd3, wr: ti.f32, wg: ti.f32, wb: ti.f32):
+    for t, y in ti.ndrange(out.shape[0], out.shape[1]):
+        for x in range(out.shape[2]):
+            g = wr * srgb_encode(rgb[t, y, x, 0]) + wg * srgb_encode(rgb[t, y, x, 1]) \
+                + wb * srgb_encode(rgb[t, y, x, 2])
+            out[t, y, x] = 255.0 * g
+
+
+@ti.kernel
+def _min_max(src: nd4, out: nd3):
+    for t, y in ti.ndrange(src.shape[0], src.shape[1]):
+        r = t * src.shape[1] + y
+        for c in range(src.shape[3]):
+            lo = src[t, y, 0, c]
+            hi = lo
+            for x in range(1, src.shape[2]):
+                v = src[t, y, x, c]
+                lo = ti.min(lo, v)
+                hi = ti.max(hi, v)
+            out[r, c, 0] = lo
+            out[r, c, 1] = hi
+
+
+@ti.kernel
+def _scale_shift(src: nd4, out: nd4, scale: nd1, shift: nd1):
+    for t, y in ti.ndrange(src.shape[0], src.shape[1]):
+        for x in range(src.shape[2]):
+            for c in range(src.shape[3]):
+                out[t, y, x, c] = src[t, y, x, c] * scale[c] + shift[c]
+
+
+@ti.kernel
+def _rof_dual_step(img: nd3, p_in: nd4, p_out: nd4, theta: ti.f32, delta: ti.f32):
+    height = img.shape[1]
+    width = img.shape[2]
+    for t, y in ti.ndrange(img.shape[0], height):
+        for x in range(width):
+            v = img[t, y, x] + theta * rof_divergence(p_in, t, y, x)
+            gx = 0.0
+            gy = 0.0
+            if x < width - 1:
+                gx = img[t, y, x + 1] + theta * rof_divergence(p_in, t, y, x + 1) - v
+            if y < height - 1:
+                gy = img[t, y + 1, x] + theta * rof_divergence(p_in, t, y + 1, x) - v
+            px = p_in[t, y, x, 0] + delta * gx
+            py = p_in[t, y, x, 1] + delta * gy
+            norm = ti.max(1.0, ti.sqrt(px * px + py * py))
+            p_out[t, y, x, 0] = px / norm
+            p_out[t, y, x, 1] = py / norm
+
+
+@ti.kernel
+def _rof_texture(img: nd3, p: nd4, out: nd3, theta: ti.f32, alpha: ti.f32):
+    for t, y in ti.ndrange(img.shape[0], img.shape[1]):
+        for x in range(img.shape[2]):
+            structure = img[t, y, x] + theta * rof_divergence(p, t, y, x)
+            out[t, y, x] = img[t, y, x] - alpha * structure
+
+
+@ti.kernel
+def _pack_image_gradient(img: nd3, gx: nd3, gy: nd3, out: nd4):
+    for t, y in ti.ndrange(img.shape[0], img.shape[1]):
+        for x in range(img.shape[2]):
+            out[t, y, x, 0] = img[t, y, x]
+            out[t, y, x, 1] = gx[t, y, x]
+            out[t, y, x, 2] = gy[t, y, x]
+
+
+@ti.kernel
+def _data_coefficients(i1: nd3, i1x: nd3, i1y: nd3, warped: nd4, inside: nd3, du: nd4, out: nd4,
+                       blend: ti.f32, a: ti.f32, eps: ti.f32, quad_frac: ti.f32, quad_weight: ti.f32):
+    for t, y in ti.ndrange(i1.shape[0], i1.shape[1]):
+        for x in range(i1.shape[2]):
+            ix = 0.0
+            iy = 0.0
+            it = 0.0
+            if inside[t, y, x] > 0.5:
+                ix = blend * warped[t, y, x, 1] + (1.0 - blend) * i1x[t, y, x]
+                iy = blend * warped[t, y, x, 2] + (1.0 - blend) * i1y[t, y, x]
+                it = warped[t, y, x, 0] - i1[t, y, x]
+            residual = it + ix * du[t, y, x, 0] + iy * du[t, y, x, 1]
+            psi = robust_weight(residual, a, eps, quad_frac, quad_weight)
+            out[t, y, x, 0] = psi * ix * ix
+            out[t, y, x, 1] = psi * ix * iy
+            out[t, y, x, 2] = psi * iy * iy
+            out[t, y, x, 3] = psi * ix * it
+            out[t, y, x, 4] = psi * iy * it
+
+
+@ti.kernel
+def _smoothness_weights(flow: nd4, du: nd4, out: nd4, a: ti.f32, eps: ti.f32,
+                        quad_frac: ti.f32, quad_weight: ti.f32):
+    height = flow.shape[1]
+    width = flow.shape[2]
+    for t, y in ti.ndrange(flow.shape[0], height):
+        for x in range(width):
+            for c in ti.static(range(2)):
+                here = flow[t, y, x, c] + du[t, y, x, c]
+                w_right = 0.0
+                w_down = 0.0
+                if x < width - 1:
+                    w_right = robust_weight(flow[t, y, x + 1, c] + du[t, y, x + 1, c] - here,
+                                            a, eps, quad_frac, quad_weight)
+                if y < height - 1:
+                    w_down = robust_weight(flow[t, y + 1, x, c] + du[t, y + 1, x, c] - here,
+                                           a, eps, quad_frac, quad_weight)
+                out[t, y, x, 2 * c] = w_right
+                out[t, y, x, 2 * c + 1] = w_down
+
+
+@ti.kernel
+def _sor_sweep(flow: nd4, du: nd4, data: nd4, smooth: nd4, lam: ti.f32, omega: ti.f32, parity: ti.i32):
+    height = flow.shape[1]
+    width = flow.shape[2]
+    for t, y in ti.ndrange(flow.shape[0], height):
+        x0 = (parity + y) % 2
+        for k in range((width - x0 + 1) // 2):
+            x = x0 + 2 * k
+            diag_u = 0.0
+            diag_v = 0.0
+            rhs_u = -data[t, y, x, 3]
+            rhs_v = -data[t, y, x, 4]
+            u = flow[t, y, x, 0]
+            v = flow[t, y, x, 1]
+            if x < width - 1:
+                wu = lam * smooth[t, y, x, 0]
+                wv = lam * smooth[t, y, x, 2]
+                diag_u += wu
+                diag_v += wv
+                rhs_u += wu * (flow[t, y, x + 1, 0] + du[t, y, x + 1, 0] - u)
+                rhs_v += wv * (flow[t, y, x + 1, 1] + du[t, y, x + 1, 1] - v)
+            if x > 0:
+                wu = lam * smooth[t, y, x - 1, 0]
+                wv = lam * smooth[t, y, x - 1, 2]
+                diag_u += wu
+                diag_v += wv
+                rhs_u += wu * (flow[t, y, x - 1, 0] + du[t, y, x - 1, 0] - u)
+                rhs_v += wv * (flow[t, y, x - 1, 1] + du[t, y, x - 1, 1] - v)
+            if y < height - 1:
+                wu = lam * smooth[t, y, x, 1]
+                wv = lam * smooth[t, y, x, 3]
+                diag_u += wu
+                diag_v += wv
+                rhs_u += wu * (flow[t, y + 1, x, 0] + du[t, y + 1, x, 0] - u)
+                rhs_v += wv * (flow[t, y + 1, x, 1] + du[t, y + 1, x, 1] - v)
+            if y > 0:
+                wu = lam * smooth[t, y - 1, x, 1]
+                wv = lam * smooth[t, y - 1, x, 3]
+                diag_u += wu
+                diag_v += wv
+                rhs_u += wu * (flow[t, y - 1, x, 0] + du[t, y - 1, x, 0] - u)
+                rhs_v += wv * (flow[t, y - 1, x, 1] + du[t, y - 1, x, 1] - v)
+            a11 = data[t, y, x, 0] + diag_u
+            a12 = data[t, y, x, 1]
+            a22 = data[t, y, x, 2] + diag_v
+            det = a11 * a22 - a12 * a12
+            if det > 1.0e-20 * (a11 * a22 + 1.0e-30):
+                new_u = (a22 * rhs_u - a12 * rhs_v) / det
+                new_v = (a11 * rhs_v - a12 * rhs_u) / det
+                du[t, y, x, 0] = (1.0 - omega) * du[t, y, x, 0] + omega * new_u
+                du[t, y, x, 1] = (1.0 - omega) * du[t, y, x, 1] + omega * new_v
+
+
+@ti.kernel
+def _apply_update(flow: nd4, du: nd4, out: nd4, limit: ti.f32):
+    for t, y in ti.ndrange(flow.shape[0], flow.shape[1]):
+        for x in range(flow.shape[2]):
+            for c in ti.static(range(2)):
+                d = du[t, y, x, c]
+                if limit > 0.0:
+                    d = ti.math.clamp(d, -limit, limit)
+                out[t, y, x, c] = flow[t, y, x, c] + d
+
+
+@ti.kernel
+def _select_masked(mask: nd3, inside_mask: nd4, outside_mask: nd4, out: nd4):
+    for t, y in ti.ndrange(mask.shape[0], mask.shape[1]):
+        for x in range(mask.shape[2]):
+            for c in range(out.shape[3]):
+                if mask[t, y, x] >= 0.5:
+                    out[t, y, x, c] = inside_mask[t, y, x, c]
+                else:
+                    out[t, y, x, c] = outside_mask[t, y, x, c]
+
+
+# ----------------------------------------------------------------------------
+# Host functions
+# ----------------------------------------------------------------------------
+
+def _check(name: str, a, shape: tuple, layout: str) -> None:
+    """Raise unless ``a`` is a C-contiguous float32 ndarray of ``shape`` (None = any size)."""
+    if not isinstance(a, np.ndarray):
+        raise TypeError(f"{name} must be a numpy.ndarray of float32 {layout}, got {type(a).__name__}")
+    if a.dtype != np.float32:
+        raise TypeError(f"{name} must have dtype float32, got {a.dtype}")
+    if a.ndim != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
+        want = tuple("?" if e is None else e for e in shape)
+        raise ValueError(f"{name} must have shape {layout} = {want}, got {a.shape}")
+    if not a.flags.c_contiguous:
+        raise ValueError(f"{name} must be C-contiguous")
+
+
+def srgb_grey(rgb, out) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.srgb_grey`."""
+    _check("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
+    t, h, w, _ = rgb.shape
+    _check("out", out, (t, h, w), "(T, H, W)")
+    _srgb_grey(rgb, out, *GREY_WEIGHTS)
+
+
+def row_min_max(src, out) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.row_min_max`."""
+    _check("src", src, (None, None, None, None), "(T, H, W, C)")
+    t, h, w, c = src.shape
+    if w < 1:
+        raise ValueError(f"src must have at least one column, got shape {src.shape}")
+    _check("out", out, (t * h, c, 2), "(T*H, C, 2)")
+    _min_max(src, out)
+
+
+def scale_shift(src, out, scale, shift) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.scale_shift`."""
+    _check("src", src, (None, None, None, None), "(T, H, W, C)")
+    t, h, w, c = src.shape
+    _check("out", out, (t, h, w, c), "(T, H, W, C)")
+    _check("scale", scale, (c,), "(C,)")
+    _check("shift", shift, (c,), "(C,)")
+    _scale_shift(src, out, scale, shift)
+
+
+def rof_dual_step(img, p_in, p_out, theta: float, delta: float) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.rof_dual_step`."""
+    _check("img", img, (None, None, None), "(T, H, W)")
+    t, h, w = img.shape
+    _check("p_in", p_in, (t, h, w, 2), "(T, H, W, 2)")
+    _check("p_out", p_out, (t, h, w, 2), "(T, H, W, 2)")
+    if np.shares_memory(p_in, p_out):
+        raise ValueError("p_in and p_out must be different arrays (the step reads neighbours of p_in)")
+    _rof_dual_step(img, p_in, p_out, float(theta), float(delta))
+
+
+def rof_texture(img, p, out, theta: float, alpha: float) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.rof_texture`."""
+    _check("img", img, (None, None, None), "(T, H, W)")
+    t, h, w = img.shape
+    _check("p", p, (t, h, w, 2), "(T, H, W, 2)")
+    _check("out", out, (t, h, w), "(T, H, W)")
+    _rof_texture(img, p, out, float(theta), float(alpha))
+
+
+def pack_image_gradient(img, gx, gy, out) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.pack_image_gradient`."""
+    _check("img", img, (None, None, None), "(T, H, W)")
+    t, h, w = img.shape
+    _check("gx", gx, (t, h, w), "(T, H, W)")
+    _check("gy", gy, (t, h, w), "(T, H, W)")
+    _check("out", out, (t, h, w, 3), "(T, H, W, 3)")
+    _pack_image_gradient(img, gx, gy, out)
+
+
+def data_coefficients(i1, i1x, i1y, warped, inside, du, out, blend: float = 0.5, a: float = 0.45,
+                      eps: float = 1e-3, quad_frac: float = 0.0, quad_weight: float = 2e6) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.data_coefficients`."""
+    _check("i1", i1, (None, None, None), "(T, H, W)")
+    t, h, w = i1.shape
+    _check("i1x", i1x, (t, h, w), "(T, H, W)")
+    _check("i1y", i1y, (t, h, w), "(T, H, W)")
+    _check("warped", warped, (t, h, w, 3), "(T, H, W, 3)")
+    _check("inside", inside, (t, h, w), "(T, H, W)")
+    _check("du", du, (t, h, w, 2), "(T, H, W, 2)")
+    _check("out", out, (t, h, w, 5), "(T, H, W, 5)")
+    _data_coefficients(i1, i1x, i1y, warped, inside, du, out, float(blend), float(a), float(eps),
+                       float(quad_frac), float(quad_weight))
+
+
+def smoothness_weights(flow, du, out, a: float = 0.45, eps: float = 1e-3, quad_frac: float = 0.0,
+                       quad_weight: float = 2e6) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.smoothness_weights`."""
+    _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
+    t, h, w, _ = flow.shape
+    _check("du", du, (t, h, w, 2), "(T, H, W, 2)")
+    _check("out", out, (t, h, w, 4), "(T, H, W, 4)")
+    _smoothness_weights(flow, du, out, float(a), float(eps), float(quad_frac), float(quad_weight))
+
+
+def sor_sweep(flow, du, data, smooth, lam: float, omega: float, parity: int) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.sor_sweep`."""
+    _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
+    t, h, w, _ = flow.shape
+    _check("du", du, (t, h, w, 2), "(T, H, W, 2)")
+    _check("data", data, (t, h, w, 5), "(T, H, W, 5)")
+    _check("smooth", smooth, (t, h, w, 4), "(T, H, W, 4)")
+    if parity not in (0, 1):
+        raise ValueError(f"parity must be 0 or 1, got {parity!r}")
+    _sor_sweep(flow, du, data, smooth, float(lam), float(omega), int(parity))
+
+
+def apply_update(flow, du, out, limit: float = 1.0) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.apply_update`."""
+    _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
+    t, h, w, _ = flow.shape
+    _check("du", du, (t, h, w, 2), "(T, H, W, 2)")
+    _check("out", out, (t, h, w, 2), "(T, H, W, 2)")
+    _apply_update(flow, du, out, float(limit))
+
+
+def select_masked(mask, inside_mask, outside_mask, out) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.select_masked`."""
+    _check("mask", mask, (None, None, None), "(T, H, W)")
+    t, h, w = mask.shape
+    _check("inside_mask", inside_mask, (t, h, w, None), "(T, H, W, C)")
+    c = inside_mask.shape[3]
+    _check("outside_mask", outside_mask, (t, h, w, c), "(T, H, W, C)")
+    _check("out", out, (t, h, w, c), "(T, H, W, C)")
+    _select_masked(mask, inside_mask, outside_mask, out)

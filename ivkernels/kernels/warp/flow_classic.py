@@ -1,0 +1,530 @@
+"""Per-pixel kernels of the Classic+NL optical flow (Sun, Roth & Black, IJCV 2014).
+
+The flow of the intrinsic video (paper Sec. 3, "pre-computed ... using
+Classic+NL") minimises, per pyramid level and per warping step, the
+linearised energy
+
+    E(du) = sum_x rho_D(It + Ix du + Iy dv)
+          + lam * sum_{x ~ y} rho_S((u + du)(y) - (u + du)(x)) + (same for v),
+
+with rho the generalised Charbonnier ``rho(z) = (z^2 + eps^2)^a`` (a = 0.45,
+eps = 1e-3), blended with a quadratic during graduated non-convexity (GNC).
+One iteratively-reweighted least-squares (IRLS) step replaces each rho by
+its weight ``psi(z) = rho'(z) / z`` at the current estimate and solves the
+resulting 2x2-per-pixel sparse linear system for ``(du, dv)``:
+
+    (psi_D Ix^2 + lam sum_n w^u_n) du + psi_D Ix Iy dv - lam sum_n w^u_n du_n
+        = -psi_D Ix It - lam sum_n w^u_n (u - u_n)          (and the same for v)
+
+(the normal equations of the Classic+NL "flow operator"; ``n`` runs over the
+4-neighbours joined by an existing first-order difference).  The system is
+solved data-parallel by red-black successive over-relaxation: pixels with
+``(x + y) % 2 == parity`` read only neighbours of the other colour, so a
+sweep of one colour is race-free and can be split into row bands anywhere.
+
+Also here: the ROF structure-texture decomposition the flow is computed on
+(Chambolle's dual projection), the sRGB grey conversion of the input, and
+two small helpers (per-row min/max, per-channel affine rescale) that the
+host uses to normalise images the way the public Classic+NL code does.
+
+Array layout: see :mod:`ivkernels.kernels`.  Every kernel runs one thread per
+image row (``row = t * H + y``) and loops over ``x``; all are gathers except
+:func:`sor_sweep`, which updates ``du`` in place one colour at a time.
+"""
+from __future__ import annotations
+
+import warp as wp
+
+from ivkernels.kernels.launch import launch_rows
+
+wp.set_module_options({"enable_backward": False})
+
+#: ``rgb2gray`` weights (ITU-R BT.601) applied to sRGB-encoded values.
+GREY_WEIGHTS = (0.2989, 0.5870, 0.1140)
+
+
+# ----------------------------------------------------------------------------
+# Device helpers
+# ----------------------------------------------------------------------------
+
+@wp.func
+def srgb_encode(c: float):
+    """sRGB transfer function (IEC 61966-2-1) of a linear value, clamped to [0, 1]."""
+    c = wp.clamp(c, 0.0, 1.0)
+    result = 12.92 * c
+    if c > 0.0031308:
+        result = 1.055 * wp.pow(c, 1.0 / 2.4) - 0.055
+    return result
+
+
+@wp.func
+def robust_weight(z: float, a: float, eps: float, quad_frac: float, quad_weight: float):
+    """IRLS weight ``psi(z) = rho'(z) / z`` of the GNC-blended penalty.
+
+    ``rho = quad_frac * rho_Q + (1 - quad_frac) * rho_GC`` with the
+    generalised Charbonnier ``rho_GC(z) = (z^2 + eps^2)^a`` (its
+    ``psi = 2 a (z^2 + eps^2)^(a-1)``) and a quadratic whose ``psi`` is the
+    constant ``quad_weight`` (``2 / sigma^2`` for ``rho_Q = z^2 / sigma^2``).
+    """
+    robust = 0.0
+    if quad_frac < 1.0:
+        robust = 2.0 * a * wp.pow(z * z + eps * eps, a - 1.0)
+    return quad_frac * quad_weight + (1.0 - quad_frac) * robust
+
+
+@wp.func
+def rof_divergence(p: wp.array4d(dtype=float), t: int, y: int, x: int):
+    """Backward-difference divergence of the dual field ``p`` at ``(y, x)``;
+    ``p`` is taken as zero outside the image (Chambolle 2004, Eq. 8)."""
+    d = p[t, y, x, 0] + p[t, y, x, 1]
+    if x > 0:
+        d -= p[t, y, x - 1, 0]
+    if y > 0:
+        d -= p[t, y - 1, x, 1]
+    return d
+
+
+# ----------------------------------------------------------------------------
+# Kernels: one thread per image row (row = t * H + y), looping over x
+# ----------------------------------------------------------------------------
+
+@wp.kernel
+def srgb_grey_rows(row_begin: int, rgb: wp.array4d(dtype=float), out: wp.array3d(dtype=float),
+                   wr: float, wg: float, wb: float):
+    r = row_begin + wp.tid()
+    height = out.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(out.shape[2]):
+        g = wr * srgb_encode(rgb[t, y, x, 0]) + wg * srgb_encode(rgb[t, y, x, 1]) \
+            + wb * srgb_encode(rgb[t, y, x, 2])
+        out[t, y, x] = 255.0 * g
+
+
+@wp.kernel
+def min_max_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array3d(dtype=float)):
+    r = row_begin + wp.tid()
+    height = src.shape[1]
+    t = r // height
+    y = r - t * height
+    for c in range(src.shape[3]):
+        lo = src[t, y, 0, c]
+        hi = lo
+        for x in range(1, src.shape[2]):
+            v = src[t, y, x, c]
+            lo = wp.min(lo, v)
+            hi = wp.max(hi, v)
+        out[r, c, 0] = lo
+        out[r, c, 1] = hi
+
+
+@wp.kernel
+def scale_shift_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array4d(dtype=float),
+                     scale: wp.array(dtype=float), shift: wp.array(dtype=float)):
+    r = row_begin + wp.tid()
+    height = src.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(src.shape[2]):
+        for c in range(src.shape[3]):
+            out[t, y, x, c] = src[t, y, x, c] * scale[c] + shift[c]
+
+
+@wp.kernel
+def rof_dual_step_rows(row_begin: int, img: wp.array3d(dtype=float), p_in: wp.array4d(dtype=float),
+                       p_out: wp.array4d(dtype=float), theta: float, delta: float):
+    r = row_begin + wp.tid()
+    height = img.shape[1]
+    width = img.shape[2]
+    t = r // height
+    y = r - t * height
+    for x in range(width):
+        v = img[t, y, x] + theta * rof_divergence(p_in, t, y, x)
+        gx = 0.0
+        gy = 0.0
+        if x < width - 1:
+            gx = img[t, y, x + 1] + theta * rof_divergence(p_in, t, y, x + 1) - v
+        if y < height - 1:
+            gy = img[t, y + 1, x] + theta * rof_divergence(p_in, t, y + 1, x) - v
+        px = p_in[t, y, x, 0] + delta * gx
+        py = p_in[t, y, x, 1] + delta * gy
+        norm = wp.max(1.0, wp.sqrt(px * px + py * py))
+        p_out[t, y, x, 0] = px / norm
+        p_out[t, y, x, 1] = py / norm
+
+
+@wp.kernel
+def rof_texture_rows(row_begin: int, img: wp.array3d(dtype=float), p: wp.array4d(dtype=float),
+                     out: wp.array3d(dtype=float), theta: float, alpha: float):
+    r = row_begin + wp.tid()
+    height = img.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(img.shape[2]):
+        structure = img[t, y, x] + theta * rof_divergence(p, t, y, x)
+        out[t, y, x] = img[t, y, x] - alpha * structure
+
+
+@wp.kernel
+def pack_image_gradient_rows(row_begin: int, img: wp.array3d(dtype=float), gx: wp.array3d(dtype=float),
+                             gy: wp.array3d(dtype=float), out: wp.array4d(dtype=float)):
+    r = row_begin + wp.tid()
+    height = img.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(img.shape[2]):
+        out[t, y, x, 0] = img[t, y, x]
+        out[t, y, x, 1] = gx[t, y, x]
+        out[t, y, x, 2] = gy[t, y, x]
+
+
+@wp.kernel
+def data_coefficients_rows(row_begin: int, i1: wp.array3d(dtype=float), i1x: wp.array3d(dtype=float),
+                           i1y: wp.array3d(dtype=float), warped: wp.array4d(dtype=float),
+                           inside: wp.array3d(dtype=float), du: wp.array4d(dtype=float),
+                           out: wp.array4d(dtype=float), blend: float, a: float, eps: float,
+                           quad_frac: float, quad_weight: float):
+    r = row_begin + wp.tid()
+    height = i1.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(i1.shape[2]):
+        ix = 0.0
+        iy = 0.0
+        it = 0.0
+        if inside[t, y, x] > 0.5:
+            ix = blend * warped[t, y, x, 1] + (1.0 - blend) * i1x[t, y, x]
+            iy = blend * warped[t, y, x, 2] + (1.0 - blend) * i1y[t, y, x]
+            it = warped[t, y, x, 0] - i1[t, y, x]
+        residual = it + ix * du[t, y, x, 0] + iy * du[t, y, x, 1]
+        psi = robust_weight(residual, a, eps, quad_frac, quad_weight)
+        out[t, y, x, 0] = psi * ix * ix
+        out[t, y, x, 1] = psi * ix * iy
+        out[t, y, x, 2] = psi * iy * iy
+        out[t, y, x, 3] = psi * ix * it
+        out[t, y, x, 4] = psi * iy * it
+
+
+@wp.kernel
+def smoothness_weights_rows(row_begin: int, flow: wp.array4d(dtype=float), du: wp.array4d(dtype=float),
+                            out: wp.array4d(dtype=float), a: float, eps: float,
+                            quad_frac: float, quad_weight: float):
+    r = row_begin + wp.tid()
+    height = flow.shape[1]
+    width = flow.shape[2]
+    t = r // height
+    y = r - t * height
+    for x in range(width):
+        for c in range(2):
+            here = flow[t, y, x, c] + du[t, y, x, c]
+            w_right = 0.0
+            w_down = 0.0
+            if x < width - 1:
+                w_right = robust_weight(flow[t, y, x + 1, c] + du[t, y, x + 1, c] - here,
+                                        a, eps, quad_frac, quad_weight)
+            if y < height - 1:
+                w_down = robust_weight(flow[t, y + 1, x, c] + du[t, y + 1, x, c] - here,
+                                       a, eps, quad_frac, quad_weight)
+            out[t, y, x, 2 * c] = w_right
+            out[t, y, x, 2 * c + 1] = w_down
+
+
+@wp.kernel
+def sor_sweep_rows(row_begin: int, flow: wp.array4d(dtype=float), du: wp.array4d(dtype=float),
+                   data: wp.array4d(dtype=float), smooth: wp.array4d(dtype=float),
+                   lam: float, omega: float, parity: int):
+    r = row_begin + wp.tid()
+    height = flow.shape[1]
+    width = flow.shape[2]
+    t = r // height
+    y = r - t * height
+    x = (parity + y) % 2
+    while x < width:
+        diag_u = 0.0
+        diag_v = 0.0
+        rhs_u = -data[t, y, x, 3]
+        rhs_v = -data[t, y, x, 4]
+        u = flow[t, y, x, 0]
+        v = flow[t, y, x, 1]
+        if x < width - 1:
+            wu = lam * smooth[t, y, x, 0]
+            wv = lam * smooth[t, y, x, 2]
+            diag_u += wu
+            diag_v += wv
+            rhs_u += wu * (flow[t, y, x + 1, 0] + du[t, y, x + 1, 0] - u)
+            rhs_v += wv * (flow[t, y, x + 1, 1] + du[t, y, x + 1, 1] - v)
+        if x > 0:
+            wu = lam * smooth[t, y, x - 1, 0]
+            wv = lam * smooth[t, y, x - 1, 2]
+            diag_u += wu
+            diag_v += wv
+            rhs_u += wu * (flow[t, y, x - 1, 0] + du[t, y, x - 1, 0] - u)
+            rhs_v += wv * (flow[t, y, x - 1, 1] + du[t, y, x - 1, 1] - v)
+        if y < height - 1:
+            wu = lam * smooth[t, y, x, 1]
+            wv = lam * smooth[t, y, x, 3]
+            diag_u += wu
+            diag_v += wv
+            rhs_u += wu * (flow[t, y + 1, x, 0] + du[t, y + 1, x, 0] - u)
+            rhs_v += wv * (flow[t, y + 1, x, 1] + du[t, y + 1, x, 1] - v)
+        if y > 0:
+            wu = lam * smooth[t, y - 1, x, 1]
+            wv = lam * smooth[t, y - 1, x, 3]
+            diag_u += wu
+            diag_v += wv
+            rhs_u += wu * (flow[t, y - 1, x, 0] + du[t, y - 1, x, 0] - u)
+            rhs_v += wv * (flow[t, y - 1, x, 1] + du[t, y - 1, x, 1] - v)
+        a11 = data[t, y, x, 0] + diag_u
+        a12 = data[t, y, x, 1]
+        a22 = data[t, y, x, 2] + diag_v
+        det = a11 * a22 - a12 * a12
+        if det > 1.0e-20 * (a11 * a22 + 1.0e-30):
+            new_u = (a22 * rhs_u - a12 * rhs_v) / det
+            new_v = (a11 * rhs_v - a12 * rhs_u) / det
+            du[t, y, x, 0] = (1.0 - omega) * du[t, y, x, 0] + omega * new_u
+            du[t, y, x, 1] = (1.0 - omega) * du[t, y, x, 1] + omega * new_v
+        x += 2
+
+
+@wp.kernel
+def apply_update_rows(row_begin: int, flow: wp.array4d(dtype=float), du: wp.array4d(dtype=float),
+                      out: wp.array4d(dtype=float), limit: float):
+    r = row_begin + wp.tid()
+    height = flow.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(flow.shape[2]):
+        for c in range(2):
+            d = du[t, y, x, c]
+            if limit > 0.0:
+                d = wp.clamp(d, -limit, limit)
+            out[t, y, x, c] = flow[t, y, x, c] + d
+
+
+@wp.kernel
+def select_masked_rows(row_begin: int, mask: wp.array3d(dtype=float), inside_mask: wp.array4d(dtype=float),
+                       outside_mask: wp.array4d(dtype=float), out: wp.array4d(dtype=float)):
+    r = row_begin + wp.tid()
+    height = mask.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(mask.shape[2]):
+        for c in range(out.shape[3]):
+            if mask[t, y, x] >= 0.5:
+                out[t, y, x, c] = inside_mask[t, y, x, c]
+            else:
+                out[t, y, x, c] = outside_mask[t, y, x, c]
+
+
+# ----------------------------------------------------------------------------
+# Host functions
+# ----------------------------------------------------------------------------
+
+def _check(name: str, a, shape: tuple, layout: str, device=None) -> None:
+    """Raise unless ``a`` is a float32 ``wp.array`` of ``shape`` (None = any size) on ``device``."""
+    if not isinstance(a, wp.array):
+        raise TypeError(f"{name} must be a wp.array of float32 {layout}, got {type(a).__name__}")
+    if a.dtype != wp.float32:
+        raise TypeError(f"{name} must have dtype float32, got {wp.types.type_repr(a.dtype)}")
+    if len(a.shape) != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
+        want = tuple("?" if e is None else e for e in shape)
+        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
+    if device is not None and a.device != device:
+        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
+
+
+def _rows(a) -> int:
+    return a.shape[0] * a.shape[1]
+
+
+def srgb_grey(rgb, out) -> None:
+    """Grey level of linear RGB frames, sRGB-encoded and scaled to [0, 255].
+
+    ``out = 255 * (0.2989 R' + 0.5870 G' + 0.1140 B')`` with ``X'`` the
+    sRGB encoding of the linear value clamped to [0, 1] (MATLAB's ``rgb2gray``
+    of the 8-bit image, the input of the public Classic+NL code).
+
+    rgb : (T, H, W, 3) float32, linear RGB in [0, 1].
+    out : (T, H, W) float32, grey in [0, 255] (gamma-encoded, not linear).
+    """
+    _check("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
+    t, h, w, _ = rgb.shape
+    _check("out", out, (t, h, w), "(T, H, W)", rgb.device)
+    launch_rows(srgb_grey_rows, t * h, [rgb, out, *GREY_WEIGHTS], rgb.device)
+
+
+def row_min_max(src, out) -> None:
+    """Minimum and maximum of every image row and channel.
+
+    src : (T, H, W, C) float32.
+    out : (T*H, C, 2) float32; ``out[t*H + y, c] = (min, max)`` of ``src[t, y, :, c]``.
+    The host finishes the reduction over rows (``out.min(0)``, ``out.max(0)``).
+    """
+    _check("src", src, (None, None, None, None), "(T, H, W, C)")
+    t, h, w, c = src.shape
+    if w < 1:
+        raise ValueError(f"src must have at least one column, got shape {tuple(src.shape)}")
+    _check("out", out, (t * h, c, 2), "(T*H, C, 2)", src.device)
+    launch_rows(min_max_rows, t * h, [src, out], src.device)
+
+
+def scale_shift(src, out, scale, shift) -> None:
+    """Per-channel affine map ``out[..., c] = src[..., c] * scale[c] + shift[c]``.
+
+    src, out : (T, H, W, C) float32 (may be the same array).
+    scale, shift : (C,) float32 arrays on the same device.
+    """
+    _check("src", src, (None, None, None, None), "(T, H, W, C)")
+    t, h, w, c = src.shape
+    _check("out", out, (t, h, w, c), "(T, H, W, C)", src.device)
+    _check("scale", scale, (c,), "(C,)", src.device)
+    _check("shift", shift, (c,), "(C,)", src.device)
+    launch_rows(scale_shift_rows, t * h, [src, out, scale, shift], src.device)
+
+
+def rof_dual_step(img, p_in, p_out, theta: float, delta: float) -> None:
+    """One step of Chambolle's projection for the ROF structure image.
+
+    With ``v = img + theta * div(p_in)`` (forward-difference gradient,
+    replicate border; backward-difference divergence, zero outside):
+    ``p_out = (p_in + delta * grad v) / max(1, |p_in + delta * grad v|)``.
+    Iterating from ``p = 0`` converges to the dual of
+    ``min_S |grad S|_TV + |S - img|^2 / (2 theta)`` for ``delta <= 1 / (4 theta)``.
+
+    img : (T, H, W) float32 (the public code scales it to [-1, 1]).
+    p_in, p_out : (T, H, W, 2) float32 dual field; must be different arrays.
+    """
+    _check("img", img, (None, None, None), "(T, H, W)")
+    t, h, w = img.shape
+    _check("p_in", p_in, (t, h, w, 2), "(T, H, W, 2)", img.device)
+    _check("p_out", p_out, (t, h, w, 2), "(T, H, W, 2)", img.device)
+    if p_in.ptr == p_out.ptr:
+        raise ValueError("p_in and p_out must be different arrays (the step reads neighbours of p_in)")
+    launch_rows(rof_dual_step_rows, t * h, [img, p_in, p_out, float(theta), float(delta)], img.device)
+
+
+def rof_texture(img, p, out, theta: float, alpha: float) -> None:
+    """Texture part of the ROF decomposition: ``out = img - alpha * (img + theta * div p)``.
+
+    ``img + theta * div p`` is the structure image; ``alpha = 0.95`` keeps
+    5 % of it (Classic+NL's texture weight).
+
+    img : (T, H, W) float32; p : (T, H, W, 2) float32 from :func:`rof_dual_step`;
+    out : (T, H, W) float32 (may be ``img``).
+    """
+    _check("img", img, (None, None, None), "(T, H, W)")
+    t, h, w = img.shape
+    _check("p", p, (t, h, w, 2), "(T, H, W, 2)", img.device)
+    _check("out", out, (t, h, w), "(T, H, W)", img.device)
+    launch_rows(rof_texture_rows, t * h, [img, p, out, float(theta), float(alpha)], img.device)
+
+
+def pack_image_gradient(img, gx, gy, out) -> None:
+    """Stack an image and its two derivatives as channels: ``out = (img, gx, gy)``.
+
+    img, gx, gy : (T, H, W) float32; out : (T, H, W, 3) float32.
+    """
+    _check("img", img, (None, None, None), "(T, H, W)")
+    t, h, w = img.shape
+    _check("gx", gx, (t, h, w), "(T, H, W)", img.device)
+    _check("gy", gy, (t, h, w), "(T, H, W)", img.device)
+    _check("out", out, (t, h, w, 3), "(T, H, W, 3)", img.device)
+    launch_rows(pack_image_gradient_rows, t * h, [img, gx, gy, out], img.device)
+
+
+def data_coefficients(i1, i1x, i1y, warped, inside, du, out, blend: float = 0.5, a: float = 0.45,
+                      eps: float = 1e-3, quad_frac: float = 0.0, quad_weight: float = 2e6) -> None:
+    """IRLS coefficients of the linearised brightness-constancy term.
+
+    Derivatives as in Classic+NL: ``It = I2(x + u) - I1``, ``Ix = blend *
+    I2x(x + u) + (1 - blend) * I1x`` (the same for y), all three set to 0 where
+    ``x + u`` leaves the image.  The weight ``psi`` (see :func:`robust_weight`)
+    is taken at the linearised residual ``It + Ix du + Iy dv``.
+
+    i1, i1x, i1y : (T, H, W) float32, first frames and their derivatives.
+    warped : (T, H, W, 3) float32, second frames and their x/y derivatives
+        warped by the current flow (channels ``I2, I2x, I2y``).
+    inside : (T, H, W) float32, 1 where ``x + u`` lies in the image.
+    du : (T, H, W, 2) float32, current flow increment.
+    out : (T, H, W, 5) float32 ``psi * (Ix Ix, Ix Iy, Iy Iy, Ix It, Iy It)``.
+    """
+    _check("i1", i1, (None, None, None), "(T, H, W)")
+    t, h, w = i1.shape
+    dev = i1.device
+    _check("i1x", i1x, (t, h, w), "(T, H, W)", dev)
+    _check("i1y", i1y, (t, h, w), "(T, H, W)", dev)
+    _check("warped", warped, (t, h, w, 3), "(T, H, W, 3)", dev)
+    _check("inside", inside, (t, h, w), "(T, H, W)", dev)
+    _check("du", du, (t, h, w, 2), "(T, H, W, 2)", dev)
+    _check("out", out, (t, h, w, 5), "(T, H, W, 5)", dev)
+    launch_rows(data_coefficients_rows, t * h,
+                [i1, i1x, i1y, warped, inside, du, out, float(blend), float(a), float(eps),
+                 float(quad_frac), float(quad_weight)], dev)
+
+
+def smoothness_weights(flow, du, out, a: float = 0.45, eps: float = 1e-3, quad_frac: float = 0.0,
+                       quad_weight: float = 2e6) -> None:
+    """IRLS weights of the first-order smoothness term on ``u + du``.
+
+    flow, du : (T, H, W, 2) float32.
+    out : (T, H, W, 4) float32: ``psi`` of the difference to the right
+        neighbour and to the neighbour below, for u (channels 0, 1) and
+        v (channels 2, 3); 0 where that neighbour does not exist.
+    """
+    _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
+    t, h, w, _ = flow.shape
+    _check("du", du, (t, h, w, 2), "(T, H, W, 2)", flow.device)
+    _check("out", out, (t, h, w, 4), "(T, H, W, 4)", flow.device)
+    launch_rows(smoothness_weights_rows, t * h,
+                [flow, du, out, float(a), float(eps), float(quad_frac), float(quad_weight)], flow.device)
+
+
+def sor_sweep(flow, du, data, smooth, lam: float, omega: float, parity: int) -> None:
+    """One half-sweep of red-black block SOR on the IRLS system, in place on ``du``.
+
+    Updates the pixels with ``(x + y) % 2 == parity``: solves their 2x2 block
+    (data coefficients plus ``lam`` times the smoothness weights) with the
+    neighbours fixed, and relaxes by ``omega`` (1 = Gauss-Seidel).  Call with
+    parity 0 then 1 for a full sweep.
+
+    flow : (T, H, W, 2) float32, flow ``u`` the increment is added to.
+    du : (T, H, W, 2) float32, increment, read and written.
+    data : (T, H, W, 5) float32 from :func:`data_coefficients`.
+    smooth : (T, H, W, 4) float32 from :func:`smoothness_weights`.
+    """
+    _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
+    t, h, w, _ = flow.shape
+    dev = flow.device
+    _check("du", du, (t, h, w, 2), "(T, H, W, 2)", dev)
+    _check("data", data, (t, h, w, 5), "(T, H, W, 5)", dev)
+    _check("smooth", smooth, (t, h, w, 4), "(T, H, W, 4)", dev)
+    if parity not in (0, 1):
+        raise ValueError(f"parity must be 0 or 1, got {parity!r}")
+    launch_rows(sor_sweep_rows, t * h, [flow, du, data, smooth, float(lam), float(omega), int(parity)], dev)
+
+
+def apply_update(flow, du, out, limit: float = 1.0) -> None:
+    """``out = flow + clip(du, -limit, limit)`` (no clipping when ``limit <= 0``).
+
+    flow, du, out : (T, H, W, 2) float32; ``out`` may be ``flow``.
+    """
+    _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
+    t, h, w, _ = flow.shape
+    _check("du", du, (t, h, w, 2), "(T, H, W, 2)", flow.device)
+    _check("out", out, (t, h, w, 2), "(T, H, W, 2)", flow.device)
+    launch_rows(apply_update_rows, t * h, [flow, du, out, float(limit)], flow.device)
+
+
+def select_masked(mask, inside_mask, outside_mask, out) -> None:
+    """``out = inside_mask`` where ``mask >= 0.5``, else ``outside_mask``.
+
+    mask : (T, H, W) float32; inside_mask, outside_mask, out : (T, H, W, C) float32
+    (``out`` may alias either input).
+    """
+    _check("mask", mask, (None, None, None), "(T, H, W)")
+    t, h, w = mask.shape
+    _check("inside_mask", inside_mask, (t, h, w, None), "(T, H, W, C)", mask.device)
+    c = inside_mask.shape[3]
+    _check("outside_mask", outside_mask, (t, h, w, c), "(T, H, W, C)", mask.device)
+    _check("out", out, (t, h, w, c), "(T, H, W, C)", mask.device)
+    launch_rows(select_masked_rows, t * h, [mask, inside_mask, outside_mask, out], mask.device)
