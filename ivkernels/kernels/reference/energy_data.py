@@ -1,0 +1,32 @@
+"""NumPy reference of :mod:`ivkernels.kernels.warp.energy_data` (Eq. 3), float64."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def data_term(I, A, S, w_lum, lam: float = 10.0, eps: float = 0.001):
+    """Data term of Eq. 3 and its gradient.
+
+    ``E = lam * sum_{t,y,x,c} sqrt(z^2 + eps^2)`` with
+    ``z = w_lum * (I - A - S)`` (log domain).
+
+    Parameters
+    ----------
+    I, A : (T, H, W, 3) log input and log albedo.
+    S : (T, H, W) log shading.
+    w_lum : (T, H, W) luminance weight.
+
+    Returns
+    -------
+    energy_rows : (T*H,) float64, the energy of row ``t*H + y``.
+    gA : (T, H, W, 3) float64, dE/dA.
+    gS : (T, H, W) float64, dE/dS.
+    """
+    I, A, S, w = (np.asarray(a, np.float64) for a in (I, A, S, w_lum))
+    t, h, wd, _ = I.shape
+    z = w[..., None] * (I - A - S[..., None])
+    rho = np.sqrt(z * z + eps * eps)
+    energy_rows = lam * rho.sum(axis=(2, 3)).reshape(t * h)
+    gA = -lam * w[..., None] * z / rho
+    gS = gA.sum(axis=-1)
+    return energy_rows, gA, gS

@@ -1,0 +1,51 @@
+"""NumPy reference of :mod:`ivkernels.kernels.warp.energy_shading` (Eq. 9 local part,
+Eq. 13 coupling), float64."""
+from __future__ import annotations
+
+import numpy as np
+
+NEIGHBOURS_3X3 = tuple((dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if (dy, dx) != (0, 0))
+
+
+def shading_smoothness(S, lam: float = 2.0, eps: float = 0.001):
+    """Local shading smoothness of Eq. 9 and its gradient.
+
+    ``E = lam * sum_x sum_{y in N3(x)} sqrt((S(x) - S(y))^2 + eps^2)``, N3 the
+    8 neighbours inside the image (every unordered pair counted twice).
+
+    Returns ``(energy_rows (T*H,), gS (T, H, W))``, float64.
+    """
+    S = np.asarray(S, np.float64)
+    t, h, w = S.shape
+    energy = np.zeros((t, h, w))
+    grad = np.zeros((t, h, w))
+    for dy, dx in NEIGHBOURS_3X3:
+        # pixels x whose neighbour x + (dy, dx) lies inside the image
+        ys = slice(max(0, -dy), h - max(0, dy))
+        xs = slice(max(0, -dx), w - max(0, dx))
+        yn = slice(max(0, dy), h + min(0, dy))
+        xn = slice(max(0, dx), w + min(0, dx))
+        d = S[:, ys, xs] - S[:, yn, xn]
+        rho = np.sqrt(d * d + eps * eps)
+        energy[:, ys, xs] += lam * rho
+        psi = lam * d / rho
+        grad[:, ys, xs] += psi
+        grad[:, yn, xn] -= psi
+    return energy.sum(axis=2).reshape(t * h), grad
+
+
+def coupling_term(S, S_tilde, w_bnd, lam: float = 10.0):
+    """Coupling term of Eq. 13: ``E = lam * sum_{t < T'} sum_x w_bnd (S - S~)^2``.
+
+    ``w_bnd`` is (T', H, W) with ``T' <= T``; frames ``t >= T'`` get no term.
+    Returns ``(energy_rows (T*H,), gS (T, H, W))``, float64.
+    """
+    S, St, w = (np.asarray(a, np.float64) for a in (S, S_tilde, w_bnd))
+    t, h, wd = S.shape
+    tp = w.shape[0]
+    energy = np.zeros((t, h))
+    grad = np.zeros((t, h, wd))
+    d = S[:tp] - St[:tp]
+    energy[:tp] = lam * (w * d * d).sum(axis=2)
+    grad[:tp] = 2.0 * lam * w * d
+    return energy.reshape(t * h), grad

@@ -1,0 +1,145 @@
+"""NumPy reference of :mod:`ivkernels.kernels.warp.median`, brute force, float64.
+
+Written pixel by pixel for clarity; use on small images only.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+KMEANS_ITERATIONS = 8
+MIN_SEPARATION = 0.5
+
+
+def median5x5(src):
+    """5x5 median of every channel of ``src`` (T, H, W, C), replicate border."""
+    src = np.asarray(src, np.float64)
+    padded = np.pad(src, ((0, 0), (2, 2), (2, 2), (0, 0)), mode="edge")
+    windows = np.lib.stride_tricks.sliding_window_view(padded, (5, 5), axis=(1, 2))
+    return np.median(windows.reshape(*src.shape, 25), axis=-1)
+
+
+def l1_quadratic_minimiser(values, weights, s: float, lam: float) -> float:
+    """``argmin_u sum_i w_i |u - v_i| + lam (u - s)^2`` (entries with ``w_i <= 0`` ignored).
+
+    ``lam > 0``: Li & Osher's formula, the median of the ``n`` values and the
+    ``n + 1`` points ``s + (W - 2 W_k) / (2 lam)``, ``W_k`` the weight of the
+    ``k`` smallest values.  ``lam = 0``: the lower weighted median (the
+    smallest ``v_k`` with ``W_k >= W / 2``).  No positive weight: ``s``.
+    """
+    values = np.asarray(values, np.float64)
+    weights = np.asarray(weights, np.float64)
+    keep = weights > 0
+    values, weights = values[keep], weights[keep]
+    if values.size == 0:
+        return float(s)
+    order = np.argsort(values, kind="stable")
+    v, wts = values[order], weights[order]
+    total = wts.sum()
+    cum = np.concatenate([[0.0], np.cumsum(wts)])
+    if lam > 0:
+        points = s + (total - 2.0 * cum) / (2.0 * lam)
+        return float(np.median(np.concatenate([v, points])))
+    return float(v[np.searchsorted(cum[1:], 0.5 * total, side="left")])
+
+
+def flow_two_means(flow_t, y: int, x: int, radius: int,
+                   iterations: int = KMEANS_ITERATIONS, min_separation: float = MIN_SEPARATION):
+    """``surf(x, .)`` of Eq. 10 over the window of ``(y, x)`` in one flow field (H, W, 2).
+
+    2-means of the window's flow vectors (pixels inside the image): centres
+    start at ``flow(x)`` and at the window vector farthest from it (the first
+    one in row-major order on ties); Lloyd iterations (a vector goes to
+    centre 1 only if strictly nearer to it) until the centres stop moving or
+    ``iterations`` passes; an emptied cluster keeps its centre.  Returns a
+    (2r+1, 2r+1) float array: 1 where the window pixel is inside the image and
+    in the cluster of ``flow(x)`` (or everywhere inside if the final centres
+    are closer than ``min_separation`` pixels), 0 elsewhere.
+    """
+    flow_t = np.asarray(flow_t, np.float64)
+    h, w, _ = flow_t.shape
+    n = 2 * radius + 1
+    inside = np.zeros((n, n), bool)
+    vec = np.zeros((n, n, 2))
+    for j in range(n):
+        for i in range(n):
+            yy, xx = y + j - radius, x + i - radius
+            if 0 <= yy < h and 0 <= xx < w:
+                inside[j, i] = True
+                vec[j, i] = flow_t[yy, xx]
+    c0 = flow_t[y, x].copy()
+    d = ((vec - c0) ** 2).sum(-1)
+    d[~inside] = -1.0
+    c1 = vec.reshape(-1, 2)[int(np.argmax(d))].copy()
+    for _ in range(iterations):
+        near1 = (((vec - c1) ** 2).sum(-1) < ((vec - c0) ** 2).sum(-1)) & inside
+        near0 = ~near1 & inside
+        n0 = vec[near0].mean(0) if near0.any() else c0
+        n1 = vec[near1].mean(0) if near1.any() else c1
+        moved = not (np.array_equal(n0, c0) and np.array_equal(n1, c1))
+        c0, c1 = n0, n1
+        if not moved:
+            break
+    if ((c0 - c1) ** 2).sum() < min_separation**2:
+        return inside.astype(np.float64)
+    near1 = ((vec - c1) ** 2).sum(-1) < ((vec - c0) ** 2).sum(-1)
+    own1 = ((flow_t[y, x] - c1) ** 2).sum() < ((flow_t[y, x] - c0) ** 2).sum()
+    return (inside & (near1 == own1)).astype(np.float64)
+
+
+def shading_weights(flow_t, y: int, x: int, radius: int = 7, sigma_s: float = 7.0):
+    """Non-local weights ``w_nl(x, .)`` of Eq. 10 over the window of ``(y, x)``: (2r+1, 2r+1)."""
+    j, i = np.mgrid[-radius:radius + 1, -radius:radius + 1]
+    spatial = np.exp(-(i * i + j * j) / (2.0 * sigma_s**2))
+    return spatial * flow_two_means(flow_t, y, x, radius)
+
+
+def _window(img, y: int, x: int, radius: int):
+    """(2r+1, 2r+1) window of ``img`` (H, W) around (y, x); outside pixels are 0."""
+    h, w = img.shape
+    out = np.zeros((2 * radius + 1, 2 * radius + 1))
+    y0, y1 = max(0, y - radius), min(h, y + radius + 1)
+    x0, x1 = max(0, x - radius), min(w, x + radius + 1)
+    out[y0 - y + radius:y1 - y + radius, x0 - x + radius:x1 - x + radius] = img[y0:y1, x0:x1]
+    return out
+
+
+def weighted_median_shading(S, flow, w_bnd, radius: int = 7, sigma_s: float = 7.0, lam: float = 0.001):
+    """S~ update of Eq. 13: see :func:`ivkernels.kernels.warp.median.weighted_median_shading`.
+
+    ``S`` (T, H, W), ``flow`` (T', H, W, 2), ``w_bnd`` (T', H, W).  Returns (T, H, W).
+    """
+    S = np.asarray(S, np.float64)
+    out = S.copy()
+    for t in range(flow.shape[0]):
+        for y, x in zip(*np.nonzero(np.asarray(w_bnd[t]) >= 0.5)):
+            wts = shading_weights(flow[t], y, x, radius, sigma_s)
+            vals = _window(S[t], y, x, radius)
+            out[t, y, x] = l1_quadratic_minimiser(vals.ravel(), wts.ravel(), S[t, y, x], lam)
+    return out
+
+
+def flow_weights(lab_t, occ_t, y: int, x: int, radius: int = 7, sigma_x: float = 7.0, sigma_i: float = 7.0):
+    """Classic+NL weights over the window of ``(y, x)``: spatial * colour * occlusion, (2r+1, 2r+1)."""
+    lab_t = np.asarray(lab_t, np.float64)
+    j, i = np.mgrid[-radius:radius + 1, -radius:radius + 1]
+    spatial = np.exp(-(i * i + j * j) / (2.0 * sigma_x**2))
+    diff2 = sum((_window(lab_t[..., c], y, x, radius) - lab_t[y, x, c]) ** 2 for c in range(3))
+    colour = np.exp(-diff2 / (2.0 * sigma_i**2))
+    return spatial * colour * _window(np.asarray(occ_t, np.float64), y, x, radius) \
+        * _window(np.ones(occ_t.shape), y, x, radius)
+
+
+def weighted_median_flow(flow, lab, occ, mask, radius: int = 7, sigma_x: float = 7.0, sigma_i: float = 7.0):
+    """Classic+NL non-local flow median: see :func:`ivkernels.kernels.warp.median.weighted_median_flow`.
+
+    Returns (T, H, W, 2).
+    """
+    flow = np.asarray(flow, np.float64)
+    out = flow.copy()
+    for t in range(flow.shape[0]):
+        for y, x in zip(*np.nonzero(np.asarray(mask[t]) >= 0.5)):
+            wts = flow_weights(lab[t], occ[t], y, x, radius, sigma_x, sigma_i).ravel()
+            for c in range(2):
+                vals = _window(flow[t, ..., c], y, x, radius).ravel()
+                out[t, y, x, c] = l1_quadratic_minimiser(vals, wts, flow[t, y, x, c], 0.0)
+    return out

@@ -1,0 +1,127 @@
+"""Shading terms of the intrinsic-video energy, log domain: the local
+smoothness of Eq. 9 and the coupling to S~ of Eq. 13.
+
+Energy conventions as in :mod:`ivkernels.kernels`: gradients are *added* into
+``gS``, energies *added* per row into ``energy_rows`` (float64, row ``t*H + y``).
+The non-local part of Eq. 9 is minimised through S~ by
+:func:`ivkernels.kernels.warp.median.weighted_median_shading`.
+"""
+from __future__ import annotations
+
+import warp as wp
+
+from ivkernels.kernels.launch import launch_rows
+
+wp.set_module_options({"enable_backward": False})
+
+
+@wp.func
+def charbonnier(z: float, eps: float):
+    """``sqrt(z^2 + eps^2)``."""
+    return wp.sqrt(z * z + eps * eps)
+
+
+@wp.kernel
+def shading_smoothness_rows(row_begin: int, S: wp.array3d(dtype=float), gS: wp.array3d(dtype=float),
+                            energy_rows: wp.array(dtype=wp.float64), lam: float, eps: float):
+    r = row_begin + wp.tid()
+    height = S.shape[1]
+    width = S.shape[2]
+    t = r // height
+    y = r - t * height
+    e = wp.float64(0.0)
+    for x in range(width):
+        s = S[t, y, x]
+        g = float(0.0)
+        for j in range(3):
+            yy = y + j - 1
+            if yy >= 0 and yy < height:
+                for i in range(3):
+                    xx = x + i - 1
+                    if xx >= 0 and xx < width and (i != 1 or j != 1):
+                        d = s - S[t, yy, xx]
+                        rho = charbonnier(d, eps)
+                        e += wp.float64(rho)
+                        g += d / rho
+        # S(x) appears in the pair (x, y) and in (y, x): twice the derivative
+        gS[t, y, x] = gS[t, y, x] + 2.0 * lam * g
+    energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
+
+
+@wp.kernel
+def coupling_rows(row_begin: int, S: wp.array3d(dtype=float), S_tilde: wp.array3d(dtype=float),
+                  w_bnd: wp.array3d(dtype=float), gS: wp.array3d(dtype=float),
+                  energy_rows: wp.array(dtype=wp.float64), lam: float):
+    r = row_begin + wp.tid()
+    height = S.shape[1]
+    t = r // height
+    y = r - t * height
+    e = wp.float64(0.0)
+    for x in range(S.shape[2]):
+        w = w_bnd[t, y, x]
+        d = S[t, y, x] - S_tilde[t, y, x]
+        e += wp.float64(w * d * d)
+        gS[t, y, x] = gS[t, y, x] + 2.0 * lam * w * d
+    energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
+
+
+def _check(name: str, a, shape: tuple, layout: str, device=None, dtype=wp.float32) -> None:
+    """Raise unless ``a`` is a ``wp.array`` of ``dtype`` and ``shape`` (None = any size) on ``device``."""
+    if not isinstance(a, wp.array):
+        raise TypeError(f"{name} must be a wp.array of {wp.types.type_repr(dtype)} {layout}, "
+                        f"got {type(a).__name__}")
+    if a.dtype != dtype:
+        raise TypeError(f"{name} must have dtype {wp.types.type_repr(dtype)}, got {wp.types.type_repr(a.dtype)}")
+    if len(a.shape) != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
+        want = tuple("?" if e is None else e for e in shape)
+        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
+    if device is not None and a.device != device:
+        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
+
+
+def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
+    """Add the local shading smoothness of Eq. 9 and its gradient.
+
+    ``E = lam * sum_x sum_{y in N3(x)} sqrt((S(x) - S(y))^2 + eps^2)``, N3 the 8
+    neighbours inside the image; as in the paper's double sum every unordered
+    pair is counted twice, so ``dE/dS(x) = 2 lam sum_y psi(S(x) - S(y))`` with
+    ``psi(d) = d / sqrt(d^2 + eps^2)`` (a gather, no atomics).
+
+    Parameters
+    ----------
+    S : wp.array float32 (T, H, W), log shading.
+    gS : wp.array float32 (T, H, W), accumulated.
+    energy_rows : wp.array float64 (T*H,), accumulated.
+    lam : lambda_Ss.  eps : Charbonnier epsilon.
+    """
+    _check("S", S, (None, None, None), "(T, H, W)")
+    t, h, w = S.shape
+    _check("gS", gS, (t, h, w), "(T, H, W)", S.device)
+    _check("energy_rows", energy_rows, (t * h,), "(T*H,)", S.device, wp.float64)
+    launch_rows(shading_smoothness_rows, t * h, [S, gS, energy_rows, float(lam), float(eps)], device=S.device)
+
+
+def coupling_term(S, S_tilde, w_bnd, gS, energy_rows, lam: float = 10.0) -> None:
+    """Add the coupling term of Eq. 13 and its gradient in S.
+
+    ``E = lam * sum_{t < T'} sum_x w_bnd (S - S~)^2``; ``dE/dS = 2 lam w_bnd (S - S~)``.
+    Frames ``t >= T'`` (the last frame has no flow) get no term.
+
+    Parameters
+    ----------
+    S, S_tilde : wp.array float32 (T, H, W), log shading and its coupling variable.
+    w_bnd : wp.array float32 (T', H, W), ``T' <= T``, motion-boundary map.
+    gS : wp.array float32 (T, H, W), accumulated.
+    energy_rows : wp.array float64 (T*H,), accumulated.
+    lam : lambda_cpl.
+    """
+    _check("S", S, (None, None, None), "(T, H, W)")
+    t, h, w = S.shape
+    dev = S.device
+    _check("S_tilde", S_tilde, (t, h, w), "(T, H, W)", dev)
+    _check("w_bnd", w_bnd, (None, h, w), "(T', H, W)", dev)
+    if w_bnd.shape[0] > t:
+        raise ValueError(f"w_bnd has {w_bnd.shape[0]} frames but S only {t}; expected T' <= T")
+    _check("gS", gS, (t, h, w), "(T, H, W)", dev)
+    _check("energy_rows", energy_rows, (t * h,), "(T*H,)", dev, wp.float64)
+    launch_rows(coupling_rows, w_bnd.shape[0] * h, [S, S_tilde, w_bnd, gS, energy_rows, float(lam)], device=dev)

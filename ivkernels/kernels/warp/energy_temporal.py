@@ -1,0 +1,151 @@
+"""Temporal coherence terms of the intrinsic-video energy (Eq. 4, 5, 8), log domain.
+
+``E_T = lam * sum_{t<T-1} sum_{x,c} occ_t(x) rho(X_{t+1}(x + u_t(x), c) - X_t(x, c))``
+
+for the albedo (Eq. 4, ``X = A``, C = 3, lambda_TA = 10) and the shading
+(Eq. 8, ``X = S`` as a (T, H, W, 1) view, lambda_TS = 1).  ``X_{t+1}(x + u)`` is
+the bilinear sample with corners clamped to the image (the convention of
+:mod:`ivkernels.kernels.warp.sampling`, whose ``@wp.func`` helpers are used).
+
+``rho`` is the *continuous* Tukey biweight (Eq. 5 as printed jumps from 1/3 to
+1/alpha^2 at |z| = alpha)::
+
+    rho(z)  = z^2/a^2 - z^4/a^4 + z^6/(3 a^6)   for |z| <= a,   1/3 outside
+    rho'(z) = (2/a^2) z (1 - z^2/a^2)^2          for |z| <= a,   0 outside
+
+The gradient in ``X_t`` is a gather; the gradient in ``X_{t+1}`` lands on the
+four corners of ``x + u`` (a bilinear splat with atomic adds).  They are two
+launches: the gather over all rows, then the splat split only at frame
+boundaries, so concurrent CPU launches never write the same gradient frame.
+Energies go to the rows of frame ``t`` (conventions in :mod:`ivkernels.kernels`).
+"""
+from __future__ import annotations
+
+import warp as wp
+
+from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners
+
+wp.set_module_options({"enable_backward": False})
+
+
+@wp.func
+def tukey(z: float, alpha: float):
+    """Continuous Tukey penalty (Eq. 5 made continuous), saturating at 1/3."""
+    q = z * z / (alpha * alpha)
+    result = 1.0 / 3.0
+    if q <= 1.0:
+        result = q - q * q + q * q * q / 3.0
+    return result
+
+
+@wp.func
+def tukey_derivative(z: float, alpha: float):
+    """``(2/a^2) z (1 - z^2/a^2)^2`` inside ``|z| <= a``, else 0."""
+    q = z * z / (alpha * alpha)
+    result = 0.0
+    if q <= 1.0:
+        result = 2.0 / (alpha * alpha) * z * (1.0 - q) * (1.0 - q)
+    return result
+
+
+@wp.kernel
+def temporal_gather_rows(row_begin: int, X: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
+                         occ: wp.array3d(dtype=float), gX: wp.array4d(dtype=float),
+                         energy_rows: wp.array(dtype=wp.float64), lam: float, alpha: float):
+    """Energy of frame ``t`` rows and the gradient in ``X_t`` (rows of frames 0 .. T-2)."""
+    r = row_begin + wp.tid()
+    height = X.shape[1]
+    width = X.shape[2]
+    t = r // height
+    y = r - t * height
+    e = wp.float64(0.0)
+    for x in range(width):
+        o = occ[t, y, x]
+        if o == 0.0:
+            continue
+        x0, x1, fx = clamped_corners(float(x) + flow[t, y, x, 0], width)
+        y0, y1, fy = clamped_corners(float(y) + flow[t, y, x, 1], height)
+        for c in range(X.shape[3]):
+            d = bilinear_at(X, t + 1, c, x0, x1, fx, y0, y1, fy) - X[t, y, x, c]
+            e += wp.float64(o * tukey(d, alpha))
+            gX[t, y, x, c] = gX[t, y, x, c] - lam * o * tukey_derivative(d, alpha)
+    energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
+
+
+@wp.kernel
+def temporal_splat_rows(row_begin: int, X: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
+                        occ: wp.array3d(dtype=float), gX: wp.array4d(dtype=float), lam: float, alpha: float):
+    """Gradient in ``X_{t+1}``: splat ``lam occ rho'(d)`` onto the corners of ``x + u_t(x)``."""
+    r = row_begin + wp.tid()
+    height = X.shape[1]
+    width = X.shape[2]
+    t = r // height
+    y = r - t * height
+    for x in range(width):
+        o = occ[t, y, x]
+        if o == 0.0:
+            continue
+        x0, x1, fx = clamped_corners(float(x) + flow[t, y, x, 0], width)
+        y0, y1, fy = clamped_corners(float(y) + flow[t, y, x, 1], height)
+        for c in range(X.shape[3]):
+            d = bilinear_at(X, t + 1, c, x0, x1, fx, y0, y1, fy) - X[t, y, x, c]
+            g = lam * o * tukey_derivative(d, alpha)
+            if g != 0.0:
+                wp.atomic_add(gX, t + 1, y0, x0, c, (1.0 - fx) * (1.0 - fy) * g)
+                wp.atomic_add(gX, t + 1, y0, x1, c, fx * (1.0 - fy) * g)
+                wp.atomic_add(gX, t + 1, y1, x0, c, (1.0 - fx) * fy * g)
+                wp.atomic_add(gX, t + 1, y1, x1, c, fx * fy * g)
+
+
+def _check(name: str, a, shape: tuple, layout: str, device=None, dtype=wp.float32) -> None:
+    """Raise unless ``a`` is a ``wp.array`` of ``dtype`` and ``shape`` (None = any size) on ``device``."""
+    if not isinstance(a, wp.array):
+        raise TypeError(f"{name} must be a wp.array of {wp.types.type_repr(dtype)} {layout}, "
+                        f"got {type(a).__name__}")
+    if a.dtype != dtype:
+        raise TypeError(f"{name} must have dtype {wp.types.type_repr(dtype)}, got {wp.types.type_repr(a.dtype)}")
+    if len(a.shape) != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
+        want = tuple("?" if e is None else e for e in shape)
+        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
+    if device is not None and a.device != device:
+        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
+
+
+def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0) -> None:
+    """Add the temporal term of Eq. 4 (albedo) or Eq. 8 (shading) and its gradient.
+
+    ``E = lam * sum_{t<T-1} sum_{x,c} occ_t(x) rho(X_{t+1}(x + u_t(x), c) - X_t(x, c))``,
+    ``rho`` the continuous Tukey with scale ``alpha`` (module docstring).
+
+    Parameters
+    ----------
+    X : wp.array float32 (T, H, W, C) log albedo (C = 3) or log shading
+        (C = 1, a ``reshape((T, H, W, 1))`` view); a (T, H, W) array is
+        accepted too and viewed that way.
+    flow : wp.array float32 (T-1, H, W, 2), forward flow u_t (pixels).
+    occ : wp.array float32 (T-1, H, W), w_occ (1 visible in t+1, 0 occluded).
+    gX : wp.array float32, same shape as ``X``, accumulated: ``gX += dE/dX``.
+    energy_rows : wp.array float64 (T*H,), accumulated; the pair (t, t+1)
+        adds to the rows of frame t, the last frame's rows get nothing.
+    lam : lambda_TA (10) or lambda_TS (1).  alpha : Tukey scale (log units).
+
+    With T = 1 there is no pair and nothing is added.
+    """
+    if isinstance(X, wp.array) and len(X.shape) == 3:
+        _check("X", X, (None, None, None), "(T, H, W)")
+        _check("gX", gX, tuple(X.shape), "(T, H, W) like X", X.device)
+        X = X.reshape((*X.shape, 1))
+        gX = gX.reshape((*gX.shape, 1))
+    _check("X", X, (None, None, None, None), "(T, H, W, C) or (T, H, W)")
+    t, h, w, c = X.shape
+    dev = X.device
+    _check("gX", gX, (t, h, w, c), "(T, H, W, C) like X", dev)
+    _check("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)", dev)
+    _check("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", dev)
+    _check("energy_rows", energy_rows, (t * h,), "(T*H,)", dev, wp.float64)
+    if t < 2:
+        return
+    args = [X, flow, occ, gX]
+    launch_rows(temporal_gather_rows, (t - 1) * h, [*args, energy_rows, float(lam), float(alpha)], device=dev)
+    launch_rows(temporal_splat_rows, (t - 1) * h, [*args, float(lam), float(alpha)], device=dev, align=h)

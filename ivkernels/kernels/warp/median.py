@@ -1,0 +1,453 @@
+"""Median filters: the flow's 5x5 median, the weighted (non-local) medians of
+Classic+NL's flow and of the shading coupling variable (Eq. 9, 10, 13).
+
+Weighted medians are computed per pixel inside the kernel: one kernel thread
+owns one image row and, for each pixel, copies the window's (value, weight)
+pairs into its own slice of a *scratch* buffer (one row of floats per image
+row), then selects the minimiser from there in expected linear time
+(:func:`l1_quadratic_select`, a weighted quickselect).  The 225 weights of a
+15x15 window are never stored per pixel.
+
+Scratch convention: the host functions take ``scratch=None`` and then allocate
+a float32 buffer lazily and cache it per (device, shape, calling thread); pass
+``scratch=`` (see :func:`shading_scratch_shape`, :func:`flow_scratch_shape`)
+to own the memory instead.
+"""
+from __future__ import annotations
+
+import threading
+
+import warp as wp
+
+from ivkernels.kernels.launch import launch_rows
+
+wp.set_module_options({"enable_backward": False})
+
+#: Lloyd iterations of the 2-means split of a window's flow vectors (surf of Eq. 10).
+KMEANS_ITERATIONS = 8
+#: Final cluster centres closer than this (pixels) mean "no motion boundary in the window".
+MIN_SEPARATION = 0.5
+
+vec25 = wp.types.vector(length=25, dtype=wp.float32)
+
+
+# ----------------------------------------------------------------------------
+# Device helpers
+# ----------------------------------------------------------------------------
+
+@wp.func
+def swap_entries(buf: wp.array2d(dtype=float), row: int, base: int, i: int, j: int):
+    """Swap the (value, weight) pairs ``i`` and ``j`` of ``buf[row, base:]``."""
+    v = buf[row, base + 2 * i]
+    w = buf[row, base + 2 * i + 1]
+    buf[row, base + 2 * i] = buf[row, base + 2 * j]
+    buf[row, base + 2 * i + 1] = buf[row, base + 2 * j + 1]
+    buf[row, base + 2 * j] = v
+    buf[row, base + 2 * j + 1] = w
+
+
+@wp.func
+def l1_quadratic_select(buf: wp.array2d(dtype=float), row: int, base: int, n: int, s: float, lam: float):
+    """``argmin_u sum_i w_i |u - v_i| + lam (u - s)^2`` over the ``n`` pairs
+    ``(v_i, w_i) = buf[row, base + 2i], buf[row, base + 2i + 1]`` (all ``w_i > 0``).
+
+    Weighted quickselect on the subgradient ``g(u) = 2 lam (u - s) + W(< u) - W(> u)``,
+    which is non-decreasing in ``u``: three-way partition the active entries
+    around a pivot value ``p``; if ``g(p-) < 0 <= g(p+)`` the answer is ``p``,
+    else keep the side holding the zero crossing.  When no entry remains the
+    minimiser lies strictly between two values, where ``g`` is linear:
+    ``u = s + (W_above - W_below) / (2 lam)`` (Li & Osher's median formula
+    gives the same point).  ``lam = 0`` returns the lower weighted median
+    (smallest ``v`` with ``W(<= v) >= W / 2``); ``n = 0`` returns ``s``.
+    The pairs are reordered in place.
+    """
+    lo = int(0)
+    hi = int(n)
+    w_below = float(0.0)
+    w_above = float(0.0)
+    result = float(s)
+    found = int(0)
+    while lo < hi and found == 0:
+        pivot = buf[row, base + 2 * ((lo + hi) // 2)]
+        lt = int(lo)
+        i = int(lo)
+        gt = int(hi)
+        w_lt = float(0.0)
+        w_eq = float(0.0)
+        w_gt = float(0.0)
+        while i < gt:
+            v = buf[row, base + 2 * i]
+            w = buf[row, base + 2 * i + 1]
+            if v < pivot:
+                swap_entries(buf, row, base, lt, i)
+                w_lt += w
+                lt += 1
+                i += 1
+            elif v > pivot:
+                gt -= 1
+                swap_entries(buf, row, base, i, gt)
+                w_gt += w
+            else:
+                w_eq += w
+                i += 1
+        below = w_below + w_lt
+        above = w_above + w_gt
+        g_lo = 2.0 * lam * (pivot - s) + below - above - w_eq
+        g_hi = g_lo + 2.0 * w_eq
+        if g_lo < 0.0 and g_hi >= 0.0:
+            result = pivot
+            found = 1
+        elif g_hi < 0.0:
+            w_below = below + w_eq
+            lo = gt
+        else:
+            w_above = above + w_eq
+            hi = lt
+    if found == 0 and lam > 0.0 and n > 0:
+        result = s + (w_above - w_below) / (2.0 * lam)
+    return result
+
+
+@wp.func
+def nearer_second(fx: float, fy: float, c0x: float, c0y: float, c1x: float, c1y: float):
+    """True if ``(fx, fy)`` is strictly nearer to centre 1 than to centre 0."""
+    d0 = (fx - c0x) * (fx - c0x) + (fy - c0y) * (fy - c0y)
+    d1 = (fx - c1x) * (fx - c1x) + (fy - c1y) * (fy - c1y)
+    return d1 < d0
+
+
+# ----------------------------------------------------------------------------
+# Kernels: one thread per image row (row = t * H + y), looping over x
+# ----------------------------------------------------------------------------
+
+@wp.kernel
+def median5x5_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array4d(dtype=float),
+                   taps: int, middle: int):
+    r = row_begin + wp.tid()
+    height = src.shape[1]
+    width = src.shape[2]
+    t = r // height
+    y = r - t * height
+    for x in range(width):
+        for c in range(src.shape[3]):
+            v = vec25()
+            k = int(0)
+            for j in range(taps):
+                yy = wp.clamp(y + j - 2, 0, height - 1)
+                for i in range(taps):
+                    v[k] = src[t, yy, wp.clamp(x + i - 2, 0, width - 1), c]
+                    k += 1
+            # partial selection sort up to the middle element
+            for a in range(middle + 1):
+                m = int(a)
+                for b in range(a + 1, taps * taps):
+                    if v[b] < v[m]:
+                        m = b
+                tmp = v[a]
+                v[a] = v[m]
+                v[m] = tmp
+            out[t, y, x, c] = v[middle]
+
+
+@wp.kernel
+def weighted_median_shading_rows(row_begin: int, S: wp.array3d(dtype=float), flow: wp.array4d(dtype=float),
+                                 w_bnd: wp.array3d(dtype=float), out: wp.array3d(dtype=float),
+                                 scratch: wp.array2d(dtype=float), radius: int, sigma_s: float,
+                                 lam: float, iterations: int, min_separation: float):
+    r = row_begin + wp.tid()
+    height = S.shape[1]
+    width = S.shape[2]
+    t = r // height
+    y = r - t * height
+    inv_two_sigma2 = 1.0 / (2.0 * sigma_s * sigma_s)
+    for x in range(width):
+        s = S[t, y, x]
+        out[t, y, x] = s
+        if t >= flow.shape[0]:
+            continue
+        if w_bnd[t, y, x] < 0.5:
+            continue
+        y_lo = wp.max(y - radius, 0)
+        y_hi = wp.min(y + radius + 1, height)
+        x_lo = wp.max(x - radius, 0)
+        x_hi = wp.min(x + radius + 1, width)
+        # surf (Eq. 10): 2-means of the window's flow vectors
+        c0x = flow[t, y, x, 0]
+        c0y = flow[t, y, x, 1]
+        c1x = c0x
+        c1y = c0y
+        far = float(-1.0)
+        for yy in range(y_lo, y_hi):
+            for xx in range(x_lo, x_hi):
+                dx = flow[t, yy, xx, 0] - c0x
+                dy = flow[t, yy, xx, 1] - c0y
+                d = dx * dx + dy * dy
+                if d > far:
+                    far = d
+                    c1x = flow[t, yy, xx, 0]
+                    c1y = flow[t, yy, xx, 1]
+        for it in range(iterations):
+            s0x = float(0.0)
+            s0y = float(0.0)
+            s1x = float(0.0)
+            s1y = float(0.0)
+            n0 = int(0)
+            n1 = int(0)
+            for yy in range(y_lo, y_hi):
+                for xx in range(x_lo, x_hi):
+                    fx = flow[t, yy, xx, 0]
+                    fy = flow[t, yy, xx, 1]
+                    if nearer_second(fx, fy, c0x, c0y, c1x, c1y):
+                        s1x += fx
+                        s1y += fy
+                        n1 += 1
+                    else:
+                        s0x += fx
+                        s0y += fy
+                        n0 += 1
+            m0x = c0x
+            m0y = c0y
+            m1x = c1x
+            m1y = c1y
+            if n0 > 0:
+                m0x = s0x / float(n0)
+                m0y = s0y / float(n0)
+            if n1 > 0:
+                m1x = s1x / float(n1)
+                m1y = s1y / float(n1)
+            moved = m0x != c0x or m0y != c0y or m1x != c1x or m1y != c1y
+            c0x = m0x
+            c0y = m0y
+            c1x = m1x
+            c1y = m1y
+            if not moved:
+                break
+        split = (c0x - c1x) * (c0x - c1x) + (c0y - c1y) * (c0y - c1y) >= min_separation * min_separation
+        own = nearer_second(flow[t, y, x, 0], flow[t, y, x, 1], c0x, c0y, c1x, c1y)
+        # window pairs (value, weight) of x's surface, Eq. 10
+        n = int(0)
+        for yy in range(y_lo, y_hi):
+            for xx in range(x_lo, x_hi):
+                keep = True
+                if split:
+                    keep = nearer_second(flow[t, yy, xx, 0], flow[t, yy, xx, 1], c0x, c0y, c1x, c1y) == own
+                if keep:
+                    ddx = float(xx - x)
+                    ddy = float(yy - y)
+                    scratch[r, 2 * n] = S[t, yy, xx]
+                    scratch[r, 2 * n + 1] = wp.exp(-(ddx * ddx + ddy * ddy) * inv_two_sigma2)
+                    n += 1
+        out[t, y, x] = l1_quadratic_select(scratch, r, 0, n, s, lam)
+
+
+@wp.kernel
+def weighted_median_flow_rows(row_begin: int, flow: wp.array4d(dtype=float), lab: wp.array4d(dtype=float),
+                              occ: wp.array3d(dtype=float), mask: wp.array3d(dtype=float),
+                              out: wp.array4d(dtype=float), scratch: wp.array2d(dtype=float),
+                              radius: int, sigma_x: float, sigma_i: float):
+    r = row_begin + wp.tid()
+    height = flow.shape[1]
+    width = flow.shape[2]
+    t = r // height
+    y = r - t * height
+    side = 2 * radius + 1
+    base = side * side  # scratch[r, :base] holds the window's weights, then the pairs
+    inv_x = 1.0 / (2.0 * sigma_x * sigma_x)
+    inv_i = 1.0 / (2.0 * sigma_i * sigma_i)
+    for x in range(width):
+        out[t, y, x, 0] = flow[t, y, x, 0]
+        out[t, y, x, 1] = flow[t, y, x, 1]
+        if mask[t, y, x] < 0.5:
+            continue
+        l0 = lab[t, y, x, 0]
+        l1 = lab[t, y, x, 1]
+        l2 = lab[t, y, x, 2]
+        k = int(0)
+        for yy in range(y - radius, y + radius + 1):
+            for xx in range(x - radius, x + radius + 1):
+                w = float(0.0)
+                if yy >= 0 and yy < height and xx >= 0 and xx < width:
+                    ddx = float(xx - x)
+                    ddy = float(yy - y)
+                    e0 = lab[t, yy, xx, 0] - l0
+                    e1 = lab[t, yy, xx, 1] - l1
+                    e2 = lab[t, yy, xx, 2] - l2
+                    w = wp.exp(-(ddx * ddx + ddy * ddy) * inv_x - (e0 * e0 + e1 * e1 + e2 * e2) * inv_i)
+                    w = w * occ[t, yy, xx]
+                scratch[r, k] = w
+                k += 1
+        for c in range(2):
+            n = int(0)
+            k = int(0)
+            for yy in range(y - radius, y + radius + 1):
+                for xx in range(x - radius, x + radius + 1):
+                    w = scratch[r, k]
+                    if w > 0.0:
+                        scratch[r, base + 2 * n] = flow[t, yy, xx, c]
+                        scratch[r, base + 2 * n + 1] = w
+                        n += 1
+                    k += 1
+            out[t, y, x, c] = l1_quadratic_select(scratch, r, base, n, flow[t, y, x, c], 0.0)
+
+
+# ----------------------------------------------------------------------------
+# Host functions
+# ----------------------------------------------------------------------------
+
+def _check(name: str, a, shape: tuple, layout: str, device=None) -> None:
+    """Raise unless ``a`` is a float32 ``wp.array`` of ``shape`` (None = any size) on ``device``."""
+    if not isinstance(a, wp.array):
+        raise TypeError(f"{name} must be a wp.array of float32 {layout}, got {type(a).__name__}")
+    if a.dtype != wp.float32:
+        raise TypeError(f"{name} must have dtype float32, got {wp.types.type_repr(a.dtype)}")
+    if len(a.shape) != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
+        want = tuple("?" if e is None else e for e in shape)
+        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
+    if device is not None and a.device != device:
+        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
+
+
+def _check_radius(radius) -> int:
+    if isinstance(radius, bool) or not isinstance(radius, int) or radius < 0:
+        raise ValueError(f"radius must be a non-negative int, got {radius!r}")
+    return radius
+
+
+def _check_positive(name: str, value) -> float:
+    value = float(value)
+    if not value > 0.0:
+        raise ValueError(f"{name} must be > 0, got {value!r}")
+    return value
+
+
+def shading_scratch_shape(S_shape: tuple, radius: int) -> tuple:
+    """Shape of the float32 scratch of :func:`weighted_median_shading`: ``(T*H, 2*(2r+1)^2)``."""
+    return (S_shape[0] * S_shape[1], 2 * (2 * radius + 1) ** 2)
+
+
+def flow_scratch_shape(flow_shape: tuple, radius: int) -> tuple:
+    """Shape of the float32 scratch of :func:`weighted_median_flow`: ``(T*H, 3*(2r+1)^2)``."""
+    return (flow_shape[0] * flow_shape[1], 3 * (2 * radius + 1) ** 2)
+
+
+_scratch_cache: dict = {}
+_scratch_lock = threading.Lock()
+
+
+def _scratch(scratch, shape: tuple, device):
+    """The caller's scratch (checked) or a cached one of ``shape`` for this device and thread."""
+    if scratch is not None:
+        _check("scratch", scratch, shape, "(rows, floats per row)", device)
+        return scratch
+    key = (str(device), shape, threading.get_ident())
+    with _scratch_lock:
+        buf = _scratch_cache.get(key)
+        if buf is None:
+            buf = wp.empty(shape, dtype=wp.float32, device=device)
+            _scratch_cache[key] = buf
+    return buf
+
+
+def median5x5(src, out) -> None:
+    """5x5 median of every channel, replicate border (Classic+NL's median filter of the flow).
+
+    Parameters
+    ----------
+    src : wp.array float32 (T, H, W, C), any units.
+    out : wp.array float32 (T, H, W, C), written.  Must not overlap ``src``.
+    """
+    _check("src", src, (None, None, None, None), "(T, H, W, C)")
+    t, h, w, c = src.shape
+    _check("out", out, (t, h, w, c), "(T, H, W, C)", src.device)
+    launch_rows(median5x5_rows, t * h, [src, out, 5, 12], device=src.device)
+
+
+def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float = 7.0,
+                            lam: float = 0.001, *, scratch=None) -> None:
+    """Update of the coupling variable S~ (Eq. 13), the non-local term of Eq. 9-10.
+
+    For frames ``t < T'`` and pixels with ``w_bnd >= 0.5`` (the paper's
+    ``w_bnd = 1``)::
+
+        out(x) = argmin_u  sum_{y in window} w_nl(x, y) |u - S(y)|  +  lam (u - S(x))^2
+
+    with ``lam = lambda_cpl / lambda_Sm`` (Eq. 13 divided by lambda_Sm), solved
+    exactly (Li & Osher's median formula, :func:`l1_quadratic_select`);
+    ``lam = 0`` gives the plain (lower) weighted median.  Elsewhere ``out = S``.
+
+    ``w_nl(x, y) = exp(-|x - y|^2 / (2 sigma_s^2)) * surf(x, y)`` (Eq. 10) over
+    the ``(2 radius + 1)^2`` window; pixels outside the image are skipped.
+
+    ``surf`` (not specified by the paper): the window's flow vectors are split
+    in two by 2-means, centres started at ``flow(x)`` and at the window's
+    vector farthest from it, refined by at most ``KMEANS_ITERATIONS`` Lloyd
+    iterations; ``surf = 1`` on the pixels of x's cluster, 0 on the other.  If
+    the final centres are closer than ``MIN_SEPARATION`` (0.5 px) the window
+    holds no motion boundary and ``surf = 1`` everywhere.  Clustering flow
+    vectors (rather than flood-filling inside the window) also separates
+    regions whose boundary is broken or touches the window's border, and
+    costs a few passes over the window.
+
+    Parameters
+    ----------
+    S : wp.array float32 (T, H, W), log shading.
+    flow : wp.array float32 (T', H, W, 2), T' <= T, forward flow of frame t (pixels).
+    w_bnd : wp.array float32 (T', H, W), motion-boundary map (0 or 1).
+    out : wp.array float32 (T, H, W), written (log shading S~).  Must not overlap ``S``.
+    radius : window half-size (7 gives the paper's 15x15).
+    sigma_s : spatial scale of w_nl in pixels.
+    lam : weight of the quadratic pull towards S(x), >= 0.
+    scratch : optional float32 wp.array of shape :func:`shading_scratch_shape`;
+        by default a buffer cached per (device, shape, thread) is used.
+    """
+    _check("S", S, (None, None, None), "(T, H, W)")
+    t, h, w = S.shape
+    _check("flow", flow, (None, h, w, 2), "(T', H, W, 2)", S.device)
+    tp = flow.shape[0]
+    if tp > t:
+        raise ValueError(f"flow has {tp} frames but S only {t}; expected T' <= T")
+    _check("w_bnd", w_bnd, (tp, h, w), "(T', H, W)", S.device)
+    _check("out", out, (t, h, w), "(T, H, W)", S.device)
+    radius = _check_radius(radius)
+    sigma_s = _check_positive("sigma_s", sigma_s)
+    lam = float(lam)
+    if not lam >= 0.0:
+        raise ValueError(f"lam must be >= 0, got {lam!r}")
+    buf = _scratch(scratch, shading_scratch_shape(S.shape, radius), S.device)
+    launch_rows(weighted_median_shading_rows, t * h,
+                [S, flow, w_bnd, out, buf, radius, sigma_s, lam, KMEANS_ITERATIONS, MIN_SEPARATION],
+                device=S.device)
+
+
+def weighted_median_flow(flow, lab, occ, mask, out, radius: int = 7, sigma_x: float = 7.0,
+                         sigma_i: float = 7.0, *, scratch=None) -> None:
+    """Classic+NL's non-local flow median (each flow component independently).
+
+    Where ``mask >= 0.5``, ``out`` is the (lower) weighted median of the flow
+    over the ``(2 radius + 1)^2`` window with weights
+    ``exp(-|x - y|^2 / (2 sigma_x^2)) * exp(-|lab(x) - lab(y)|^2 / (2 sigma_i^2)) * occ(y)``
+    (pixels outside the image skipped; no positive weight keeps the flow);
+    elsewhere ``out = flow``.
+
+    Parameters
+    ----------
+    flow : wp.array float32 (T, H, W, 2), pixels.
+    lab : wp.array float32 (T, H, W, 3), CIE Lab of the first image of each pair.
+    occ : wp.array float32 (T, H, W), occlusion weight (1 visible, 0 occluded).
+    mask : wp.array float32 (T, H, W), 1 where the median is taken.
+    out : wp.array float32 (T, H, W, 2), written.  Must not overlap ``flow``.
+    scratch : optional float32 wp.array of shape :func:`flow_scratch_shape`;
+        by default a buffer cached per (device, shape, thread) is used.
+    """
+    _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
+    t, h, w, _ = flow.shape
+    _check("lab", lab, (t, h, w, 3), "(T, H, W, 3)", flow.device)
+    _check("occ", occ, (t, h, w), "(T, H, W)", flow.device)
+    _check("mask", mask, (t, h, w), "(T, H, W)", flow.device)
+    _check("out", out, (t, h, w, 2), "(T, H, W, 2)", flow.device)
+    radius = _check_radius(radius)
+    sigma_x = _check_positive("sigma_x", sigma_x)
+    sigma_i = _check_positive("sigma_i", sigma_i)
+    buf = _scratch(scratch, flow_scratch_shape(flow.shape, radius), flow.device)
+    launch_rows(weighted_median_flow_rows, t * h,
+                [flow, lab, occ, mask, out, buf, radius, sigma_x, sigma_i], device=flow.device)
