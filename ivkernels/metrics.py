@@ -1,0 +1,375 @@
+"""Error measures: LMSE for intrinsic images, EPE/AAE for flow, temporal coherence.
+
+* :func:`lmse` — local mean squared error of Grosse et al. (ICCV 2009),
+  scale-invariant per window; the standard intrinsic-image measure (used in
+  the paper's Fig. 6, left).
+* :func:`endpoint_error`, :func:`angular_error` — the Middlebury flow
+  errors (Baker et al., IJCV 2011).
+* :func:`temporal_incoherence` — the paper's measure (Sec. 5.1, Fig. 6
+  right): estimate flow on the recovered albedo sequence with a fixed flow
+  method and report its EPE against ground truth.
+* :func:`albedo_consistency` — a direct check: log-albedo change along the
+  ground-truth flow.
+
+All inputs are NumPy arrays; computations run in float64.
+"""
+from __future__ import annotations
+
+import cv2
+import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
+
+from .flowio import valid_flow_mask
+from .io import linear_to_srgb
+
+__all__ = [
+    "lmse",
+    "intrinsic_lmse",
+    "endpoint_error",
+    "angular_error",
+    "flow_errors",
+    "temporal_incoherence",
+    "albedo_consistency",
+]
+
+_REC709 = np.array([0.2126, 0.7152, 0.0722])
+
+
+# ----------------------------------------------------------------------------
+# helpers
+# ----------------------------------------------------------------------------
+
+def _float_array(x, name: str) -> np.ndarray:
+    x = np.asarray(x)
+    if not (np.issubdtype(x.dtype, np.floating) or np.issubdtype(x.dtype, np.integer)) or x.dtype == np.bool_:
+        raise TypeError(f"{name}: expected a real numeric array, got dtype {x.dtype}")
+    if x.size == 0:
+        raise ValueError(f"{name}: empty array, shape {x.shape}")
+    x = x.astype(np.float64)
+    if not np.all(np.isfinite(x)):
+        raise ValueError(f"{name}: contains NaN or infinite values")
+    return x
+
+
+def _as_bool_mask(mask, shape: tuple, name: str = "mask") -> np.ndarray:
+    """Mask -> bool array broadcast to ``shape``; nonzero / >= 0.5 is True."""
+    m = np.asarray(mask)
+    if m.dtype != np.bool_:
+        if not (np.issubdtype(m.dtype, np.floating) or np.issubdtype(m.dtype, np.integer)):
+            raise TypeError(f"{name}: expected a boolean or numeric array, got dtype {m.dtype}")
+        if not np.all(np.isfinite(m)):
+            raise ValueError(f"{name}: contains NaN or infinite values")
+        m = m >= 0.5
+    if m.ndim < 2 or m.shape != shape[len(shape) - m.ndim:]:
+        raise ValueError(f"{name}: shape {m.shape} does not match {shape} (expected {shape} or {shape[-2:]})")
+    return np.broadcast_to(m, shape)
+
+
+def _as_image_stack(x, name: str) -> np.ndarray:
+    """(H,W) | (H,W,3) | (T,H,W) | (T,H,W,C) -> float64 (T,H,W,C).
+
+    A 3-D array whose last axis has length 3 is read as one colour image.
+    """
+    x = _float_array(x, name)
+    if x.ndim == 2:
+        return x[None, :, :, None]
+    if x.ndim == 3:
+        return x[None] if x.shape[-1] == 3 else x[..., None]
+    if x.ndim == 4:
+        return x
+    raise ValueError(f"{name}: expected (H, W), (H, W, 3), (T, H, W) or (T, H, W, 3), got shape {x.shape}")
+
+
+# ----------------------------------------------------------------------------
+# LMSE (Grosse et al. 2009)
+# ----------------------------------------------------------------------------
+
+def _lmse_frame(est: np.ndarray, truth: np.ndarray, mask: np.ndarray, wy: int, wx: int, step: int):
+    """Per-channel (ssq, total) of one frame.  est/truth (H,W,C), mask (H,W) float."""
+    m_w = sliding_window_view(mask, (wy, wx))[::step, ::step]            # (ny, nx, wy, wx)
+    out = []
+    for c in range(est.shape[-1]):
+        e_w = sliding_window_view(est[..., c] * mask, (wy, wx))[::step, ::step]
+        t_w = sliding_window_view(truth[..., c] * mask, (wy, wx))[::step, ::step]
+        ee = np.sum(e_w * e_w, axis=(-2, -1))
+        te = np.sum(t_w * e_w, axis=(-2, -1))
+        alpha = np.divide(te, ee, out=np.zeros_like(te), where=ee > 0)
+        resid = (t_w - alpha[..., None, None] * e_w) * m_w
+        out.append((float(np.sum(resid * resid)), float(np.sum(t_w * t_w))))
+    return out
+
+
+def lmse(estimate, truth, window: int = 20, step: int = 10, mask=None) -> float:
+    """Local mean squared error (Grosse et al., ICCV 2009), scale-invariant per window.
+
+    For every ``window x window`` patch whose top-left corner lies on the
+    grid ``(0, step, 2 step, ...)`` and that fits inside the image, the
+    scale ``alpha = <t, e> / <e, e>`` minimising ``||t - alpha e||^2`` over
+    the masked pixels of the patch is fitted (``alpha = 0`` where the
+    estimate is zero), and::
+
+        LMSE = sum_windows ||t - alpha_w e||^2  /  sum_windows ||t||^2
+
+    (same windows, masked pixels only).  A perfect estimate, or one off by a
+    scale per window, scores 0; an estimate of 0 scores 1.  Images smaller
+    than the window use one window as large as the image along that axis.
+
+    Parameters
+    ----------
+    estimate, truth : same shape: ``(H, W)``, ``(H, W, 3)``, ``(T, H, W)``
+        or ``(T, H, W, 3)``, linear values.  A 3-D array with last axis 3 is
+        one colour image.  **Colour**: the LMSE is computed for each channel
+        separately and the channels are averaged (channels whose truth is 0
+        in every window are left out of the average).  **Stacks**: the mean
+        of the per-frame values.
+    window, step : window size and stride in pixels (Grosse: 20 and 10).
+    mask : optional bool ``(H, W)`` or ``(T, H, W)``; pixels outside the
+        mask count neither in the fit nor in the sums.
+
+    Returns
+    -------
+    float, >= 0.
+    """
+    e = _as_image_stack(estimate, "lmse: estimate")
+    t = _as_image_stack(truth, "lmse: truth")
+    if e.shape != t.shape:
+        raise ValueError(f"lmse: estimate shape {np.shape(estimate)} != truth shape {np.shape(truth)}")
+    for name, v in (("window", window), ("step", step)):
+        if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < 1:
+            raise ValueError(f"lmse: {name} must be a positive int, got {v!r}")
+    n, h, w, _ = t.shape
+    m = np.ones((n, h, w)) if mask is None else _as_bool_mask(mask, (n, h, w)).astype(np.float64)
+    wy, wx = min(window, h), min(window, w)
+    scores = []
+    for f in range(n):
+        per_channel = _lmse_frame(e[f], t[f], m[f], wy, wx, step)
+        ratios = [ssq / tot for ssq, tot in per_channel if tot > 0]
+        if not ratios:
+            raise ValueError(f"lmse: ground truth of frame {f} is zero inside every window (mask); LMSE undefined")
+        scores.append(float(np.mean(ratios)))
+    return float(np.mean(scores))
+
+
+def intrinsic_lmse(albedo_est, shading_est, albedo_gt, shading_gt, mask=None,
+                   window: int = 20, step: int = 10) -> dict:
+    """LMSE of albedo and of shading, and their mean (Grosse et al.'s score).
+
+    Shapes as in :func:`lmse` (e.g. albedo ``(T, H, W, 3)``, shading
+    ``(T, H, W)``).  Returns ``{"albedo": float, "shading": float,
+    "mean": (albedo + shading) / 2}``.
+    """
+    a = lmse(albedo_est, albedo_gt, window=window, step=step, mask=mask)
+    s = lmse(shading_est, shading_gt, window=window, step=step, mask=mask)
+    return {"albedo": a, "shading": s, "mean": 0.5 * (a + s)}
+
+
+# ----------------------------------------------------------------------------
+# Flow errors (Baker et al., IJCV 2011)
+# ----------------------------------------------------------------------------
+
+def _flow_pair(flow, flow_gt, mask):
+    """Validated float64 flows and the bool mask of pixels to evaluate."""
+    flow = np.asarray(flow)
+    flow_gt = np.asarray(flow_gt)
+    for name, f in (("flow", flow), ("flow_gt", flow_gt)):
+        if f.ndim < 3 or f.shape[-1] != 2:
+            raise ValueError(f"{name}: expected shape (..., H, W, 2), got {f.shape}")
+        if not (np.issubdtype(f.dtype, np.floating) or np.issubdtype(f.dtype, np.integer)) or f.dtype == np.bool_:
+            raise TypeError(f"{name}: expected a real numeric array, got dtype {f.dtype}")
+    if flow.shape != flow_gt.shape:
+        raise ValueError(f"flow shape {flow.shape} != flow_gt shape {flow_gt.shape}")
+    sel = valid_flow_mask(flow_gt)
+    if mask is not None:
+        sel = sel & _as_bool_mask(mask, sel.shape)
+    if not np.any(sel):
+        raise ValueError("no pixel to evaluate: the mask is empty or the ground truth is unknown everywhere")
+    if not np.all(np.isfinite(flow[sel])):
+        raise ValueError("flow: contains NaN or infinite values at evaluated pixels")
+    return flow.astype(np.float64), flow_gt.astype(np.float64), sel
+
+
+def endpoint_error(flow, flow_gt, mask=None) -> float:
+    """Mean end-point error ``|u - u_gt|`` (pixels).
+
+    ``flow``, ``flow_gt``: ``(..., H, W, 2)``; ``mask``: optional bool
+    ``(..., H, W)`` (or ``(H, W)``, shared).  Pixels with unknown ground
+    truth (components > 1e9 or non-finite) are ignored.
+    """
+    f, g, sel = _flow_pair(flow, flow_gt, mask)
+    d = f[sel] - g[sel]
+    return float(np.mean(np.sqrt(np.sum(d * d, axis=-1))))
+
+
+def angular_error(flow, flow_gt, mask=None) -> float:
+    """Mean angular error in degrees (Barron et al. 1994; Middlebury).
+
+    The angle between the space-time vectors ``(u, v, 1)`` and
+    ``(u_gt, v_gt, 1)``::
+
+        arccos( (u u_gt + v v_gt + 1) / sqrt((u^2 + v^2 + 1)(u_gt^2 + v_gt^2 + 1)) )
+
+    Same shapes, mask and unknown-flow handling as :func:`endpoint_error`.
+    """
+    f, g, sel = _flow_pair(flow, flow_gt, mask)
+    u, v = f[sel][:, 0], f[sel][:, 1]
+    ug, vg = g[sel][:, 0], g[sel][:, 1]
+    num = u * ug + v * vg + 1.0
+    den = np.sqrt((u * u + v * v + 1.0) * (ug * ug + vg * vg + 1.0))
+    ang = np.arccos(np.clip(num / den, -1.0, 1.0))
+    return float(np.degrees(np.mean(ang)))
+
+
+def flow_errors(flow, flow_gt, mask=None) -> dict:
+    """``{"epe": endpoint_error(...), "aae": angular_error(...)}``."""
+    return {"epe": endpoint_error(flow, flow_gt, mask), "aae": angular_error(flow, flow_gt, mask)}
+
+
+# ----------------------------------------------------------------------------
+# Temporal coherence of an albedo sequence
+# ----------------------------------------------------------------------------
+
+def _check_albedo_stack(albedo, name: str = "albedo") -> np.ndarray:
+    a = _float_array(albedo, name)
+    if a.ndim != 4 or a.shape[-1] != 3:
+        raise ValueError(f"{name}: expected (T, H, W, 3) linear RGB, got shape {a.shape}")
+    if a.shape[0] < 2:
+        raise ValueError(f"{name}: need at least 2 frames, got {a.shape[0]}")
+    if a.min() < 0:
+        raise ValueError(f"{name}: linear albedo must be >= 0, got minimum {a.min():.4g}")
+    return a
+
+
+def _albedo_to_uint8_luminance(albedo: np.ndarray) -> np.ndarray:
+    """(T,H,W,3) linear -> (T,H,W) uint8 sRGB luminance, normalised per sequence.
+
+    Luminance uses Rec. 709 weights; the whole sequence is divided by its
+    99th-percentile luminance (so the global scale of an albedo estimate does
+    not matter, but frame-to-frame scale changes do), clipped to [0, 1],
+    sRGB-encoded and rounded to 8 bits.
+    """
+    lum = albedo @ _REC709
+    p = float(np.percentile(lum, 99))
+    if p > 0:
+        lum = lum / p
+    return np.round(linear_to_srgb(np.clip(lum, 0.0, 1.0)) * 255.0).astype(np.uint8)
+
+
+def _dis_flow(frames) -> np.ndarray:
+    """Forward flow ``(T-1, H, W, 2)`` float32 between consecutive frames.
+
+    OpenCV DIS optical flow (Kroeger et al., ECCV 2016), preset MEDIUM, on
+    the 8-bit sRGB luminance of ``frames`` ``(T, H, W, 3)`` (linear RGB)
+    normalised per sequence (see :func:`_albedo_to_uint8_luminance`).
+    """
+    a = _check_albedo_stack(frames, "frames")
+    grey = _albedo_to_uint8_luminance(a)
+    dis = cv2.DISOpticalFlow_create(cv2.DISOPTICAL_FLOW_PRESET_MEDIUM)
+    t, h, w = grey.shape
+    out = np.empty((t - 1, h, w, 2), np.float32)
+    for t in range(grey.shape[0] - 1):
+        out[t] = dis.calc(grey[t], grey[t + 1], None)
+    return out
+
+
+def _check_flow_visibility(flow_gt, visibility, t: int, h: int, w: int):
+    flow_gt = np.asarray(flow_gt)
+    if flow_gt.shape != (t - 1, h, w, 2):
+        raise ValueError(f"flow_gt: expected shape {(t - 1, h, w, 2)} for {t} frames of {h}x{w}, got {flow_gt.shape}")
+    if not (np.issubdtype(flow_gt.dtype, np.floating) or np.issubdtype(flow_gt.dtype, np.integer)):
+        raise TypeError(f"flow_gt: expected a real numeric array, got dtype {flow_gt.dtype}")
+    vis = None
+    if visibility is not None:
+        visibility = np.asarray(visibility)
+        if visibility.shape != (t - 1, h, w):
+            raise ValueError(f"visibility: expected shape {(t - 1, h, w)}, got {visibility.shape}")
+        vis = _as_bool_mask(visibility, (t - 1, h, w), "visibility")
+    return flow_gt, vis
+
+
+def temporal_incoherence(albedo, flow_gt, visibility=None, flow_method=None) -> dict:
+    """The paper's temporal incoherence measure (Sec. 5.1, Fig. 6 right).
+
+    Flow is estimated between consecutive frames of the albedo sequence with
+    a fixed method and compared with the ground-truth flow: an albedo that
+    is constant over time obeys brightness constancy and gives a lower EPE.
+
+    Parameters
+    ----------
+    albedo : ``(T, H, W, 3)`` linear RGB, ``T >= 2``.
+    flow_gt : ``(T-1, H, W, 2)`` forward ground-truth flow (unknown values
+        > 1e9 are ignored).
+    visibility : optional ``(T-1, H, W)``, 1 (or >= 0.5) where pixel ``x`` of
+        frame ``t`` is visible in frame ``t+1``.
+    flow_method : callable ``(T, H, W, 3) float -> (T-1, H, W, 2)``; default
+        :func:`_dis_flow` (OpenCV DIS, preset MEDIUM, on the sequence-
+        normalised 8-bit sRGB luminance).  The paper used Classic+NL on
+        brightness.
+
+    Returns
+    -------
+    ``{"epe": mean EPE over all known pixels of all frame pairs,
+    "epe_visible": the same over visible pixels only (NaN when
+    ``visibility`` is None)}``.
+    """
+    a = _check_albedo_stack(albedo)
+    t, h, w, _ = a.shape
+    flow_gt, vis = _check_flow_visibility(flow_gt, visibility, t, h, w)
+    method = _dis_flow if flow_method is None else flow_method
+    if not callable(method):
+        raise TypeError(f"flow_method must be callable (T,H,W,3) -> (T-1,H,W,2), got {type(method).__name__}")
+    flow = np.asarray(method(a.astype(np.float32)))
+    if flow.shape != (t - 1, h, w, 2):
+        raise ValueError(f"flow_method returned shape {flow.shape}, expected {(t - 1, h, w, 2)}")
+    epe = endpoint_error(flow, flow_gt)
+    epe_vis = float("nan") if vis is None else endpoint_error(flow, flow_gt, mask=vis)
+    return {"epe": epe, "epe_visible": epe_vis}
+
+
+def albedo_consistency(albedo, flow_gt, visibility=None, eps: float = 1e-3) -> float:
+    """Mean absolute change of log albedo along the ground-truth flow.
+
+    ``mean |L_{t+1}(x + u_t(x)) - L_t(x)|`` over RGB channels and over the
+    pixels ``x`` that are visible (``visibility >= 0.5``; all if None), have
+    known flow, and land inside frame ``t+1``.  ``L_t = log(max(A_t, eps))
+    - median(log(max(A_t, eps)))``: each frame's log albedo has its median
+    (over pixels and channels) removed, so a per-frame global scale does not
+    count.  ``L_{t+1}(x + u)`` is bilinear (``cv2.remap``).
+
+    Parameters
+    ----------
+    albedo : ``(T, H, W, 3)`` linear RGB, ``T >= 2``.
+    flow_gt : ``(T-1, H, W, 2)``; visibility : ``(T-1, H, W)`` or None.
+
+    Returns
+    -------
+    float (log units; 0 for an albedo that is exactly constant along the
+    flow up to a per-frame scale).
+    """
+    a = _check_albedo_stack(albedo)
+    t, h, w, _ = a.shape
+    flow_gt, vis = _check_flow_visibility(flow_gt, visibility, t, h, w)
+    if not (np.isfinite(eps) and eps > 0):
+        raise ValueError(f"eps must be a positive number, got {eps}")
+    log_a = np.log(np.maximum(a, eps))
+    log_a -= np.median(log_a.reshape(t, -1), axis=1)[:, None, None, None]
+    log_a = log_a.astype(np.float32)
+    known = valid_flow_mask(flow_gt)
+    fl = np.where(known[..., None], flow_gt, 0.0)
+    gx, gy = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+    total, count = 0.0, 0
+    for k in range(t - 1):
+        mx = gx + fl[k, ..., 0]
+        my = gy + fl[k, ..., 1]
+        sel = known[k] & (mx >= 0) & (mx <= w - 1) & (my >= 0) & (my <= h - 1)
+        if vis is not None:
+            sel &= vis[k]
+        if not np.any(sel):
+            continue
+        warped = cv2.remap(log_a[k + 1], mx.astype(np.float32), my.astype(np.float32),
+                           interpolation=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        diff = np.abs(warped[sel].astype(np.float64) - log_a[k][sel])
+        total += float(diff.sum())
+        count += diff.size
+    if count == 0:
+        raise ValueError("albedo_consistency: no visible pixel with known flow lands inside the next frame")
+    return total / count

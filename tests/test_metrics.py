@@ -1,0 +1,253 @@
+"""LMSE, flow errors, temporal incoherence and albedo consistency."""
+import numpy as np
+import pytest
+
+from ivkernels.metrics import (_dis_flow, albedo_consistency, angular_error, endpoint_error, flow_errors,
+                               intrinsic_lmse, lmse, temporal_incoherence)
+
+
+def _lmse_loops(est, truth, mask, window, step):
+    """Grosse et al.'s definition, written as explicit loops over windows (grey, one frame)."""
+    h, w = truth.shape
+    ssq = total = 0.0
+    for i in range(0, h - window + 1, step):
+        for j in range(0, w - window + 1, step):
+            e = est[i:i + window, j:j + window]
+            t = truth[i:i + window, j:j + window]
+            m = mask[i:i + window, j:j + window]
+            ee = np.sum(e * e * m)
+            alpha = np.sum(t * e * m) / ee if ee > 0 else 0.0
+            ssq += np.sum(m * (t - alpha * e) ** 2)
+            total += np.sum(m * t * t)
+    return ssq / total
+
+
+# ----------------------------------------------------------------------------- LMSE
+def test_lmse_perfect_scaled_and_zero(rng):
+    truth = rng.uniform(0.1, 1, (37, 53, 3))
+    assert lmse(truth, truth) == pytest.approx(0.0, abs=1e-14)
+    assert lmse(3.7 * truth, truth) == pytest.approx(0.0, abs=1e-14)
+    assert lmse(np.zeros_like(truth), truth) == pytest.approx(1.0, abs=1e-14)
+
+
+def test_lmse_per_window_scale_is_free(rng):
+    truth = rng.uniform(0.1, 1, (40, 60))
+    scales = np.kron(rng.uniform(0.2, 5.0, (4, 6)), np.ones((10, 10)))   # one scale per 10x10 tile
+    est = truth * scales
+    assert lmse(est, truth, window=10, step=10) == pytest.approx(0.0, abs=1e-14)
+    # with overlapping 20-pixel windows the tiles no longer align: the error is positive
+    assert lmse(est, truth) > 0.01
+
+
+def test_lmse_hand_computed():
+    truth = np.ones((2, 2))
+    est = np.array([[1.0, 0.0], [1.0, 0.0]])
+    # one window (the image is smaller than 20): alpha = 2/2 = 1, ssq = 2, total = 4
+    assert lmse(est, truth) == pytest.approx(0.5)
+    # window=1: four single-pixel windows; where est = 0, alpha = 0 and the error is
+    # t^2 = 1, elsewhere 0 -> 2/4
+    assert lmse(est, truth, window=1, step=1) == pytest.approx(0.5)
+    # step larger than the image: only the window at (0, 0)
+    t = np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]])
+    e = np.array([[1.0, 1.0, 9.0], [1.0, 1.0, 9.0]])
+    # window 2x2 at (0,0): t=(1,2,4,5), e=1 -> alpha=3, ssq=4+1+1+4=10, total=46
+    assert lmse(e, t, window=2, step=5) == pytest.approx(10.0 / 46.0)
+
+
+def test_lmse_matches_loop_reference(rng):
+    truth = rng.uniform(0, 1, (37, 53))
+    est = truth + rng.normal(scale=0.2, size=truth.shape)
+    mask = rng.uniform(size=truth.shape) > 0.2
+    for window, step in [(20, 10), (7, 3), (10, 10)]:
+        ref = _lmse_loops(est, truth, mask.astype(float), window, step)
+        assert lmse(est, truth, window=window, step=step, mask=mask) == pytest.approx(ref, rel=1e-12)
+
+
+def test_lmse_colour_is_mean_of_channels_and_stack_mean_of_frames(rng):
+    truth = rng.uniform(0.1, 1, (3, 30, 41, 3))
+    est = truth * rng.uniform(0.5, 1.5, truth.shape)
+    per_frame = [np.mean([lmse(est[f, ..., c], truth[f, ..., c]) for c in range(3)]) for f in range(3)]
+    assert lmse(est[0], truth[0]) == pytest.approx(per_frame[0], rel=1e-12)
+    assert lmse(est, truth) == pytest.approx(np.mean(per_frame), rel=1e-12)
+    grey_stack = lmse(est[..., 0], truth[..., 0])           # (T, H, W)
+    assert grey_stack == pytest.approx(np.mean([lmse(est[f, ..., 0], truth[f, ..., 0]) for f in range(3)]))
+
+
+def test_lmse_zero_channel_left_out(rng):
+    truth = rng.uniform(0.1, 1, (25, 25, 3))
+    truth[..., 2] = 0.0
+    est = truth.copy()
+    est[..., 2] = rng.uniform(size=(25, 25))                 # error only in the empty channel
+    assert lmse(est, truth) == pytest.approx(0.0, abs=1e-14)
+
+
+def test_lmse_mask_ignores_outside(rng):
+    truth = rng.uniform(0.1, 1, (30, 30))
+    est = truth * 1.3 + rng.normal(scale=0.05, size=truth.shape)
+    mask = np.ones((30, 30), bool)
+    mask[:, 15:] = False
+    garbage = est.copy()
+    garbage[:, 15:] = 100.0
+    assert lmse(garbage, truth, mask=mask) == pytest.approx(lmse(est, truth, mask=mask), rel=1e-12)
+    stack_mask = np.stack([mask, mask])
+    two = np.stack([est, est])
+    assert lmse(two, np.stack([truth, truth]), mask=stack_mask) == pytest.approx(lmse(est, truth, mask=mask))
+
+
+def test_intrinsic_lmse(rng):
+    a = rng.uniform(0.1, 1, (2, 20, 20, 3))
+    s = rng.uniform(0.1, 1, (2, 20, 20))
+    out = intrinsic_lmse(a * 2, np.zeros_like(s), a, s)
+    assert out["albedo"] == pytest.approx(0.0, abs=1e-14)
+    assert out["shading"] == pytest.approx(1.0)
+    assert out["mean"] == pytest.approx(0.5)
+
+
+@pytest.mark.parametrize("est, truth, kwargs, exc, msg", [
+    (np.zeros((5, 5)), np.ones((5, 6)), {}, ValueError, "shape"),
+    (np.zeros((5,)), np.ones((5,)), {}, ValueError, "expected"),
+    (np.full((5, 5), np.nan), np.ones((5, 5)), {}, ValueError, "NaN"),
+    (np.zeros((5, 5)), np.ones((5, 5)), {"window": 0}, ValueError, "window"),
+    (np.zeros((5, 5)), np.ones((5, 5)), {"step": 2.5}, ValueError, "step"),
+    (np.zeros((5, 5)), np.zeros((5, 5)), {}, ValueError, "zero inside every window"),
+    (np.zeros((5, 5)), np.ones((5, 5)), {"mask": np.ones((4, 5))}, ValueError, "mask"),
+    (np.zeros((5, 5)), np.ones((5, 5)), {"mask": np.array(["a"] * 25).reshape(5, 5)}, TypeError, "mask"),
+    (np.array([["a"]]), np.ones((1, 1)), {}, TypeError, "numeric"),
+])
+def test_lmse_rejects(est, truth, kwargs, exc, msg):
+    with pytest.raises(exc, match=msg):
+        lmse(est, truth, **kwargs)
+
+
+# ----------------------------------------------------------------------------- flow errors
+def test_constant_flows():
+    gt = np.zeros((2, 7, 9, 2))
+    f = np.zeros_like(gt)
+    f[..., 0] = 3.0
+    f[..., 1] = 4.0
+    assert endpoint_error(f, gt) == pytest.approx(5.0)
+    f1 = np.zeros_like(gt)
+    f1[..., 0] = 1.0
+    assert angular_error(f1, gt) == pytest.approx(45.0)       # (1,0,1) vs (0,0,1)
+    assert angular_error(f1, -f1) == pytest.approx(90.0)      # (1,0,1) vs (-1,0,1): cos = 0
+    assert angular_error(f, f) == pytest.approx(0.0, abs=1e-5)
+    assert flow_errors(f1, gt) == pytest.approx({"epe": 1.0, "aae": 45.0})
+
+
+def test_flow_errors_mask_and_unknown_gt():
+    gt = np.zeros((6, 8, 2))
+    f = np.zeros_like(gt)
+    f[:3, ..., 0] = 2.0                      # error 2 on the top half
+    mask = np.zeros((6, 8), bool)
+    mask[:3] = True
+    assert endpoint_error(f, gt) == pytest.approx(1.0)
+    assert endpoint_error(f, gt, mask=mask) == pytest.approx(2.0)
+    assert endpoint_error(f, gt, mask=~mask) == pytest.approx(0.0)
+    gt_unknown = gt.copy()
+    gt_unknown[:3] = 1e10                    # unknown ground truth is ignored
+    assert endpoint_error(f, gt_unknown) == pytest.approx(0.0)
+    assert angular_error(f, gt_unknown) == pytest.approx(0.0, abs=1e-5)
+    gt_nan = gt.copy()
+    gt_nan[:3, :, 1] = np.nan
+    assert endpoint_error(f, gt_nan) == pytest.approx(0.0)
+    f_nan = f.copy()
+    f_nan[:3] = np.nan                       # non-finite estimate where gt is unknown: fine
+    assert endpoint_error(f_nan, gt_unknown) == pytest.approx(0.0)
+
+
+@pytest.mark.parametrize("f, g, mask, exc, msg", [
+    (np.zeros((4, 5, 2)), np.zeros((4, 6, 2)), None, ValueError, "shape"),
+    (np.zeros((4, 5, 3)), np.zeros((4, 5, 3)), None, ValueError, r"\(\.\.\., H, W, 2\)"),
+    (np.zeros((4, 5, 2)), np.full((4, 5, 2), 1e10), None, ValueError, "no pixel"),
+    (np.zeros((4, 5, 2)), np.zeros((4, 5, 2)), np.zeros((4, 5), bool), ValueError, "no pixel"),
+    (np.full((4, 5, 2), np.inf), np.zeros((4, 5, 2)), None, ValueError, "NaN or infinite"),
+    (np.zeros((4, 5, 2)), np.zeros((4, 5, 2)), np.ones((5, 4)), ValueError, "mask"),
+    (np.zeros((4, 5, 2), bool), np.zeros((4, 5, 2)), None, TypeError, "numeric"),
+])
+def test_flow_errors_reject(f, g, mask, exc, msg):
+    for fn in (endpoint_error, angular_error):
+        with pytest.raises(exc, match=msg):
+            fn(f, g, mask=mask)
+
+
+# ----------------------------------------------------------------------------- temporal measures
+def _translating_texture(rng, t=3, h=48, w=64, shift=(2, 1)):
+    """Smooth random texture moved by an integer shift per frame (np.roll), and its flow."""
+    import cv2
+
+    base = rng.uniform(0.05, 1.0, (h, w, 3)).astype(np.float32)
+    base = cv2.GaussianBlur(base, (0, 0), 1.5)
+    frames = np.stack([np.roll(base, (shift[1] * k, shift[0] * k), axis=(0, 1)) for k in range(t)])
+    flow = np.zeros((t - 1, h, w, 2), np.float32)
+    flow[..., 0], flow[..., 1] = shift
+    vis = np.ones((t - 1, h, w), np.float32)
+    vis[:, h - shift[1]:] = 0
+    vis[:, :, w - shift[0]:] = 0
+    return frames, flow, vis
+
+
+def test_temporal_incoherence_with_given_method(rng):
+    albedo, flow, vis = _translating_texture(rng)
+    exact = temporal_incoherence(albedo, flow, vis, flow_method=lambda a: flow)
+    assert exact == {"epe": 0.0, "epe_visible": 0.0}
+    off = temporal_incoherence(albedo, flow, None, flow_method=lambda a: flow + np.array([0.0, 1.0]))
+    assert off["epe"] == pytest.approx(1.0) and np.isnan(off["epe_visible"])
+
+
+def test_temporal_incoherence_dis_tracks_translation(rng):
+    albedo, flow, vis = _translating_texture(rng)
+    f = _dis_flow(albedo)
+    assert f.shape == flow.shape and f.dtype == np.float32
+    coherent = temporal_incoherence(albedo, flow, vis)
+    assert coherent["epe_visible"] < 0.5
+    # the same albedo with an illumination change that moves with the frame: less coherent
+    ramp = np.linspace(0.3, 1.0, albedo.shape[2], dtype=np.float32)
+    flicker = albedo * np.stack([ramp, ramp[::-1], ramp])[:, None, :, None]
+    assert temporal_incoherence(flicker, flow, vis)["epe_visible"] > coherent["epe_visible"]
+    # the global scale of the albedo does not matter (normalised per sequence)
+    scaled = temporal_incoherence(0.5 * albedo, flow, vis)
+    assert scaled["epe"] == pytest.approx(coherent["epe"], abs=1e-6)
+
+
+def test_temporal_incoherence_rejects(rng):
+    albedo, flow, vis = _translating_texture(rng)
+    with pytest.raises(ValueError, match=r"\(T, H, W, 3\)"):
+        temporal_incoherence(albedo[..., 0], flow, vis)
+    with pytest.raises(ValueError, match="at least 2 frames"):
+        temporal_incoherence(albedo[:1], flow[:0], vis[:0])
+    with pytest.raises(ValueError, match="flow_gt"):
+        temporal_incoherence(albedo, flow[:1], vis)
+    with pytest.raises(ValueError, match="visibility"):
+        temporal_incoherence(albedo, flow, vis[..., :-1])
+    with pytest.raises(ValueError, match=">= 0"):
+        temporal_incoherence(albedo - 2.0, flow, vis)
+    with pytest.raises(TypeError, match="callable"):
+        temporal_incoherence(albedo, flow, vis, flow_method="dis")
+    with pytest.raises(ValueError, match="flow_method returned"):
+        temporal_incoherence(albedo, flow, vis, flow_method=lambda a: flow[:, :-1])
+
+
+def test_albedo_consistency(rng):
+    albedo, flow, vis = _translating_texture(rng)
+    assert albedo_consistency(albedo, flow, vis) == pytest.approx(0.0, abs=1e-5)
+    # a per-frame global scale is removed by the median normalisation
+    scaled = albedo * np.array([1.0, 0.5, 2.0], np.float32)[:, None, None, None]
+    assert albedo_consistency(scaled, flow, vis) == pytest.approx(0.0, abs=1e-5)
+    assert albedo_consistency(albedo, flow, None) == pytest.approx(0.0, abs=1e-5)
+    # a local change of the second frame shows up; marked occluded, only the shift of
+    # frame 1's median (the per-frame normalisation) remains
+    changed = albedo.copy()
+    changed[1, 10:30, 10:30] *= 0.5
+    seen = albedo_consistency(changed, flow, vis)
+    assert seen > 0.05
+    hidden = vis.copy()
+    hidden[0, 9:29, 8:28] = 0           # pixels of frame 0 that land in the square (shift (2, 1))
+    hidden[1, 10:30, 10:30] = 0         # pixels of the square itself, compared with frame 2
+    assert albedo_consistency(changed, flow, hidden) < 0.4 * seen
+    # flow pointing out of the image everywhere leaves nothing to compare
+    with pytest.raises(ValueError, match="no visible pixel"):
+        albedo_consistency(albedo, flow + 1000.0, vis)
+    with pytest.raises(ValueError, match="eps"):
+        albedo_consistency(albedo, flow, vis, eps=0.0)
+    with pytest.raises(ValueError, match="flow_gt"):
+        albedo_consistency(albedo, flow[..., :1], vis)
