@@ -1,0 +1,41 @@
+"""NumPy reference of :mod:`ivkernels.kernels.warp.derivatives` (float64, replicate border)."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def correlate_xy(img: np.ndarray, kernel: np.ndarray) -> np.ndarray:
+    """2-D correlation of every (T, H, W[, C]) frame with ``kernel`` (kh, kw), replicate border."""
+    img = np.asarray(img, np.float64)
+    kh, kw = kernel.shape
+    ry, rx = kh // 2, kw // 2
+    pad = [(0, 0), (ry, ry), (rx, rx)] + [(0, 0)] * (img.ndim - 3)
+    p = np.pad(img, pad, mode="edge")
+    h, w = img.shape[1], img.shape[2]
+    out = np.zeros_like(img)
+    for j in range(kh):
+        for i in range(kw):
+            if kernel[j, i] != 0:
+                out += kernel[j, i] * p[:, j:j + h, i:i + w]
+    return out
+
+
+FIVE_POINT = np.array([1.0, -8.0, 0.0, 8.0, -1.0]) / 12.0
+SOBEL_X = np.array([[-1.0, 0, 1], [-2, 0, 2], [-1, 0, 1]]) / 8.0
+
+
+def image_gradient(src: np.ndarray):
+    """Return ``(gx, gy)``: correlation with ``[1 -8 0 8 -1] / 12`` along x and y."""
+    return correlate_xy(src, FIVE_POINT[None, :]), correlate_xy(src, FIVE_POINT[:, None])
+
+
+def flow_sobel_magnitude(flow: np.ndarray) -> np.ndarray:
+    sx = correlate_xy(flow, SOBEL_X)
+    sy = correlate_xy(flow, SOBEL_X.T)
+    return np.sqrt((sx**2 + sy**2).sum(-1))
+
+
+def divergence_negative(flow: np.ndarray) -> np.ndarray:
+    central = np.array([[-0.5, 0.0, 0.5]])
+    div = correlate_xy(flow[..., 0], central) + correlate_xy(flow[..., 1], central.T)
+    return np.minimum(div, 0.0)

@@ -1,0 +1,33 @@
+"""NumPy reference of :mod:`ivkernels.kernels.warp.vecops` (float64 unless noted)."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def dot(a, b) -> float:
+    return float(np.dot(np.asarray(a, np.float64), np.asarray(b, np.float64)))
+
+
+def norm_inf(x) -> float:
+    return float(np.abs(np.asarray(x, np.float64)).max())
+
+
+def axpy(alpha: float, x, y) -> np.ndarray:
+    """Returns ``y + alpha * x``."""
+    return np.asarray(y, np.float64) + alpha * np.asarray(x, np.float64)
+
+
+def scale(alpha: float, x) -> np.ndarray:
+    return alpha * np.asarray(x, np.float64)
+
+
+def lincomb(a: float, x, b: float, y) -> np.ndarray:
+    return a * np.asarray(x, np.float64) + b * np.asarray(y, np.float64)
+
+
+def copy(src) -> np.ndarray:
+    return np.array(src, copy=True)
+
+
+def fill(x, value: float) -> np.ndarray:
+    return np.full(np.shape(x), value, dtype=np.asarray(x).dtype)

@@ -1,0 +1,196 @@
+"""Occlusion and motion-boundary maps computed from the flow (Sections 3.2, 3.3).
+
+* :func:`occlusion_soft`: the occlusion likelihood ``o(x)`` of Eq. 7 (times
+  the inside-the-image indicator),
+* :func:`occlusion_binary`: ``w_occ`` of Eq. 6, 1 = visible in frame t+1,
+* :func:`motion_boundary`: ``w_bnd`` of Eq. 9, 1 = near a motion boundary
+  (thresholded Sobel magnitude of the flow, dilated).
+
+The next frame's Lab colour at ``x + u`` is sampled inside the kernels with the
+bilinear helpers of :mod:`ivkernels.kernels.warp.sampling` (clamped corners).
+"""
+from __future__ import annotations
+
+import numbers
+
+import warp as wp
+
+from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners, inside_image
+
+wp.set_module_options({"enable_backward": False})
+
+
+# ----------------------------------------------------------------------------
+# Device helpers
+# ----------------------------------------------------------------------------
+
+@wp.func
+def occlusion_likelihood(lab: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
+                         div_neg: wp.array3d(dtype=float), t: int, y: int, x: int,
+                         sigma_e: float, sigma_d: float):
+    """Eq. 7 at pixel (t, y, x): returns ``(o, inside)``.
+
+    ``o = exp(-|lab_t(x) - lab_{t+1}(x + u)|^2 / (2 sigma_e^2) - d^2 / (2 sigma_d^2))``
+    with the squared Euclidean Lab distance and ``lab_{t+1}`` sampled
+    bilinearly; ``inside`` is 1.0 if ``x + u`` lies in the image, else 0.0.
+    """
+    height = flow.shape[1]
+    width = flow.shape[2]
+    px = float(x) + flow[t, y, x, 0]
+    py = float(y) + flow[t, y, x, 1]
+    x0, x1, fx = clamped_corners(px, width)
+    y0, y1, fy = clamped_corners(py, height)
+    dist2 = float(0.0)
+    for c in range(3):
+        diff = lab[t, y, x, c] - bilinear_at(lab, t + 1, c, x0, x1, fx, y0, y1, fy)
+        dist2 += diff * diff
+    d = div_neg[t, y, x]
+    o = wp.exp(-dist2 / (2.0 * sigma_e * sigma_e) - d * d / (2.0 * sigma_d * sigma_d))
+    return o, inside_image(px, py, height, width)
+
+
+# ----------------------------------------------------------------------------
+# Kernels (one thread per row = t * H + y)
+# ----------------------------------------------------------------------------
+
+@wp.kernel
+def occlusion_soft_rows(row_begin: int, lab: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
+                        div_neg: wp.array3d(dtype=float), out: wp.array3d(dtype=float),
+                        sigma_e: float, sigma_d: float):
+    r = row_begin + wp.tid()
+    height = flow.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(flow.shape[2]):
+        o, inside = occlusion_likelihood(lab, flow, div_neg, t, y, x, sigma_e, sigma_d)
+        out[t, y, x] = o * inside
+
+
+@wp.kernel
+def occlusion_binary_rows(row_begin: int, lab: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
+                          div_neg: wp.array3d(dtype=float), out: wp.array3d(dtype=float),
+                          sigma_e: float, sigma_d: float, threshold: float):
+    r = row_begin + wp.tid()
+    height = flow.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(flow.shape[2]):
+        o, inside = occlusion_likelihood(lab, flow, div_neg, t, y, x, sigma_e, sigma_d)
+        w = 0.0
+        if o >= threshold and inside > 0.0:
+            w = 1.0
+        out[t, y, x] = w
+
+
+@wp.kernel
+def boundary_dilate_rows(row_begin: int, magnitude: wp.array3d(dtype=float), out: wp.array3d(dtype=float),
+                         threshold: float, radius: int):
+    r = row_begin + wp.tid()
+    height = magnitude.shape[1]
+    width = magnitude.shape[2]
+    t = r // height
+    y = r - t * height
+    y_lo = wp.max(y - radius, 0)
+    y_hi = wp.min(y + radius, height - 1)
+    for x in range(width):
+        x_lo = wp.max(x - radius, 0)
+        x_hi = wp.min(x + radius, width - 1)
+        hit = float(0.0)
+        for yy in range(y_lo, y_hi + 1):
+            for xx in range(x_lo, x_hi + 1):
+                if magnitude[t, yy, xx] > threshold:
+                    hit = 1.0
+                    break
+            if hit > 0.0:
+                break
+        out[t, y, x] = hit
+
+
+# ----------------------------------------------------------------------------
+# Host functions
+# ----------------------------------------------------------------------------
+
+def _check(name: str, a, shape: tuple, layout: str, device=None) -> None:
+    """Raise unless ``a`` is a float32 ``wp.array`` of ``shape`` (None = any size) on ``device``."""
+    if not isinstance(a, wp.array):
+        raise TypeError(f"{name} must be a wp.array of float32 {layout}, got {type(a).__name__}")
+    if a.dtype != wp.float32:
+        raise TypeError(f"{name} must have dtype float32, got {wp.types.type_repr(a.dtype)}")
+    if len(a.shape) != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
+        want = tuple("?" if e is None else e for e in shape)
+        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
+    if device is not None and a.device != device:
+        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
+
+
+def _check_occlusion_args(lab, flow, div_neg, out, sigma_e, sigma_d):
+    _check("lab", lab, (None, None, None, 3), "(T+1, H, W, 3)")
+    if lab.shape[0] < 2:
+        raise ValueError(f"lab must hold at least two frames (T+1, H, W, 3), got {tuple(lab.shape)}")
+    t, h, w = lab.shape[0] - 1, lab.shape[1], lab.shape[2]
+    _check("flow", flow, (t, h, w, 2), "(T, H, W, 2) with T = lab frames - 1", lab.device)
+    _check("div_neg", div_neg, (t, h, w), "(T, H, W)", lab.device)
+    _check("out", out, (t, h, w), "(T, H, W)", lab.device)
+    sigma_e, sigma_d = float(sigma_e), float(sigma_d)
+    if not (sigma_e > 0.0 and sigma_d > 0.0):
+        raise ValueError(f"sigma_e and sigma_d must be > 0, got {sigma_e}, {sigma_d}")
+    return sigma_e, sigma_d
+
+
+def occlusion_soft(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: float = 0.3) -> None:
+    """Occlusion likelihood ``o(x)`` of Eq. 7, times the inside-the-image indicator.
+
+    ``out[t] = exp(-|lab[t](x) - lab[t+1](x + u_t)|^2 / (2 sigma_e^2) - d_t^2 / (2 sigma_d^2))``
+    where ``x + u_t`` stays inside ``[0, W-1] x [0, H-1]``, and 0 elsewhere.
+
+    Parameters
+    ----------
+    lab : wp.array float32 (T+1, H, W, 3), CIE Lab (L in [0, 100]) of frames 0..T
+        (:func:`ivkernels.kernels.warp.colour.linear_rgb_to_lab`).
+    flow : wp.array float32 (T, H, W, 2), forward flow t -> t+1, pixels.
+    div_neg : wp.array float32 (T, H, W), one-sided divergence ``d <= 0``
+        (:func:`ivkernels.kernels.warp.derivatives.divergence_negative`).
+    out : wp.array float32 (T, H, W), written, in [0, 1].
+    sigma_e : Lab distance scale (paper: 20).
+    sigma_d : divergence scale, pixels per pixel (paper: 0.3).
+    """
+    sigma_e, sigma_d = _check_occlusion_args(lab, flow, div_neg, out, sigma_e, sigma_d)
+    launch_rows(occlusion_soft_rows, flow.shape[0] * flow.shape[1],
+                [lab, flow, div_neg, out, sigma_e, sigma_d], device=lab.device)
+
+
+def occlusion_binary(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: float = 0.3,
+                     threshold: float = 0.5) -> None:
+    """Occlusion map ``w_occ`` of Eq. 6: 1 = visible in frame t+1, 0 = occluded or leaves the image.
+
+    ``out = 1`` where ``o(x) >= threshold`` (``o`` of Eq. 7, as in
+    :func:`occlusion_soft`) and ``x + u`` lies inside ``[0, W-1] x [0, H-1]``;
+    0 otherwise.  Same arguments as :func:`occlusion_soft`; ``threshold``: the
+    paper's 0.5.
+    """
+    sigma_e, sigma_d = _check_occlusion_args(lab, flow, div_neg, out, sigma_e, sigma_d)
+    launch_rows(occlusion_binary_rows, flow.shape[0] * flow.shape[1],
+                [lab, flow, div_neg, out, sigma_e, sigma_d, float(threshold)], device=lab.device)
+
+
+def motion_boundary(sobel_mag, out, threshold: float, radius: int) -> None:
+    """Motion-boundary map ``w_bnd`` (Sec. 3.3, Eq. 9): threshold and dilation in one gather.
+
+    ``out[t, y, x] = 1`` if any pixel of the ``(2 radius + 1)^2`` window around
+    ``(y, x)`` (clipped to the image) has ``sobel_mag > threshold``, else 0.
+
+    Parameters
+    ----------
+    sobel_mag : wp.array float32 (T, H, W), flow edge magnitude
+        (:func:`ivkernels.kernels.warp.derivatives.flow_sobel_magnitude`).
+    out : wp.array float32 (T, H, W), written, 0 or 1.  Must not overlap sobel_mag.
+    threshold : edge magnitude, pixels per pixel.
+    radius : dilation radius in pixels, int >= 0 (0 = threshold only).
+    """
+    _check("sobel_mag", sobel_mag, (None, None, None), "(T, H, W)")
+    _check("out", out, tuple(sobel_mag.shape), "(T, H, W)", sobel_mag.device)
+    if isinstance(radius, bool) or not isinstance(radius, numbers.Integral) or radius < 0:
+        raise ValueError(f"radius must be an int >= 0, got {radius!r}")
+    launch_rows(boundary_dilate_rows, sobel_mag.shape[0] * sobel_mag.shape[1],
+                [sobel_mag, out, float(threshold), int(radius)], device=sobel_mag.device)

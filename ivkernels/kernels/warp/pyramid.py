@@ -1,0 +1,200 @@
+"""Image-pyramid kernels: separable Gaussian blur and bilinear resizing.
+
+The solver (and the optical flow) build their coarse-to-fine pyramids from
+these: a level is ``gaussian_blur`` (anti-aliasing) then ``resize_bilinear``
+down; a coarse solution goes back up with ``resize_bilinear`` (images) or
+``resize_flow`` (flow, whose vectors are rescaled by the size ratio).
+
+Resizing maps pixel centres (the "align_corners=False" convention, as in
+OpenCV's ``INTER_LINEAR``): output pixel ``x`` samples the source at
+``(x + 0.5) * w / W - 0.5``, bilinearly with corner indices clamped to the
+image (the helpers of :mod:`ivkernels.kernels.warp.sampling`).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import warp as wp
+
+from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners
+
+wp.set_module_options({"enable_backward": False})
+
+
+# ----------------------------------------------------------------------------
+# Kernels (one thread per output row = t * H + y)
+# ----------------------------------------------------------------------------
+
+@wp.kernel
+def blur_x_rows(row_begin: int, src: wp.array4d(dtype=float), dst: wp.array4d(dtype=float),
+                weights: wp.array(dtype=float), radius: int):
+    r = row_begin + wp.tid()
+    height = src.shape[1]
+    width = src.shape[2]
+    t = r // height
+    y = r - t * height
+    for x in range(width):
+        for c in range(src.shape[3]):
+            acc = float(0.0)
+            for k in range(-radius, radius + 1):
+                acc += weights[k + radius] * src[t, y, wp.clamp(x + k, 0, width - 1), c]
+            dst[t, y, x, c] = acc
+
+
+@wp.kernel
+def blur_y_rows(row_begin: int, src: wp.array4d(dtype=float), dst: wp.array4d(dtype=float),
+                weights: wp.array(dtype=float), radius: int):
+    r = row_begin + wp.tid()
+    height = src.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(src.shape[2]):
+        for c in range(src.shape[3]):
+            acc = float(0.0)
+            for k in range(-radius, radius + 1):
+                acc += weights[k + radius] * src[t, wp.clamp(y + k, 0, height - 1), x, c]
+            dst[t, y, x, c] = acc
+
+
+@wp.kernel
+def copy_rows(row_begin: int, src: wp.array4d(dtype=float), dst: wp.array4d(dtype=float)):
+    r = row_begin + wp.tid()
+    height = src.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(src.shape[2]):
+        for c in range(src.shape[3]):
+            dst[t, y, x, c] = src[t, y, x, c]
+
+
+@wp.kernel
+def resize_bilinear_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array4d(dtype=float),
+                         scale_x: float, scale_y: float):
+    r = row_begin + wp.tid()
+    height = out.shape[1]
+    t = r // height
+    y = r - t * height
+    y0, y1, fy = clamped_corners((float(y) + 0.5) * scale_y - 0.5, src.shape[1])
+    for x in range(out.shape[2]):
+        x0, x1, fx = clamped_corners((float(x) + 0.5) * scale_x - 0.5, src.shape[2])
+        for c in range(out.shape[3]):
+            out[t, y, x, c] = bilinear_at(src, t, c, x0, x1, fx, y0, y1, fy)
+
+
+@wp.kernel
+def resize_flow_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array4d(dtype=float),
+                     scale_x: float, scale_y: float, gain_x: float, gain_y: float):
+    r = row_begin + wp.tid()
+    height = out.shape[1]
+    t = r // height
+    y = r - t * height
+    y0, y1, fy = clamped_corners((float(y) + 0.5) * scale_y - 0.5, src.shape[1])
+    for x in range(out.shape[2]):
+        x0, x1, fx = clamped_corners((float(x) + 0.5) * scale_x - 0.5, src.shape[2])
+        out[t, y, x, 0] = bilinear_at(src, t, 0, x0, x1, fx, y0, y1, fy) * gain_x
+        out[t, y, x, 1] = bilinear_at(src, t, 1, x0, x1, fx, y0, y1, fy) * gain_y
+
+
+# ----------------------------------------------------------------------------
+# Host functions
+# ----------------------------------------------------------------------------
+
+def _check(name: str, a, shape: tuple, layout: str, device=None) -> None:
+    """Raise unless ``a`` is a float32 ``wp.array`` of ``shape`` (None = any size) on ``device``."""
+    if not isinstance(a, wp.array):
+        raise TypeError(f"{name} must be a wp.array of float32 {layout}, got {type(a).__name__}")
+    if a.dtype != wp.float32:
+        raise TypeError(f"{name} must have dtype float32, got {wp.types.type_repr(a.dtype)}")
+    if len(a.shape) != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
+        want = tuple("?" if e is None else e for e in shape)
+        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
+    if device is not None and a.device != device:
+        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
+
+
+def gaussian_kernel(sigma: float) -> np.ndarray:
+    """Normalised 1-D Gaussian taps ``exp(-k^2 / 2 sigma^2)``, k = -r..r, r = ceil(3 sigma)."""
+    radius = max(1, math.ceil(3.0 * sigma))
+    k = np.arange(-radius, radius + 1, dtype=np.float64)
+    w = np.exp(-0.5 * (k / sigma) ** 2)
+    return (w / w.sum()).astype(np.float32)
+
+
+def gaussian_blur(src, out, scratch, sigma: float) -> None:
+    """Separable Gaussian blur, truncated at 3 sigma, replicate border.
+
+    Choosing sigma for a pyramid: before resampling by a factor ``scale < 1``
+    (e.g. 0.5), blur with ``sigma = 1 / sqrt(2 * scale)`` pixels
+    (= ``sqrt(spacing) / sqrt(2)`` with ``spacing = 1 / scale``, Classic+NL's
+    choice): 1.0 for halving, 0.63 for ``scale = 0.8``.
+
+    Parameters
+    ----------
+    src : wp.array float32 (T, H, W, C).
+    out : wp.array float32 (T, H, W, C), written; may be ``src``.
+    scratch : wp.array float32 (T, H, W, C), overwritten (the x-blurred
+        image); must overlap neither ``src`` nor ``out``.
+    sigma : standard deviation in pixels; ``sigma <= 0`` copies ``src``.
+    """
+    _check("src", src, (None, None, None, None), "(T, H, W, C)")
+    _check("out", out, tuple(src.shape), "(T, H, W, C)", src.device)
+    _check("scratch", scratch, tuple(src.shape), "(T, H, W, C)", src.device)
+    if scratch.ptr is not None and scratch.ptr in (src.ptr, out.ptr):
+        raise ValueError("scratch must be a separate buffer from src and out")
+    sigma = float(sigma)
+    if not math.isfinite(sigma):
+        raise ValueError(f"sigma must be finite, got {sigma}")
+    rows = src.shape[0] * src.shape[1]
+    if sigma <= 0.0:
+        if out.ptr != src.ptr:
+            launch_rows(copy_rows, rows, [src, out], device=src.device)
+        return
+    taps = gaussian_kernel(sigma)
+    weights = wp.array(taps, dtype=wp.float32, device=src.device)
+    radius = (len(taps) - 1) // 2
+    launch_rows(blur_x_rows, rows, [src, scratch, weights, radius], device=src.device)
+    launch_rows(blur_y_rows, rows, [scratch, out, weights, radius], device=src.device)
+
+
+def _check_resize(src, out, channels):
+    _check("src", src, (None, None, None, channels), "(T, h, w, C)" if channels is None else "(T, h, w, 2)")
+    t, h, w, c = src.shape
+    _check("out", out, (t, None, None, c), "(T, H, W, C)" if channels is None else "(T, H, W, 2)", src.device)
+    if min(h, w, out.shape[1], out.shape[2]) < 1:
+        raise ValueError(f"image sizes must be >= 1, got src {tuple(src.shape)}, out {tuple(out.shape)}")
+    return src.shape[2] / out.shape[2], src.shape[1] / out.shape[1]
+
+
+def resize_bilinear(src, out) -> None:
+    """Resize frames bilinearly to ``out``'s size (down or up), pixel-centre mapping.
+
+    ``out[t, y, x] = src[t]`` sampled at ``((x + 0.5) w / W - 0.5, (y + 0.5) h / H - 0.5)``,
+    corner indices clamped.  Blur first (:func:`gaussian_blur`) when shrinking.
+
+    Parameters
+    ----------
+    src : wp.array float32 (T, h, w, C).
+    out : wp.array float32 (T, H, W, C), written (must not overlap src).
+    """
+    scale_x, scale_y = _check_resize(src, out, None)
+    launch_rows(resize_bilinear_rows, out.shape[0] * out.shape[1], [src, out, scale_x, scale_y], device=src.device)
+
+
+def resize_flow(src, out) -> None:
+    """Resize a flow field to ``out``'s size and rescale its vectors.
+
+    :func:`resize_bilinear`, then component 0 (dx) times ``W / w`` and
+    component 1 (dy) times ``H / h``, so the vectors stay in pixels of the new
+    size.
+
+    Parameters
+    ----------
+    src : wp.array float32 (T, h, w, 2), pixels of the source size.
+    out : wp.array float32 (T, H, W, 2), written, pixels of the target size.
+    """
+    scale_x, scale_y = _check_resize(src, out, 2)
+    gain_x, gain_y = out.shape[2] / src.shape[2], out.shape[1] / src.shape[1]
+    launch_rows(resize_flow_rows, out.shape[0] * out.shape[1], [src, out, scale_x, scale_y, gain_x, gain_y],
+                device=src.device)
