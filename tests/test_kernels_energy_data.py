@@ -85,8 +85,9 @@ def test_warp_matches_taichi(rng):
     inputs = make_inputs(rng, 2, 19, 23)
     w = run(get_backend("warp"), *inputs)
     t = run(get_backend("taichi"), *inputs)
+    # d/dz of z / sqrt(z^2 + eps^2) is up to 1/eps: float32 rounding of z shows up scaled by lam/eps
     for a, b in zip(w, t):
-        np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-5)
+        np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-3)
 
 
 def test_bad_input_raises(backend, rng):

@@ -70,11 +70,16 @@ def test_median5x5_tiny_images(backend, rng):
 
 # ----------------------------------------------------------------------------- selection / Li & Osher
 
-def grid_minimiser(values, weights, s, lam, step=1e-5):
+def grid_minimiser(values, weights, s, lam):
+    """Brute-force 1-D minimisation of the (convex) objective: a grid of step 1e-3,
+    then a grid of step 1e-6 around its best point."""
     lo, hi = min(values.min(), s) - 0.1, max(values.max(), s) + 0.1
-    u = np.arange(lo, hi, step)
-    f = np.abs(u[:, None] - values[None]) @ weights + lam * (u - s) ** 2
-    return u[np.argmin(f)], f.min()
+    for step in (1e-3, 1e-6):
+        u = np.arange(lo, hi, step)
+        f = np.abs(u[:, None] - values[None]) @ weights + lam * (u - s) ** 2
+        best = u[np.argmin(f)]
+        lo, hi = best - 2e-3, best + 2e-3
+    return best, f.min()
 
 
 @pytest.mark.parametrize("lam", [0.5, 5.0, 50.0])

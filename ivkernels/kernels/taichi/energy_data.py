@@ -1,0 +1,79 @@
+"""Taichi mirror of :mod:`ivkernels.kernels.warp.energy_data` (Eq. 3): same host
+function, same signature, NumPy arrays passed as ``ti.types.ndarray()``.
+
+The outermost loop runs over the ``T * H`` rows in parallel, each iteration
+looping over ``x``; the gradient and row energy of a row are written by the
+iteration that owns it.
+"""
+
+import numpy as np
+import taichi as ti
+
+nd1_f64 = ti.types.ndarray(dtype=ti.f64, ndim=1)
+nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
+nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
+
+
+@ti.func
+def charbonnier(z, eps):
+    """``sqrt(z^2 + eps^2)``, the differentiable L1 of Eq. 3."""
+    return ti.sqrt(z * z + eps * eps)
+
+
+@ti.kernel
+def data_term_rows(I: nd4, A: nd4, S: nd3, w_lum: nd3, gA: nd4, gS: nd3, energy_rows: nd1_f64,
+                   lam: ti.f32, eps: ti.f32):
+    height = S.shape[1]
+    for r in range(S.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        e = ti.f64(0.0)
+        for x in range(S.shape[2]):
+            w = w_lum[t, y, x]
+            s = S[t, y, x]
+            g_s = 0.0
+            for c in ti.static(range(3)):
+                z = w * (I[t, y, x, c] - A[t, y, x, c] - s)
+                rho = charbonnier(z, eps)
+                e += ti.cast(rho, ti.f64)
+                g = -lam * w * z / rho
+                gA[t, y, x, c] += g
+                g_s += g
+            gS[t, y, x] += g_s
+        energy_rows[r] += ti.cast(lam, ti.f64) * e
+
+
+def _check(name: str, a, shape: tuple, layout: str, dtype=np.float32, output: bool = False) -> np.ndarray:
+    """Raise unless ``a`` is a NumPy array of ``dtype`` and ``shape`` (None = any size).
+
+    Returns a C-contiguous array: inputs are copied if needed, outputs must
+    already be contiguous (they are updated in place).
+    """
+    if not isinstance(a, np.ndarray):
+        raise TypeError(f"{name} must be a numpy.ndarray of {np.dtype(dtype).name} {layout}, got {type(a).__name__}")
+    if a.dtype != dtype:
+        raise TypeError(f"{name} must have dtype {np.dtype(dtype).name}, got {a.dtype.name}")
+    if a.ndim != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
+        want = tuple("?" if e is None else e for e in shape)
+        raise ValueError(f"{name} must have shape {layout} = {want}, got {a.shape}")
+    if not a.flags.c_contiguous:
+        if output:
+            raise ValueError(f"{name} is updated in place and must be C-contiguous")
+        a = np.ascontiguousarray(a)
+    return a
+
+
+def data_term(I, A, S, w_lum, gA, gS, energy_rows, lam: float = 10.0, eps: float = 0.001) -> None:
+    """Add the data term of Eq. 3 and its gradient; see
+    :func:`ivkernels.kernels.warp.energy_data.data_term` (NumPy arrays here)."""
+    I = _check("I", I, (None, None, None, 3), "(T, H, W, 3)")
+    t, h, w, _ = I.shape
+    A = _check("A", A, (t, h, w, 3), "(T, H, W, 3)")
+    S = _check("S", S, (t, h, w), "(T, H, W)")
+    w_lum = _check("w_lum", w_lum, (t, h, w), "(T, H, W)")
+    _check("gA", gA, (t, h, w, 3), "(T, H, W, 3)", output=True)
+    _check("gS", gS, (t, h, w), "(T, H, W)", output=True)
+    _check("energy_rows", energy_rows, (t * h,), "(T*H,)", np.float64, output=True)
+    if t * h * w == 0:
+        return
+    data_term_rows(I, A, S, w_lum, gA, gS, energy_rows, float(lam), float(eps))

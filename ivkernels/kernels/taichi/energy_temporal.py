@@ -1,0 +1,119 @@
+"""Taichi mirror of :mod:`ivkernels.kernels.warp.energy_temporal` (Eq. 4, 5, 8):
+same host function and signature, NumPy arrays passed as ``ti.types.ndarray()``.
+
+One kernel does both halves of the gradient: the gather into ``X_t`` and the
+bilinear splat into ``X_{t+1}``.  Its outermost loop runs over the rows in
+parallel and ``+=`` on an ndarray there is atomic, so unlike the Warp CPU
+launches nothing needs to be split at frame boundaries.  Bilinear sampling
+uses corners clamped to the image and weights from the unclamped fractional
+position, as :mod:`ivkernels.kernels.warp.sampling` does.
+"""
+import numpy as np
+import taichi as ti
+
+nd1_f64 = ti.types.ndarray(dtype=ti.f64, ndim=1)
+nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
+nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
+
+
+@ti.func
+def tukey(z, alpha):
+    """Continuous Tukey penalty (Eq. 5 made continuous), saturating at 1/3."""
+    q = z * z / (alpha * alpha)
+    result = 1.0 / 3.0
+    if q <= 1.0:
+        result = q - q * q + q * q * q / 3.0
+    return result
+
+
+@ti.func
+def tukey_derivative(z, alpha):
+    """``(2/a^2) z (1 - z^2/a^2)^2`` inside ``|z| <= a``, else 0."""
+    q = z * z / (alpha * alpha)
+    result = 0.0
+    if q <= 1.0:
+        result = 2.0 / (alpha * alpha) * z * (1.0 - q) * (1.0 - q)
+    return result
+
+
+@ti.func
+def corner_index(i, n):
+    """Clamp a corner index to ``[0, n-1]``."""
+    return ti.min(ti.max(i, 0), n - 1)
+
+
+@ti.kernel
+def temporal_rows(X: nd4, flow: nd4, occ: nd3, gX: nd4, energy_rows: nd1_f64, lam: ti.f32, alpha: ti.f32):
+    height = X.shape[1]
+    width = X.shape[2]
+    for r in range(flow.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        e = ti.f64(0.0)
+        for x in range(width):
+            o = occ[t, y, x]
+            if o != 0.0:
+                # p clamped to [-2, n+1]: same samples, no float-to-int overflow
+                px = ti.min(ti.max(x + flow[t, y, x, 0], -2.0), width + 1.0)
+                py = ti.min(ti.max(y + flow[t, y, x, 1], -2.0), height + 1.0)
+                bx = ti.floor(px)
+                by = ti.floor(py)
+                fx = px - bx
+                fy = py - by
+                x0 = corner_index(ti.cast(bx, ti.i32), width)
+                x1 = corner_index(ti.cast(bx, ti.i32) + 1, width)
+                y0 = corner_index(ti.cast(by, ti.i32), height)
+                y1 = corner_index(ti.cast(by, ti.i32) + 1, height)
+                for c in range(X.shape[3]):
+                    top = (1.0 - fx) * X[t + 1, y0, x0, c] + fx * X[t + 1, y0, x1, c]
+                    bottom = (1.0 - fx) * X[t + 1, y1, x0, c] + fx * X[t + 1, y1, x1, c]
+                    d = (1.0 - fy) * top + fy * bottom - X[t, y, x, c]
+                    e += ti.cast(o * tukey(d, alpha), ti.f64)
+                    g = lam * o * tukey_derivative(d, alpha)
+                    if g != 0.0:
+                        gX[t, y, x, c] -= g
+                        gX[t + 1, y0, x0, c] += (1.0 - fx) * (1.0 - fy) * g
+                        gX[t + 1, y0, x1, c] += fx * (1.0 - fy) * g
+                        gX[t + 1, y1, x0, c] += (1.0 - fx) * fy * g
+                        gX[t + 1, y1, x1, c] += fx * fy * g
+        energy_rows[r] += ti.cast(lam, ti.f64) * e
+
+
+def _check(name: str, a, shape: tuple, layout: str, dtype=np.float32, output: bool = False) -> np.ndarray:
+    """Raise unless ``a`` is a NumPy array of ``dtype`` and ``shape`` (None = any size).
+
+    Returns a C-contiguous array: inputs are copied if needed, outputs must
+    already be contiguous (they are updated in place).
+    """
+    if not isinstance(a, np.ndarray):
+        raise TypeError(f"{name} must be a numpy.ndarray of {np.dtype(dtype).name} {layout}, got {type(a).__name__}")
+    if a.dtype != dtype:
+        raise TypeError(f"{name} must have dtype {np.dtype(dtype).name}, got {a.dtype.name}")
+    if a.ndim != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
+        want = tuple("?" if e is None else e for e in shape)
+        raise ValueError(f"{name} must have shape {layout} = {want}, got {a.shape}")
+    if not a.flags.c_contiguous:
+        if output:
+            raise ValueError(f"{name} is updated in place and must be C-contiguous")
+        a = np.ascontiguousarray(a)
+    return a
+
+
+def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0) -> None:
+    """Add the temporal term of Eq. 4 (albedo) or Eq. 8 (shading) and its gradient; see
+    :func:`ivkernels.kernels.warp.energy_temporal.temporal_term` (NumPy arrays here;
+    ``X`` (T, H, W, C) or (T, H, W), ``gX`` shaped like ``X``)."""
+    if isinstance(X, np.ndarray) and X.ndim == 3:
+        X = _check("X", X, (None, None, None), "(T, H, W)")
+        _check("gX", gX, X.shape, "(T, H, W) like X", output=True)
+        X = X.reshape(*X.shape, 1)
+        gX = gX.reshape(*gX.shape, 1)
+    X = _check("X", X, (None, None, None, None), "(T, H, W, C) or (T, H, W)")
+    t, h, w, c = X.shape
+    _check("gX", gX, (t, h, w, c), "(T, H, W, C) like X", output=True)
+    flow = _check("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)")
+    occ = _check("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)")
+    _check("energy_rows", energy_rows, (t * h,), "(T*H,)", np.float64, output=True)
+    if t < 2 or h * w * c == 0:
+        return
+    temporal_rows(X, flow, occ, gX, energy_rows, float(lam), float(alpha))
