@@ -1,0 +1,229 @@
+"""Synthetic Lambertian sequences: image formation, ground-truth flow and
+visibility, resolution scaling, determinism and input checks."""
+import numpy as np
+import pytest
+
+from ivkernels.synthetic import KINDS, TEXTURE_KINDS, SyntheticSequence, _build_scene, render_sequence
+
+SIZE = (72, 96)
+N_FRAMES = 4
+
+
+@pytest.fixture(scope="module")
+def sequences():
+    return {kind: render_sequence(kind, n_frames=N_FRAMES, size=SIZE, seed=1) for kind in KINDS}
+
+
+def bilinear(img, x, y):
+    """Sample ``img`` (H, W[, C]) at float coordinates (pixel centres at
+    integers); coordinates are clamped to the image."""
+    h, w = img.shape[:2]
+    x = np.clip(x, 0, w - 1)
+    y = np.clip(y, 0, h - 1)
+    x0 = np.minimum(np.floor(x).astype(int), w - 2)
+    y0 = np.minimum(np.floor(y).astype(int), h - 2)
+    fx, fy = x - x0, y - y0
+    if img.ndim == 3:
+        fx, fy = fx[..., None], fy[..., None]
+    return ((1 - fy) * ((1 - fx) * img[y0, x0] + fx * img[y0, x0 + 1])
+            + fy * ((1 - fx) * img[y0 + 1, x0] + fx * img[y0 + 1, x0 + 1]))
+
+
+def local_variation(img):
+    """Largest absolute difference to any 8-neighbour, max over channels (H, W)."""
+    if img.ndim == 2:
+        img = img[..., None]
+    p = np.pad(img, ((1, 1), (1, 1), (0, 0)), mode="edge")
+    h, w = img.shape[:2]
+    out = np.zeros((h, w))
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            shifted = p[1 + dy:1 + dy + h, 1 + dx:1 + dx + w]
+            out = np.maximum(out, np.abs(shifted - img).max(axis=-1))
+    return out
+
+
+def test_shapes_dtypes_and_ranges(sequences):
+    T, (H, W) = N_FRAMES, SIZE
+    for kind, s in sequences.items():
+        assert isinstance(s, SyntheticSequence) and s.kind == kind and s.seed == 1
+        assert s.frames.shape == (T, H, W, 3) and s.frames.dtype == np.float32
+        assert s.albedo.shape == (T, H, W, 3) and s.albedo.dtype == np.float32
+        assert s.shading.shape == (T, H, W) and s.shading.dtype == np.float32
+        assert s.flow.shape == (T - 1, H, W, 2) and s.flow.dtype == np.float32
+        assert s.visibility.shape == (T - 1, H, W) and s.visibility.dtype == np.float32
+        assert s.depth.shape == (T, H, W) and s.depth.dtype == np.float32
+        assert s.object_id.shape == (T, H, W)
+        assert s.albedo.min() >= 0.03 and s.albedo.max() <= 1.0
+        assert s.shading.min() >= 0.05 and s.shading.max() <= 1.0
+        assert s.frames.min() > 0.0 and s.frames.max() <= 1.0
+        assert s.depth.min() > 0.0
+        assert set(np.unique(s.visibility)) <= {0.0, 1.0}
+        assert np.isfinite(s.flow).all()
+
+
+def test_frames_are_albedo_times_shading(sequences):
+    for s in sequences.values():
+        np.testing.assert_array_equal(s.frames, s.albedo * s.shading[..., None])
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_every_texture_kind_is_used(kind):
+    scene = _build_scene(kind, 2, np.random.default_rng(4))
+    assert {obj.texture.kind for obj in scene.objects} == set(TEXTURE_KINDS)
+
+
+def test_albedo_has_flat_regions_and_edges(sequences):
+    s = sequences["free_camera"]
+    assert len(np.unique(s.albedo[0].reshape(-1, 3), axis=0)) > 50
+    var = local_variation(s.albedo[0])
+    assert (var < 0.01).mean() > 0.1 and (var > 0.1).mean() > 0.02
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_albedo_is_constant_along_true_flow(sequences, kind):
+    """Warp albedo t+1 back by the flow: equals albedo t where visible and
+    where the albedo is locally smooth (bilinear interpolation across a texture
+    edge cannot reproduce the edge, so such pixels are left out)."""
+    s = sequences[kind]
+    H, W = SIZE
+    ys, xs = np.mgrid[0:H, 0:W].astype(np.float64)
+    errors, used = [], 0
+    for t in range(N_FRAMES - 1):
+        x1 = xs + s.flow[t, ..., 0]
+        y1 = ys + s.flow[t, ..., 1]
+        warped = bilinear(s.albedo[t + 1].astype(np.float64), x1, y1)
+        smooth_t = local_variation(s.albedo[t]) < 0.03
+        smooth_t1 = bilinear(local_variation(s.albedo[t + 1]), x1, y1) < 0.03
+        mask = (s.visibility[t] == 1) & smooth_t & smooth_t1
+        used += mask.sum()
+        errors.append(np.abs(warped - s.albedo[t]).max(axis=-1)[mask])
+    err = np.concatenate(errors)
+    assert used > 0.25 * (N_FRAMES - 1) * H * W
+    assert np.median(err) < 5e-4
+    assert np.percentile(err, 95) < 5e-3
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_visible_points_land_on_the_same_surface(sequences, kind):
+    s = sequences[kind]
+    H, W = SIZE
+    ys, xs = np.mgrid[0:H, 0:W]
+    for t in range(N_FRAMES - 1):
+        vis = s.visibility[t] == 1
+        x1 = np.clip(np.rint(xs + s.flow[t, ..., 0]).astype(int), 0, W - 1)
+        y1 = np.clip(np.rint(ys + s.flow[t, ..., 1]).astype(int), 0, H - 1)
+        same = s.object_id[t + 1][y1, x1] == s.object_id[t]
+        assert same[vis].mean() > 0.98
+        # depth of a visible point is continuous along the flow for static scenes
+        assert vis.mean() > 0.8
+
+
+def test_static_moving_light_has_zero_flow_and_changing_shading(sequences):
+    s = sequences["static_moving_light"]
+    assert np.all(s.flow == 0.0)
+    assert np.all(s.visibility == 1.0)
+    for t in range(1, N_FRAMES):
+        np.testing.assert_array_equal(s.albedo[t], s.albedo[0])
+        np.testing.assert_array_equal(s.depth[t], s.depth[0])
+        assert np.abs(s.shading[t] - s.shading[t - 1]).mean() > 0.01
+
+
+@pytest.mark.parametrize("kind", ["free_camera", "objects_camera", "rotating_shadows"])
+def test_moving_kinds_move_and_occlude(sequences, kind):
+    s = sequences[kind]
+    mag = np.linalg.norm(s.flow, axis=-1)
+    assert mag.max() > 0.5
+    assert (s.visibility == 0).any()
+    if kind == "rotating_shadows":  # static camera: the background stays put
+        assert np.all(mag[s.object_id[:-1] <= 1] == 0.0)
+        assert np.abs(np.diff(s.shading, axis=0)).max() > 0.2   # shadows move
+    else:
+        assert np.median(mag) > 0.5
+
+
+def test_free_camera_light_changes_strongly(sequences):
+    s = sequences["free_camera"]
+    floor = s.object_id == 0
+    means = [s.shading[t][floor[t]].mean() for t in range(N_FRAMES)]
+    assert np.ptp(means) > 0.05
+
+
+def _check_flow_scaling(kind, lo_size, seed=2, n_frames=2):
+    lo = render_sequence(kind, n_frames=n_frames, size=lo_size, seed=seed)
+    hi = render_sequence(kind, n_frames=n_frames, size=(2 * lo_size[0], 2 * lo_size[1]), seed=seed)
+    H, W = lo_size
+    blocks = lambda a: a.reshape(n_frames - 1, H, 2, W, 2, *a.shape[3:])  # noqa: E731
+    hi_flow = blocks(hi.flow).mean(axis=(2, 4)) / 2.0
+    hi_vis = blocks(hi.visibility).min(axis=(2, 4))
+    ids = blocks(hi.object_id[:-1])
+    same_id = (ids.min(axis=(2, 4)) == ids.max(axis=(2, 4))) & (ids[:, :, 0, :, 0] == lo.object_id[:-1])
+    smooth = np.stack([local_variation(f) < 0.5 for f in lo.flow])
+    mask = (lo.visibility == 1) & (hi_vis == 1) & same_id & smooth
+    assert mask.mean() > 0.5
+    diff = np.abs(hi_flow - lo.flow)[mask]
+    assert np.percentile(np.linalg.norm(lo.flow, axis=-1)[mask], 99) > 0.01 * W  # not trivial
+    assert np.median(diff) < 1e-3
+    assert np.percentile(diff, 95) < 1e-2
+
+
+@pytest.mark.parametrize("kind", ["free_camera", "objects_camera"])
+def test_flow_doubles_at_twice_the_resolution(kind):
+    _check_flow_scaling(kind, (48, 64))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", ["free_camera", "objects_camera", "rotating_shadows"])
+def test_flow_doubles_at_640x480(kind):
+    _check_flow_scaling(kind, (240, 320))
+
+
+@pytest.mark.slow
+def test_renders_at_640x480():
+    s = render_sequence("rotating_shadows", n_frames=3, size=(480, 640), seed=5)
+    assert s.frames.shape == (3, 480, 640, 3)
+    np.testing.assert_array_equal(s.frames, s.albedo * s.shading[..., None])
+    assert s.albedo.min() >= 0.03 and s.frames.max() <= 1.0
+
+
+def test_deterministic_by_seed():
+    a = render_sequence("objects_camera", n_frames=3, size=(32, 40), seed=7)
+    b = render_sequence("objects_camera", n_frames=3, size=(32, 40), seed=7)
+    for name in ("frames", "albedo", "shading", "flow", "visibility", "depth", "object_id"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+
+
+def test_different_seeds_differ():
+    a = render_sequence("free_camera", n_frames=2, size=(32, 40), seed=0)
+    b = render_sequence("free_camera", n_frames=2, size=(32, 40), seed=1)
+    assert not np.array_equal(a.frames, b.frames)
+    assert not np.array_equal(a.flow, b.flow)
+
+
+def test_frames_srgb8(sequences):
+    s = sequences["free_camera"]
+    out = s.frames_srgb8()
+    assert out.dtype == np.uint8 and out.shape == s.frames.shape
+    # the sRGB curve is monotonic and maps linear 0.5 to ~188
+    order = np.argsort(s.frames.ravel())
+    assert np.all(np.diff(out.ravel()[order].astype(int)) >= 0)
+    mid = SyntheticSequence(np.full((1, 1, 1, 3), 0.5, np.float32), *([None] * 6), "x", 0)
+    assert mid.frames_srgb8()[0, 0, 0, 0] == 188
+
+
+@pytest.mark.parametrize("args, error, match", [
+    (dict(kind="spinning"), ValueError, "free_camera, objects_camera"),
+    (dict(kind=3), ValueError, "unknown kind"),
+    (dict(n_frames=1), ValueError, "n_frames must be >= 2"),
+    (dict(n_frames=2.0), TypeError, "n_frames must be an int"),
+    (dict(size=(15, 64)), ValueError, "H must be >= 16"),
+    (dict(size=(64, 8)), ValueError, "W must be >= 16"),
+    (dict(size=(64,)), ValueError, r"pair \(H, W\)"),
+    (dict(size=(64.0, 64)), TypeError, "H must be an int"),
+    (dict(seed="0"), TypeError, "seed must be an int"),
+])
+def test_bad_input_raises(args, error, match):
+    kwargs = dict(kind="free_camera", n_frames=2, size=(32, 32), seed=0)
+    kwargs.update(args)
+    with pytest.raises(error, match=match):
+        render_sequence(**kwargs)
