@@ -1,0 +1,146 @@
+"""Taichi mirror of :mod:`ivkernels.kernels.warp.maps`: occlusion maps (Eq. 6, 7)
+and the motion-boundary map (Sec. 3.3), same host functions and signatures,
+NumPy arrays passed as ``ti.types.ndarray()``.
+
+The next frame's Lab colour at ``x + u`` is sampled with the bilinear helpers
+of :mod:`ivkernels.kernels.taichi.sampling`.  Parallel over the ``T * H`` rows.
+"""
+import numbers
+
+import numpy as np
+import taichi as ti
+
+from ivkernels.kernels.taichi.sampling import bilinear_at, clamped_corners, inside_image
+
+nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
+nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
+
+
+@ti.func
+def occlusion_likelihood(lab: ti.template(), flow: ti.template(), div_neg: ti.template(), t, y, x,
+                         sigma_e, sigma_d):
+    """Eq. 7 at pixel (t, y, x): returns ``(o, inside)`` (see the Warp module)."""
+    height = flow.shape[1]
+    width = flow.shape[2]
+    px = ti.cast(x, ti.f32) + flow[t, y, x, 0]
+    py = ti.cast(y, ti.f32) + flow[t, y, x, 1]
+    x0, x1, fx = clamped_corners(px, width)
+    y0, y1, fy = clamped_corners(py, height)
+    dist2 = 0.0
+    for c in ti.static(range(3)):
+        diff = lab[t, y, x, c] - bilinear_at(lab, t + 1, c, x0, x1, fx, y0, y1, fy)
+        dist2 += diff * diff
+    d = div_neg[t, y, x]
+    o = ti.exp(-dist2 / (2.0 * sigma_e * sigma_e) - d * d / (2.0 * sigma_d * sigma_d))
+    return o, inside_image(px, py, height, width)
+
+
+@ti.kernel
+def occlusion_soft_rows(lab: nd4, flow: nd4, div_neg: nd3, out: nd3, sigma_e: ti.f32, sigma_d: ti.f32):
+    height = flow.shape[1]
+    for r in range(flow.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for x in range(flow.shape[2]):
+            o, inside = occlusion_likelihood(lab, flow, div_neg, t, y, x, sigma_e, sigma_d)
+            out[t, y, x] = o * inside
+
+
+@ti.kernel
+def occlusion_binary_rows(lab: nd4, flow: nd4, div_neg: nd3, out: nd3, sigma_e: ti.f32, sigma_d: ti.f32,
+                          threshold: ti.f32):
+    height = flow.shape[1]
+    for r in range(flow.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for x in range(flow.shape[2]):
+            o, inside = occlusion_likelihood(lab, flow, div_neg, t, y, x, sigma_e, sigma_d)
+            w = 0.0
+            if o >= threshold and inside > 0.0:
+                w = 1.0
+            out[t, y, x] = w
+
+
+@ti.kernel
+def boundary_dilate_rows(magnitude: nd3, out: nd3, threshold: ti.f32, radius: ti.i32):
+    height = magnitude.shape[1]
+    width = magnitude.shape[2]
+    for r in range(magnitude.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        y_lo = ti.max(y - radius, 0)
+        y_hi = ti.min(y + radius, height - 1)
+        for x in range(width):
+            x_lo = ti.max(x - radius, 0)
+            x_hi = ti.min(x + radius, width - 1)
+            hit = 0.0
+            for yy in range(y_lo, y_hi + 1):
+                for xx in range(x_lo, x_hi + 1):
+                    if magnitude[t, yy, xx] > threshold:
+                        hit = 1.0
+                        break
+                if hit > 0.0:
+                    break
+            out[t, y, x] = hit
+
+
+def _check(name: str, a, shape: tuple, layout: str, output: bool = False) -> np.ndarray:
+    """Raise unless ``a`` is a float32 NumPy array of ``shape`` (None = any size).
+
+    Returns a C-contiguous array: inputs are copied if needed, outputs must
+    already be contiguous (they are written in place).
+    """
+    if not isinstance(a, np.ndarray):
+        raise TypeError(f"{name} must be a numpy.ndarray of float32 {layout}, got {type(a).__name__}")
+    if a.dtype != np.float32:
+        raise TypeError(f"{name} must have dtype float32, got {a.dtype.name}")
+    if a.ndim != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
+        want = tuple("?" if e is None else e for e in shape)
+        raise ValueError(f"{name} must have shape {layout} = {want}, got {a.shape}")
+    if not a.flags.c_contiguous:
+        if output:
+            raise ValueError(f"{name} is written in place and must be C-contiguous")
+        a = np.ascontiguousarray(a)
+    return a
+
+
+def _check_occlusion_args(lab, flow, div_neg, out, sigma_e, sigma_d):
+    lab = _check("lab", lab, (None, None, None, 3), "(T+1, H, W, 3)")
+    if lab.shape[0] < 2:
+        raise ValueError(f"lab must hold at least two frames (T+1, H, W, 3), got {lab.shape}")
+    t, h, w = lab.shape[0] - 1, lab.shape[1], lab.shape[2]
+    flow = _check("flow", flow, (t, h, w, 2), "(T, H, W, 2) with T = lab frames - 1")
+    div_neg = _check("div_neg", div_neg, (t, h, w), "(T, H, W)")
+    _check("out", out, (t, h, w), "(T, H, W)", output=True)
+    sigma_e, sigma_d = float(sigma_e), float(sigma_d)
+    if not (sigma_e > 0.0 and sigma_d > 0.0):
+        raise ValueError(f"sigma_e and sigma_d must be > 0, got {sigma_e}, {sigma_d}")
+    return lab, flow, div_neg, sigma_e, sigma_d
+
+
+def occlusion_soft(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: float = 0.3) -> None:
+    """Occlusion likelihood ``o(x)`` of Eq. 7 times the inside indicator; see
+    :func:`ivkernels.kernels.warp.maps.occlusion_soft` (NumPy arrays here)."""
+    lab, flow, div_neg, sigma_e, sigma_d = _check_occlusion_args(lab, flow, div_neg, out, sigma_e, sigma_d)
+    if out.size:
+        occlusion_soft_rows(lab, flow, div_neg, out, sigma_e, sigma_d)
+
+
+def occlusion_binary(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: float = 0.3,
+                     threshold: float = 0.5) -> None:
+    """Occlusion map ``w_occ`` of Eq. 6 (1 = visible in t+1); see
+    :func:`ivkernels.kernels.warp.maps.occlusion_binary`."""
+    lab, flow, div_neg, sigma_e, sigma_d = _check_occlusion_args(lab, flow, div_neg, out, sigma_e, sigma_d)
+    if out.size:
+        occlusion_binary_rows(lab, flow, div_neg, out, sigma_e, sigma_d, float(threshold))
+
+
+def motion_boundary(sobel_mag, out, threshold: float, radius: int) -> None:
+    """``w_bnd``: 1 where the (2r+1)^2 window holds ``sobel_mag > threshold``; see
+    :func:`ivkernels.kernels.warp.maps.motion_boundary`."""
+    sobel_mag = _check("sobel_mag", sobel_mag, (None, None, None), "(T, H, W)")
+    _check("out", out, sobel_mag.shape, "(T, H, W)", output=True)
+    if isinstance(radius, bool) or not isinstance(radius, numbers.Integral) or radius < 0:
+        raise ValueError(f"radius must be an int >= 0, got {radius!r}")
+    if out.size:
+        boundary_dilate_rows(sobel_mag, out, float(threshold), int(radius))

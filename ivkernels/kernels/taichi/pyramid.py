@@ -1,0 +1,148 @@
+"""Taichi mirror of :mod:`ivkernels.kernels.warp.pyramid`: separable Gaussian
+blur and bilinear resizing (pixel-centre mapping, clamped corners), same host
+functions and signatures, NumPy arrays passed as ``ti.types.ndarray()``.
+
+Parallel over output rows; the bilinear helpers come from
+:mod:`ivkernels.kernels.taichi.sampling`.
+"""
+import math
+
+import numpy as np
+import taichi as ti
+
+from ivkernels.kernels.taichi.sampling import bilinear_at, clamped_corners
+
+nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
+nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
+
+
+@ti.kernel
+def blur_x_rows(src: nd4, dst: nd4, weights: nd1, radius: ti.i32):
+    height = src.shape[1]
+    width = src.shape[2]
+    for r in range(src.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for x in range(width):
+            for c in range(src.shape[3]):
+                acc = 0.0
+                for k in range(-radius, radius + 1):
+                    acc += weights[k + radius] * src[t, y, ti.math.clamp(x + k, 0, width - 1), c]
+                dst[t, y, x, c] = acc
+
+
+@ti.kernel
+def blur_y_rows(src: nd4, dst: nd4, weights: nd1, radius: ti.i32):
+    height = src.shape[1]
+    for r in range(src.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for x in range(src.shape[2]):
+            for c in range(src.shape[3]):
+                acc = 0.0
+                for k in range(-radius, radius + 1):
+                    acc += weights[k + radius] * src[t, ti.math.clamp(y + k, 0, height - 1), x, c]
+                dst[t, y, x, c] = acc
+
+
+@ti.kernel
+def resize_bilinear_rows(src: nd4, out: nd4, scale_x: ti.f32, scale_y: ti.f32):
+    height = out.shape[1]
+    for r in range(out.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        y0, y1, fy = clamped_corners((ti.cast(y, ti.f32) + 0.5) * scale_y - 0.5, src.shape[1])
+        for x in range(out.shape[2]):
+            x0, x1, fx = clamped_corners((ti.cast(x, ti.f32) + 0.5) * scale_x - 0.5, src.shape[2])
+            for c in range(out.shape[3]):
+                out[t, y, x, c] = bilinear_at(src, t, c, x0, x1, fx, y0, y1, fy)
+
+
+@ti.kernel
+def resize_flow_rows(src: nd4, out: nd4, scale_x: ti.f32, scale_y: ti.f32, gain_x: ti.f32, gain_y: ti.f32):
+    height = out.shape[1]
+    for r in range(out.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        y0, y1, fy = clamped_corners((ti.cast(y, ti.f32) + 0.5) * scale_y - 0.5, src.shape[1])
+        for x in range(out.shape[2]):
+            x0, x1, fx = clamped_corners((ti.cast(x, ti.f32) + 0.5) * scale_x - 0.5, src.shape[2])
+            out[t, y, x, 0] = bilinear_at(src, t, 0, x0, x1, fx, y0, y1, fy) * gain_x
+            out[t, y, x, 1] = bilinear_at(src, t, 1, x0, x1, fx, y0, y1, fy) * gain_y
+
+
+def _check(name: str, a, shape: tuple, layout: str, output: bool = False) -> np.ndarray:
+    """Raise unless ``a`` is a float32 NumPy array of ``shape`` (None = any size).
+
+    Returns a C-contiguous array: inputs are copied if needed, outputs must
+    already be contiguous (they are written in place).
+    """
+    if not isinstance(a, np.ndarray):
+        raise TypeError(f"{name} must be a numpy.ndarray of float32 {layout}, got {type(a).__name__}")
+    if a.dtype != np.float32:
+        raise TypeError(f"{name} must have dtype float32, got {a.dtype.name}")
+    if a.ndim != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
+        want = tuple("?" if e is None else e for e in shape)
+        raise ValueError(f"{name} must have shape {layout} = {want}, got {a.shape}")
+    if not a.flags.c_contiguous:
+        if output:
+            raise ValueError(f"{name} is written in place and must be C-contiguous")
+        a = np.ascontiguousarray(a)
+    return a
+
+
+def gaussian_kernel(sigma: float) -> np.ndarray:
+    """Normalised 1-D Gaussian taps ``exp(-k^2 / 2 sigma^2)``, k = -r..r, r = max(1, ceil(3 sigma))."""
+    radius = max(1, math.ceil(3.0 * sigma))
+    k = np.arange(-radius, radius + 1, dtype=np.float64)
+    w = np.exp(-0.5 * (k / sigma) ** 2)
+    return (w / w.sum()).astype(np.float32)
+
+
+def gaussian_blur(src, out, scratch, sigma: float) -> None:
+    """Separable Gaussian blur truncated at 3 sigma, replicate border; ``sigma <= 0``
+    copies.  Pyramid choice: ``sigma = 1 / sqrt(2 * scale)`` before resampling by
+    ``scale < 1``.  See :func:`ivkernels.kernels.warp.pyramid.gaussian_blur`."""
+    src = _check("src", src, (None, None, None, None), "(T, H, W, C)")
+    _check("out", out, src.shape, "(T, H, W, C)", output=True)
+    _check("scratch", scratch, src.shape, "(T, H, W, C)", output=True)
+    if np.shares_memory(scratch, src) or np.shares_memory(scratch, out):
+        raise ValueError("scratch must be a separate buffer from src and out")
+    sigma = float(sigma)
+    if not math.isfinite(sigma):
+        raise ValueError(f"sigma must be finite, got {sigma}")
+    if sigma <= 0.0:
+        if out is not src:
+            np.copyto(out, src)
+        return
+    if src.size == 0:
+        return
+    taps = gaussian_kernel(sigma)
+    radius = (len(taps) - 1) // 2
+    blur_x_rows(src, scratch, taps, radius)
+    blur_y_rows(scratch, out, taps, radius)
+
+
+def _check_resize(src, out, channels):
+    src = _check("src", src, (None, None, None, channels), "(T, h, w, C)" if channels is None else "(T, h, w, 2)")
+    t, h, w, c = src.shape
+    _check("out", out, (t, None, None, c), "(T, H, W, C)" if channels is None else "(T, H, W, 2)", output=True)
+    if min(h, w, out.shape[1], out.shape[2]) < 1:
+        raise ValueError(f"image sizes must be >= 1, got src {src.shape}, out {out.shape}")
+    return src, src.shape[2] / out.shape[2], src.shape[1] / out.shape[1]
+
+
+def resize_bilinear(src, out) -> None:
+    """Bilinear resize (T, h, w, C) -> (T, H, W, C), pixel-centre mapping, clamped; see
+    :func:`ivkernels.kernels.warp.pyramid.resize_bilinear` (NumPy arrays here)."""
+    src, scale_x, scale_y = _check_resize(src, out, None)
+    if out.size:
+        resize_bilinear_rows(src, out, scale_x, scale_y)
+
+
+def resize_flow(src, out) -> None:
+    """Resize a flow (T, h, w, 2) -> (T, H, W, 2) and scale dx by W / w, dy by H / h; see
+    :func:`ivkernels.kernels.warp.pyramid.resize_flow`."""
+    src, scale_x, scale_y = _check_resize(src, out, 2)
+    if out.size:
+        resize_flow_rows(src, out, scale_x, scale_y, out.shape[2] / src.shape[2], out.shape[1] / src.shape[1])

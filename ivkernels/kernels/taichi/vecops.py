@@ -1,0 +1,145 @@
+"""Taichi mirror of :mod:`ivkernels.kernels.warp.vecops`: BLAS-1 operations on
+flat float32 vectors for the optimiser, same host functions and signatures,
+NumPy arrays passed as ``ti.types.ndarray()``.
+
+As in the Warp module the vector is cut into chunks of :data:`CHUNK` elements
+(parallel over chunks), and the reductions write one partial per chunk that
+the host finishes, so both backends reduce in the same order.
+"""
+import numpy as np
+import taichi as ti
+
+nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
+nd1_f64 = ti.types.ndarray(dtype=ti.f64, ndim=1)
+
+#: Elements per parallel iteration (the same as the Warp module's).
+CHUNK = 4096
+
+
+@ti.kernel
+def dot_chunks(a: nd1, b: nd1, partial: nd1_f64, chunk: ti.i32):
+    for k in range(partial.shape[0]):
+        begin = k * chunk
+        end = ti.min(begin + chunk, a.shape[0])
+        acc = ti.f64(0.0)
+        for i in range(begin, end):
+            acc += ti.cast(a[i], ti.f64) * ti.cast(b[i], ti.f64)
+        partial[k] = acc
+
+
+@ti.kernel
+def max_abs_chunks(x: nd1, partial: nd1, chunk: ti.i32):
+    for k in range(partial.shape[0]):
+        begin = k * chunk
+        end = ti.min(begin + chunk, x.shape[0])
+        m = 0.0
+        for i in range(begin, end):
+            m = ti.max(m, ti.abs(x[i]))
+        partial[k] = m
+
+
+@ti.kernel
+def axpy_flat(alpha: ti.f32, x: nd1, y: nd1):
+    for i in range(x.shape[0]):
+        y[i] = y[i] + alpha * x[i]
+
+
+@ti.kernel
+def scale_flat(alpha: ti.f32, x: nd1):
+    for i in range(x.shape[0]):
+        x[i] = alpha * x[i]
+
+
+@ti.kernel
+def lincomb_flat(out: nd1, a: ti.f32, x: nd1, b: ti.f32, y: nd1):
+    for i in range(x.shape[0]):
+        out[i] = a * x[i] + b * y[i]
+
+
+@ti.kernel
+def copy_flat(src: nd1, dst: nd1):
+    for i in range(src.shape[0]):
+        dst[i] = src[i]
+
+
+@ti.kernel
+def fill_flat(x: nd1, value: ti.f32):
+    for i in range(x.shape[0]):
+        x[i] = value
+
+
+def _check(name: str, a, n=None, output: bool = False) -> np.ndarray:
+    """Raise unless ``a`` is a non-empty 1-D float32 NumPy array (of length ``n``).
+
+    Returns a C-contiguous array: inputs are copied if needed, outputs must
+    already be contiguous (they are written in place).
+    """
+    if not isinstance(a, np.ndarray):
+        raise TypeError(f"{name} must be a 1-D numpy.ndarray of float32, got {type(a).__name__}")
+    if a.dtype != np.float32:
+        raise TypeError(f"{name} must have dtype float32, got {a.dtype.name}")
+    if a.ndim != 1 or a.shape[0] < 1:
+        raise ValueError(f"{name} must be a non-empty 1-D vector (n,), got shape {a.shape}")
+    if n is not None and a.shape[0] != n:
+        raise ValueError(f"{name} must have the same length as the first vector ({n}), got {a.shape[0]}")
+    if not a.flags.c_contiguous:
+        if output:
+            raise ValueError(f"{name} is written in place and must be C-contiguous")
+        a = np.ascontiguousarray(a)
+    return a
+
+
+def _chunks(n: int) -> int:
+    return (n + CHUNK - 1) // CHUNK
+
+
+def dot(a, b) -> float:
+    """``sum(a * b)`` as a Python float (float64 per chunk, summed on the host); see
+    :func:`ivkernels.kernels.warp.vecops.dot` (NumPy arrays here)."""
+    a = _check("a", a)
+    b = _check("b", b, a.shape[0])
+    partial = np.empty(_chunks(a.shape[0]), np.float64)
+    dot_chunks(a, b, partial, CHUNK)
+    return float(partial.sum())
+
+
+def norm_inf(x) -> float:
+    """``max |x|`` as a Python float."""
+    x = _check("x", x)
+    partial = np.empty(_chunks(x.shape[0]), np.float32)
+    max_abs_chunks(x, partial, CHUNK)
+    return float(partial.max())
+
+
+def axpy(alpha: float, x, y) -> None:
+    """``y += alpha * x`` (float32)."""
+    x = _check("x", x)
+    _check("y", y, x.shape[0], output=True)
+    axpy_flat(float(alpha), x, y)
+
+
+def scale(alpha: float, x) -> None:
+    """``x *= alpha`` (float32)."""
+    _check("x", x, output=True)
+    scale_flat(float(alpha), x)
+
+
+def lincomb(out, a: float, x, b: float, y) -> None:
+    """``out = a * x + b * y`` (float32); ``out`` may be ``x`` or ``y``."""
+    _check("out", out, output=True)
+    x = _check("x", x, out.shape[0])
+    y = _check("y", y, out.shape[0])
+    lincomb_flat(out, float(a), x, float(b), y)
+
+
+def copy(src, dst) -> None:
+    """``dst[:] = src``."""
+    src = _check("src", src)
+    _check("dst", dst, src.shape[0], output=True)
+    copy_flat(src, dst)
+
+
+def fill(x, value: float) -> None:
+    """``x[:] = value``."""
+    _check("x", x, output=True)
+    fill_flat(x, float(value))
