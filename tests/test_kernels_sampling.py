@@ -118,6 +118,17 @@ def test_shading_as_single_channel_view(backend, rng):
     np.testing.assert_allclose(backend.numpy(out), want, atol=2e-5)
 
 
+def test_non_contiguous_inputs(backend, rng):
+    big = rng.random((T, H, W, 5), dtype=np.float32)
+    flow = random_flow(rng)
+    flow_big = np.concatenate([flow, flow], -1)
+    src = backend.asarray(big)[:, :, :, 1:4]                 # strided channel view
+    out, inside = backend.zeros((T, H, W, 3)), backend.zeros((T, H, W))
+    backend.sampling.warp_bilinear(src, backend.asarray(flow_big)[:, :, :, 2:4], out, inside)
+    want, _ = ref.warp_bilinear(big[..., 1:4], flow)
+    np.testing.assert_allclose(backend.numpy(out), want, atol=2e-5)
+
+
 def test_bad_input_raises(backend):
     s = backend.sampling
     src, flow = backend.zeros((T, H, W, 3)), backend.zeros((T, H, W, 2))
