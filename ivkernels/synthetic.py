@@ -24,6 +24,9 @@ Geometry and conventions
   centres are at integer coordinates (the array convention of
   :mod:`ivkernels.kernels`).  The field of view depends on the aspect ratio
   only, so the same scene at twice the resolution has exactly twice the flow.
+* One ray per pixel centre, no anti-aliasing: albedo, shading and frames are
+  point samples, so ``frames == albedo * shading`` holds exactly and texture
+  and shadow edges are pixel-sharp.
 * ``depth`` is the camera-space ``z`` of the surface seen at each pixel centre.
 * ``flow[t](x)``: the surface point ``q`` (object coordinates) seen at pixel
   ``x`` of frame ``t`` is moved by its object's pose at ``t + 1`` and
@@ -663,7 +666,7 @@ def render_sequence(kind: str, n_frames: int = 8, size: tuple[int, int] = (240, 
     flow = np.empty((T - 1, N, 2), np.float32)
     visibility = np.empty((T - 1, N), np.float32)
     for t in range(T - 1):
-        x0 = np.empty(N); y0 = np.empty(N); x1 = np.empty(N); y1 = np.empty(N); z1 = np.empty(N)
+        x0, y0, x1, y1, z1 = np.empty((5, N))
         for k, obj in enumerate(scene.objects):
             m = object_id[t] == k
             if not m.any():
@@ -671,10 +674,11 @@ def render_sequence(kind: str, n_frames: int = 8, size: tuple[int, int] = (240, 
             q = local[t, m]
             x0[m], y0[m], _ = _project(scene, t, obj.to_world(t, q), focal, cx, cy)
             x1[m], y1[m], z1[m] = _project(scene, t + 1, obj.to_world(t + 1, q), focal, cx, cy)
-        u, v = x1 - x0, y1 - y0
-        flow[t, :, 0] = u
-        flow[t, :, 1] = v
-        tx, ty = xs + u, ys + v
+        flow[t, :, 0] = x1 - x0
+        flow[t, :, 1] = y1 - y0
+        # visibility is decided at x + flow as stored (float32)
+        tx = xs + flow[t, :, 0].astype(np.float64)
+        ty = ys + flow[t, :, 1].astype(np.float64)
         inside = (z1 > 0) & (tx >= 0) & (tx <= W - 1) & (ty >= 0) & (ty <= H - 1)
         idx = np.flatnonzero(inside)
         o, d = _rays(scene, t + 1, tx[idx], ty[idx], focal, cx, cy)

@@ -115,8 +115,7 @@ def test_visible_points_land_on_the_same_surface(sequences, kind):
         y1 = np.clip(np.rint(ys + s.flow[t, ..., 1]).astype(int), 0, H - 1)
         same = s.object_id[t + 1][y1, x1] == s.object_id[t]
         assert same[vis].mean() > 0.98
-        # depth of a visible point is continuous along the flow for static scenes
-        assert vis.mean() > 0.8
+        assert vis.mean() > 0.8  # occlusions and exits are a small part of the image
 
 
 def test_static_moving_light_has_zero_flow_and_changing_shading(sequences):
