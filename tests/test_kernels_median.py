@@ -62,6 +62,20 @@ def test_median5x5_matches_reference(backend, rng):
     np.testing.assert_array_equal(median5x5(backend, src), ref.median5x5(src).astype(np.float32))
 
 
+@pytest.mark.parametrize("n", [1, 3, 9, 25, 49])
+def test_median_network_selects_the_median(rng, n):
+    from ivkernels.kernels.warp.median import median_network
+
+    pairs = median_network(n)
+    assert all(0 <= i < j < n for i, j in pairs)
+    for trial in range(500):
+        v = rng.integers(0, 3, n).astype(float) if trial % 2 else rng.random(n)
+        w = v.copy()
+        for i, j in pairs:
+            w[i], w[j] = min(w[i], w[j]), max(w[i], w[j])
+        assert w[n // 2] == np.median(v)
+
+
 def test_median5x5_tiny_images(backend, rng):
     for h, w in ((1, 1), (2, 3), (4, 1)):
         src = rng.normal(size=(1, h, w, 1)).astype(np.float32)
@@ -142,6 +156,9 @@ def test_shading_surf_stops_at_motion_boundary(backend, rng):
     median returns the picture unchanged; with a flow that has no boundary
     (surf = 1 everywhere) the same median erodes the disc into the background.
     """
+    from ivkernels.kernels.warp import median as warp_median
+
+    assert (ref.KMEANS_ITERATIONS, ref.MIN_SEPARATION) == (warp_median.KMEANS_ITERATIONS, warp_median.MIN_SEPARATION)
     h, w = 31, 37
     flow, disc = two_region_flow(rng, 1, h, w, noise=0.1, radius=5.5)
     S = np.where(disc, 1.0, 0.0)[None].astype(np.float32)

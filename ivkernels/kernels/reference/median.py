@@ -125,8 +125,7 @@ def flow_weights(lab_t, occ_t, y: int, x: int, radius: int = 7, sigma_x: float =
     spatial = np.exp(-(i * i + j * j) / (2.0 * sigma_x**2))
     diff2 = sum((_window(lab_t[..., c], y, x, radius) - lab_t[y, x, c]) ** 2 for c in range(3))
     colour = np.exp(-diff2 / (2.0 * sigma_i**2))
-    return spatial * colour * _window(np.asarray(occ_t, np.float64), y, x, radius) \
-        * _window(np.ones(occ_t.shape), y, x, radius)
+    return spatial * colour * _window(np.asarray(occ_t, np.float64), y, x, radius)  # 0 outside the image
 
 
 def weighted_median_flow(flow, lab, occ, mask, radius: int = 7, sigma_x: float = 7.0, sigma_i: float = 7.0):

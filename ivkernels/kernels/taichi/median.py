@@ -12,8 +12,10 @@ import threading
 import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.warp.median import KMEANS_ITERATIONS, MIN_SEPARATION
+from ivkernels.kernels.warp.median import KMEANS_ITERATIONS, MIN_SEPARATION, median_network
 
+nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
+nd1_i32 = ti.types.ndarray(dtype=ti.i32, ndim=1)
 nd2 = ti.types.ndarray(dtype=ti.f32, ndim=2)
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
@@ -99,7 +101,7 @@ def nearer_second(fx, fy, c0x, c0y, c1x, c1y):
 # ----------------------------------------------------------------------------
 
 @ti.kernel
-def median5x5_rows(src: nd4, out: nd4):
+def median5x5_rows(src: nd4, out: nd4, network: nd1_i32):
     height = src.shape[1]
     width = src.shape[2]
     for r in range(src.shape[0] * height):
@@ -112,24 +114,23 @@ def median5x5_rows(src: nd4, out: nd4):
                     yy = ti.min(ti.max(y + j - 2, 0), height - 1)
                     for i in ti.static(range(5)):
                         v[5 * j + i] = src[t, yy, ti.min(ti.max(x + i - 2, 0), width - 1), c]
-                # partial selection sort up to the middle element
-                for a in range(13):
-                    m = a
-                    for b in range(a + 1, 25):
-                        if v[b] < v[m]:
-                            m = b
-                    tmp = v[a]
-                    v[a] = v[m]
-                    v[m] = tmp
+                # the pruned median network of ivkernels.kernels.warp.median.median_network
+                for q in range(network.shape[0] // 2):
+                    a = network[2 * q]
+                    b = network[2 * q + 1]
+                    lo = ti.min(v[a], v[b])
+                    hi = ti.max(v[a], v[b])
+                    v[a] = lo
+                    v[b] = hi
                 out[t, y, x, c] = v[12]
 
 
 @ti.kernel
-def weighted_median_shading_rows(S: nd3, flow: nd4, w_bnd: nd3, out: nd3, scratch: nd2, radius: ti.i32,
-                                 sigma_s: ti.f32, lam: ti.f32, iterations: ti.i32, min_separation: ti.f32):
+def weighted_median_shading_rows(S: nd3, flow: nd4, w_bnd: nd3, out: nd3, scratch: nd2, spatial: nd1,
+                                 radius: ti.i32, lam: ti.f32, iterations: ti.i32, min_separation: ti.f32):
     height = S.shape[1]
     width = S.shape[2]
-    inv_two_sigma2 = 1.0 / (2.0 * sigma_s * sigma_s)
+    side = 2 * radius + 1
     for r in range(S.shape[0] * height):
         t = r // height
         y = r - t * height
@@ -208,10 +209,8 @@ def weighted_median_shading_rows(S: nd3, flow: nd4, w_bnd: nd3, out: nd3, scratc
                             keep = ti.select(
                                 nearer_second(flow[t, yy, xx, 0], flow[t, yy, xx, 1], c0x, c0y, c1x, c1y) == own, 1, 0)
                         if keep == 1:
-                            ddx = ti.cast(xx - x, ti.f32)
-                            ddy = ti.cast(yy - y, ti.f32)
                             scratch[r, 2 * n] = S[t, yy, xx]
-                            scratch[r, 2 * n + 1] = ti.exp(-(ddx * ddx + ddy * ddy) * inv_two_sigma2)
+                            scratch[r, 2 * n + 1] = spatial[(yy - y + radius) * side + xx - x + radius]
                             n += 1
                 out[t, y, x] = l1_quadratic_select(scratch, r, 0, n, s, lam)
 
@@ -312,6 +311,13 @@ def flow_scratch_shape(flow_shape: tuple, radius: int) -> tuple:
 
 _scratch_cache: dict = {}
 _scratch_lock = threading.Lock()
+_NETWORK25 = np.asarray(median_network(25), np.int32).ravel()
+
+
+def _spatial_weights(radius: int, sigma: float) -> np.ndarray:
+    """``exp(-|d|^2 / (2 sigma^2))`` over the (2r+1)^2 window offsets, row-major, float32."""
+    d = np.arange(-radius, radius + 1, dtype=np.float64)
+    return np.exp(-(d[:, None] ** 2 + d[None, :] ** 2) / (2.0 * sigma * sigma)).astype(np.float32).ravel()
 
 
 def _scratch(scratch, shape: tuple) -> np.ndarray:
@@ -334,7 +340,7 @@ def median5x5(src, out) -> None:
     t, h, w, c = src.shape
     _check("out", out, (t, h, w, c), "(T, H, W, C)", output=True)
     if src.size:
-        median5x5_rows(src, out)
+        median5x5_rows(src, out, _NETWORK25)
 
 
 def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float = 7.0,
@@ -356,7 +362,7 @@ def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float
         raise ValueError(f"lam must be >= 0, got {lam!r}")
     buf = _scratch(scratch, shading_scratch_shape(S.shape, radius))
     if S.size:
-        weighted_median_shading_rows(S, flow, w_bnd, out, buf, radius, sigma_s, lam,
+        weighted_median_shading_rows(S, flow, w_bnd, out, buf, _spatial_weights(radius, sigma_s), radius, lam,
                                      KMEANS_ITERATIONS, MIN_SEPARATION)
 
 
