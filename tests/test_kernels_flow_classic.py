@@ -159,6 +159,34 @@ def test_apply_update_and_select(backend, rng):
     np.testing.assert_array_equal(sel, ref.select_masked(mask, flow, du))
 
 
+def test_flow_sobel_components(backend, rng):
+    flow = rng.normal(size=(T, H, W, 2)).astype(np.float32)
+    out, energy = run(backend, "flow_sobel_components", [flow], [np.zeros((T, H, W, 4)), np.zeros((T * H, 2))])
+    want, want_energy = ref.flow_sobel_components(flow)
+    np.testing.assert_allclose(out, want, atol=1e-5)
+    np.testing.assert_allclose(energy, want_energy, rtol=1e-4)
+
+
+def test_thin_edges_matches_reference(backend, rng):
+    flow = rng.normal(size=(T, H, W, 2)).astype(np.float32)
+    sobel, energy = ref.flow_sobel_components(flow)
+    cutoff = (energy.reshape(T, H, 2).sum(1) / (H * W)).astype(np.float32)
+    out = run(backend, "thin_edges", [sobel, cutoff], [np.zeros((T, H, W))])
+    np.testing.assert_array_equal(out, ref.thin_edges(sobel, cutoff))
+    assert 0 < out.mean() < 0.5
+
+
+def test_thin_edges_of_a_step_is_one_pixel_wide(backend):
+    flow = np.zeros((1, 12, 20, 2), np.float32)
+    flow[:, :, 10:, 0] = 2.0                       # u jumps between columns 9 and 10
+    sobel, energy = run(backend, "flow_sobel_components", [flow], [np.zeros((1, 12, 20, 4)), np.zeros((12, 2))])
+    cutoff = (4 * energy.sum(0) / flow[0, ..., 0].size)[None].astype(np.float32)
+    edges = run(backend, "thin_edges", [sobel, cutoff], [np.zeros((1, 12, 20))])
+    want = np.zeros((1, 12, 20))
+    want[:, :, 9] = 1
+    np.testing.assert_array_equal(edges, want)
+
+
 def test_one_thread_equals_two_threads(rng):
     be = get_backend("warp")
     i1, i1x, i1y, warped, inside, flow, du = linear_system(rng)

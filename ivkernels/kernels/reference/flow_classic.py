@@ -164,3 +164,36 @@ def apply_update(flow, du, limit=1.0):
 def select_masked(mask, inside_mask, outside_mask):
     m = (np.asarray(mask) >= 0.5)[..., None]
     return np.where(m, np.asarray(inside_mask, np.float64), np.asarray(outside_mask, np.float64))
+
+
+def flow_sobel_components(flow):
+    """Returns ((T, H, W, 4) Sobel derivatives (du/dx, du/dy, dv/dx, dv/dy), (T*H, 2) row energies)."""
+    f = np.pad(np.asarray(flow, np.float64), ((0, 0), (1, 1), (1, 1), (0, 0)), mode="edge")
+    gx = (f[:, :-2, 2:] + 2 * f[:, 1:-1, 2:] + f[:, 2:, 2:] - f[:, :-2, :-2] - 2 * f[:, 1:-1, :-2] - f[:, 2:, :-2]) / 8
+    gy = (f[:, 2:, :-2] + 2 * f[:, 2:, 1:-1] + f[:, 2:, 2:] - f[:, :-2, :-2] - 2 * f[:, :-2, 1:-1] - f[:, :-2, 2:]) / 8
+    out = np.stack([gx[..., 0], gy[..., 0], gx[..., 1], gy[..., 1]], -1)
+    t, h, w, _ = out.shape
+    energy = np.stack([(gx[..., k] ** 2 + gy[..., k] ** 2).sum(axis=2).reshape(t * h) for k in range(2)], -1)
+    return out, energy
+
+
+def thin_edges(sobel, cutoff):
+    """(T, H, W) thinned edges of u OR v, written pixel by pixel."""
+    sobel = np.asarray(sobel, np.float64)
+    t_n, h, w, _ = sobel.shape
+    out = np.zeros((t_n, h, w))
+    for t in range(t_n):
+        for c in range(2):
+            gx, gy = sobel[t, ..., 2 * c], sobel[t, ..., 2 * c + 1]
+            b = gx * gx + gy * gy
+            for y in range(h):
+                for x in range(w):
+                    if not b[y, x] > cutoff[t][c]:
+                        continue
+                    xm, xp, ym, yp = max(x - 1, 0), min(x + 1, w - 1), max(y - 1, 0), min(y + 1, h - 1)
+                    ax, ay = abs(gx[y, x]), abs(gy[y, x])
+                    if ax >= ay and b[y, x] > b[y, xm] and b[y, x] >= b[y, xp]:
+                        out[t, y, x] = 1.0
+                    if ay >= ax and b[y, x] > b[ym, x] and b[y, x] >= b[yp, x]:
+                        out[t, y, x] = 1.0
+    return out

@@ -237,6 +237,69 @@ def _select_masked(mask: nd3, inside_mask: nd4, outside_mask: nd4, out: nd4):
                     out[t, y, x, c] = outside_mask[t, y, x, c]
 
 
+@ti.func
+def sobel_at(flow: ti.template(), t, y, x, c):
+    height = flow.shape[1]
+    width = flow.shape[2]
+    ym = ti.max(y - 1, 0)
+    yp = ti.min(y + 1, height - 1)
+    xm = ti.max(x - 1, 0)
+    xp = ti.min(x + 1, width - 1)
+    gx = (flow[t, ym, xp, c] + 2.0 * flow[t, y, xp, c] + flow[t, yp, xp, c]
+          - flow[t, ym, xm, c] - 2.0 * flow[t, y, xm, c] - flow[t, yp, xm, c]) / 8.0
+    gy = (flow[t, yp, xm, c] + 2.0 * flow[t, yp, x, c] + flow[t, yp, xp, c]
+          - flow[t, ym, xm, c] - 2.0 * flow[t, ym, x, c] - flow[t, ym, xp, c]) / 8.0
+    return gx, gy
+
+
+@ti.kernel
+def _flow_sobel_components(flow: nd4, out: nd4, row_energy: ti.types.ndarray(dtype=ti.f32, ndim=2)):
+    for t, y in ti.ndrange(flow.shape[0], flow.shape[1]):
+        sum_u = 0.0
+        sum_v = 0.0
+        for x in range(flow.shape[2]):
+            gxu, gyu = sobel_at(flow, t, y, x, 0)
+            gxv, gyv = sobel_at(flow, t, y, x, 1)
+            out[t, y, x, 0] = gxu
+            out[t, y, x, 1] = gyu
+            out[t, y, x, 2] = gxv
+            out[t, y, x, 3] = gyv
+            sum_u += gxu * gxu + gyu * gyu
+            sum_v += gxv * gxv + gyv * gyv
+        row_energy[t * flow.shape[1] + y, 0] = sum_u
+        row_energy[t * flow.shape[1] + y, 1] = sum_v
+
+
+@ti.func
+def sobel_energy(sobel: ti.template(), t, y, x, c):
+    gx = sobel[t, y, x, 2 * c]
+    gy = sobel[t, y, x, 2 * c + 1]
+    return gx * gx + gy * gy
+
+
+@ti.kernel
+def _thin_edges(sobel: nd4, cutoff: ti.types.ndarray(dtype=ti.f32, ndim=2), out: nd3):
+    height = sobel.shape[1]
+    width = sobel.shape[2]
+    for t, y in ti.ndrange(sobel.shape[0], height):
+        ym = ti.max(y - 1, 0)
+        yp = ti.min(y + 1, height - 1)
+        for x in range(width):
+            xm = ti.max(x - 1, 0)
+            xp = ti.min(x + 1, width - 1)
+            edge = 0.0
+            for c in ti.static(range(2)):
+                b = sobel_energy(sobel, t, y, x, c)
+                if b > cutoff[t, c]:
+                    ax = ti.abs(sobel[t, y, x, 2 * c])
+                    ay = ti.abs(sobel[t, y, x, 2 * c + 1])
+                    if ax >= ay and b > sobel_energy(sobel, t, y, xm, c) and b >= sobel_energy(sobel, t, y, xp, c):
+                        edge = 1.0
+                    if ay >= ax and b > sobel_energy(sobel, t, ym, x, c) and b >= sobel_energy(sobel, t, yp, x, c):
+                        edge = 1.0
+            out[t, y, x] = edge
+
+
 # ----------------------------------------------------------------------------
 # Host functions
 # ----------------------------------------------------------------------------
@@ -367,3 +430,21 @@ def select_masked(mask, inside_mask, outside_mask, out) -> None:
     _check("outside_mask", outside_mask, (t, h, w, c), "(T, H, W, C)")
     _check("out", out, (t, h, w, c), "(T, H, W, C)")
     _select_masked(mask, inside_mask, outside_mask, out)
+
+
+def flow_sobel_components(flow, out, row_energy) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.flow_sobel_components`."""
+    _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
+    t, h, w, _ = flow.shape
+    _check("out", out, (t, h, w, 4), "(T, H, W, 4)")
+    _check("row_energy", row_energy, (t * h, 2), "(T*H, 2)")
+    _flow_sobel_components(flow, out, row_energy)
+
+
+def thin_edges(sobel, cutoff, out) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.thin_edges`."""
+    _check("sobel", sobel, (None, None, None, 4), "(T, H, W, 4)")
+    t, h, w, _ = sobel.shape
+    _check("cutoff", cutoff, (t, 2), "(T, 2)")
+    _check("out", out, (t, h, w), "(T, H, W)")
+    _thin_edges(sobel, cutoff, out)

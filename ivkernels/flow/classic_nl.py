@@ -1,0 +1,371 @@
+"""Classic+NL optical flow on the backend's kernels (host side).
+
+Sun, Roth & Black, "A quantitative analysis of current practices in optical
+flow estimation and the principles behind them", IJCV 106(2), 2014: the flow
+the intrinsic-video paper pre-computes (Kong et al. 2014, Sec. 3).  This
+module only schedules kernels; every per-pixel operation runs in a kernel
+family of the backend (``flow_classic`` for the parts specific to this
+method, ``sampling``, ``derivatives``, ``maps``, ``pyramid``, ``median`` and
+``colour`` for the shared ones).
+
+Pipeline, following the public Classic+NL code (settings in
+:class:`ClassicNLSettings`):
+
+1. Input: linear RGB frames.  The flow is computed on the 8-bit-style grey
+   level (``rgb2gray`` of the sRGB-encoded image, [0, 255]); the weighted
+   median uses CIE Lab with each channel rescaled to [0, 255].
+2. ROF structure-texture decomposition: grey scaled to [-1, 1], structure
+   by ``rof_iters`` steps of Chambolle's projection (theta = 1/8),
+   texture = image - 0.95 structure, rescaled to [0, 255].
+3. Graduated non-convexity: stage 1 on a pyramid of spacing 2 (as many
+   levels as keep the coarsest image about 16 pixels on its long side and
+   at least 6 on its short side), purely quadratic penalties; later stages
+   on a 2-level pyramid of spacing 1.25, the quadratic weight falling
+   linearly to 0 (3 stages: 1, 0.5, 0).  Each level is blurred with
+   ``sigma = sqrt(spacing) / sqrt(2)`` before resampling.
+4. Per level, ``warps`` times: bicubic warp of the second frame and its
+   derivatives; IRLS weights of the generalised Charbonnier (a = 0.45,
+   eps = 1e-3) on the linearised data term and on first-order differences
+   of the flow; the 2x2-per-pixel linear system solved by red-black SOR;
+   the increment clipped to [-1, 1] pixel and added; then the 5x5 median of
+   the flow, replaced by the 15x15 weighted median (weights: spatial
+   distance, Lab similarity, soft occlusion) in a 5x5 dilation of the
+   flow's Sobel edges.
+
+Where the public code solves each linear system exactly (sparse direct
+solve), this implementation runs a fixed number of red-black SOR sweeps
+starting from zero increment; the warm start from the coarser level and the
+previous warp makes a few dozen sweeps enough (see ``perf/eval_flow.py``).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class ClassicNLSettings:
+    """Parameters of Classic+NL (defaults: the public code's ``classic+nl``).
+
+    Energy
+        ``lam`` smoothness weight (lambda = 3); ``a``, ``eps`` generalised
+        Charbonnier ``(z^2 + eps^2)^a`` on data and smoothness;
+        ``quad_sigma`` scale of the quadratic ``z^2 / sigma^2`` of the GNC
+        blend (the public code reuses eps = 1e-3, so mixed stages are
+        dominated by the quadratic); ``blend`` weight of the warped
+        second-image derivatives in ``Ix, Iy`` (0.5 averages both frames).
+    Schedule
+        ``gnc_stages`` GNC stages; ``warps`` warping steps per level;
+        ``spacing`` pyramid spacing of stage 1 and ``gnc_spacing``,
+        ``gnc_levels`` of the later stages; ``max_levels`` caps stage 1's
+        automatic level count (0 = no cap).
+    Input
+        ``rof_iters``, ``rof_theta``, ``texture_alpha``: ROF texture input
+        (``texture_alpha = 0`` keeps the plain grey image).
+    Solver
+        ``sor_sweeps`` red-black sweeps per linear system, ``sor_omega``
+        over-relaxation; ``limit_update`` clips each increment (pixels).
+    Non-local term
+        ``median``: apply the 5x5 median and the weighted median;
+        ``wm_radius`` (7 = 15x15), ``sigma_x`` (pixels), ``sigma_i``
+        (Lab units scaled to [0, 255], averaged over channels);
+        ``occ_sigma_i`` (texture grey levels) and ``occ_sigma_d``
+        (divergence) of the soft occlusion weight; ``edge_scale``: a pixel
+        is an edge of u (or v) where its squared Sobel magnitude exceeds
+        ``edge_scale`` times the frame's mean and is a local maximum across
+        the edge (MATLAB's ``edge(u, 'sobel')``); ``edge_radius`` dilation
+        of the edges (2 = 5x5).
+    """
+
+    lam: float = 3.0
+    a: float = 0.45
+    eps: float = 1e-3
+    quad_sigma: float = 1e-3
+    blend: float = 0.5
+    gnc_stages: int = 3
+    warps: int = 10
+    spacing: float = 2.0
+    gnc_spacing: float = 1.25
+    gnc_levels: int = 2
+    max_levels: int = 0
+    rof_iters: int = 100
+    rof_theta: float = 0.125
+    texture_alpha: float = 0.95
+    sor_sweeps: int = 30
+    sor_omega: float = 1.9
+    limit_update: float = 1.0
+    median: bool = True
+    wm_radius: int = 7
+    sigma_x: float = 7.0
+    sigma_i: float = 7.0
+    occ_sigma_i: float = 20.0
+    occ_sigma_d: float = 0.3
+    edge_scale: float = 4.0
+    edge_radius: int = 2
+
+    def __post_init__(self):
+        for name in ("gnc_stages", "warps", "gnc_levels", "rof_iters", "sor_sweeps", "wm_radius"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < (0 if name in ("rof_iters", "sor_sweeps") else 1):
+                raise ValueError(f"{name} must be a positive int, got {value!r}")
+        for name in ("spacing", "gnc_spacing"):
+            if not getattr(self, name) > 1.0:
+                raise ValueError(f"{name} must be > 1, got {getattr(self, name)!r}")
+        for name in ("lam", "eps", "quad_sigma", "sigma_x", "sigma_i", "occ_sigma_i", "occ_sigma_d"):
+            if not getattr(self, name) > 0.0:
+                raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
+        if not 0.0 < self.a <= 1.0:
+            raise ValueError(f"a must be in (0, 1], got {self.a!r}")
+        if not 0.0 < self.sor_omega < 2.0:
+            raise ValueError(f"sor_omega must be in (0, 2), got {self.sor_omega!r}")
+
+
+#: The two settings of the public code: ``classic+nl`` and ``classic+nl-fast``.
+PRESETS = {
+    "classic_nl": ClassicNLSettings(),
+    "classic_nl_fast": ClassicNLSettings(gnc_stages=2, warps=3),
+}
+
+
+def settings_for(method: str, **options) -> ClassicNLSettings:
+    """The preset ``method`` with ``options`` (fields of :class:`ClassicNLSettings`) replaced."""
+    if method not in PRESETS:
+        raise ValueError(f"unknown Classic+NL setting {method!r}; expected one of {tuple(PRESETS)}")
+    names = {f.name for f in dataclasses.fields(ClassicNLSettings)}
+    unknown = sorted(set(options) - names)
+    if unknown:
+        raise TypeError(f"unknown option(s) {unknown} for {method!r}; valid options: {sorted(names)}")
+    return dataclasses.replace(PRESETS[method], **options)
+
+
+def pyramid_sizes(height: int, width: int, spacing: float, levels: int) -> list[tuple[int, int]]:
+    """Sizes of a pyramid, finest first: each level ``ceil(size / spacing)`` of the previous."""
+    sizes = [(height, width)]
+    for _ in range(levels - 1):
+        h, w = sizes[-1]
+        sizes.append((max(1, math.ceil(h / spacing - 1e-9)), max(1, math.ceil(w / spacing - 1e-9))))
+    return sizes
+
+
+def auto_levels(height: int, width: int, spacing: float) -> int:
+    """Stage-1 level count of the public code: the coarsest long side near 16 pixels,
+    the coarsest short side at least 6."""
+    n1 = 1 + math.floor(math.log(max(height, width) / 16.0) / math.log(spacing))
+    n2 = 1 + math.floor(math.log(min(height, width) / 6.0) / math.log(spacing))
+    return max(1, min(n1, n2))
+
+
+def gnc_schedule(stages: int) -> list[float]:
+    """Weight of the quadratic penalty in each GNC stage (1 = quadratic, 0 = robust).
+
+    Stage 1 is quadratic; after stage k the weight becomes
+    ``min(previous, max(0, 1 - k / (stages - 1)))``: 3 stages give 1, 0.5, 0.
+    """
+    alphas, alpha = [], 1.0
+    for k in range(1, stages + 1):
+        alphas.append(alpha)
+        if stages > 1:
+            alpha = max(0.0, min(alpha, 1.0 - k / (stages - 1)))
+    return alphas
+
+
+class _Level:
+    """Buffers of one pyramid level: images of all T frames and the per-warp work arrays."""
+
+    def __init__(self, be, texture, lab, n_flows: int):
+        t_all, h, w, _ = texture.shape
+        n = n_flows
+        self.shape = (h, w)
+        self.texture = texture                                  # (T, h, w, 1)
+        self.lab = lab                                          # (T, h, w, 3)
+        fc = be.flow_classic
+        tex3 = texture.reshape((t_all, h, w))
+        gx, gy = be.empty((t_all, h, w, 1)), be.empty((t_all, h, w, 1))
+        be.derivatives.image_gradient(texture, gx, gy)
+        gx3, gy3 = gx.reshape((t_all, h, w)), gy.reshape((t_all, h, w))
+        self.i1, self.i1x, self.i1y = tex3[0:n], gx3[0:n], gy3[0:n]
+        self.pack2 = be.empty((n, h, w, 3))                     # (I2, I2x, I2y)
+        fc.pack_image_gradient(tex3[1:n + 1], gx3[1:n + 1], gy3[1:n + 1], self.pack2)
+        # Occlusion input: the texture image as the first of three "colour" channels,
+        # so that the maps kernel's colour distance is Classic+NL's |I2(x+u) - I1(x)|.
+        zeros = be.zeros((t_all, h, w))
+        self.occ_img = be.empty((t_all, h, w, 3))
+        fc.pack_image_gradient(tex3, zeros, zeros, self.occ_img)
+        self.warped = be.empty((n, h, w, 3))
+        self.inside = be.empty((n, h, w))
+        self.du = be.zeros((n, h, w, 2))
+        self.data = be.empty((n, h, w, 5))
+        self.smooth = be.empty((n, h, w, 4))
+        self.raw = be.empty((n, h, w, 2))
+        self.med = be.empty((n, h, w, 2))
+        self.wmed = be.empty((n, h, w, 2))
+        self.div = be.empty((n, h, w))
+        self.occ = be.empty((n, h, w))
+        self.sobel = be.empty((n, h, w, 4))
+        self.row_energy = be.empty((n * h, 2))
+        self.edges = be.empty((n, h, w))
+        self.mask = be.empty((n, h, w))
+
+
+class ClassicNL:
+    """Classic+NL flow between consecutive frames, on a backend.
+
+    >>> flow = ClassicNL(get_backend("warp"), PRESETS["classic_nl_fast"])(frames)  # doctest: +SKIP
+    """
+
+    def __init__(self, be, settings: ClassicNLSettings):
+        self.be = be
+        self.s = settings
+
+    # -- small host helpers -------------------------------------------------
+
+    def _zero(self, a) -> None:
+        if self.be.name == "warp":
+            a.zero_()
+        else:
+            a.fill(0.0)
+
+    def _min_max(self, a) -> np.ndarray:
+        """(C, 2) channel-wise (min, max) of a (T, H, W, C) array."""
+        t, h, _, c = a.shape
+        rows = self.be.empty((t * h, c, 2))
+        self.be.flow_classic.row_min_max(a, rows)
+        rows = self.be.numpy(rows)
+        return np.stack([rows[:, :, 0].min(0), rows[:, :, 1].max(0)], -1)
+
+    def _rescale(self, a, lo: float, hi: float) -> None:
+        """Map each channel of ``a`` linearly onto [lo, hi] (MATLAB ``scale_image``), in place."""
+        mm = self._min_max(a).astype(np.float64)
+        span = np.where(mm[:, 1] > mm[:, 0], mm[:, 1] - mm[:, 0], 1.0)
+        scale = (hi - lo) / span
+        shift = lo - mm[:, 0] * scale
+        self.be.flow_classic.scale_shift(a, a, self.be.asarray(scale.astype(np.float32)),
+                                         self.be.asarray(shift.astype(np.float32)))
+
+    # -- input preparation --------------------------------------------------
+
+    def _texture(self, rgb):
+        """(T, H, W, 1) ROF texture of the sRGB grey level, in [0, 255] (step 2)."""
+        be, s, fc = self.be, self.s, self.be.flow_classic
+        t, h, w, _ = rgb.shape
+        grey = be.empty((t, h, w, 1))
+        grey3 = grey.reshape((t, h, w))
+        fc.srgb_grey(rgb, grey3)
+        if s.texture_alpha == 0.0 or s.rof_iters == 0:
+            self._rescale(grey, 0.0, 255.0)
+            return grey
+        self._rescale(grey, -1.0, 1.0)
+        p, q = be.zeros((t, h, w, 2)), be.zeros((t, h, w, 2))
+        delta = 1.0 / (4.0 * s.rof_theta)
+        for _ in range(s.rof_iters):
+            fc.rof_dual_step(grey3, p, q, s.rof_theta, delta)
+            p, q = q, p
+        texture = be.empty((t, h, w, 1))
+        fc.rof_texture(grey3, p, texture.reshape((t, h, w)), s.rof_theta, s.texture_alpha)
+        self._rescale(texture, 0.0, 255.0)
+        return texture
+
+    def _pyramid(self, images, sizes, spacing: float) -> list:
+        """Blur-and-resample pyramid of (T, H, W, C) ``images`` at ``sizes`` (finest first)."""
+        be = self.be
+        sigma = math.sqrt(spacing) / math.sqrt(2.0)
+        levels = [images]
+        for h, w in sizes[1:]:
+            prev = levels[-1]
+            blurred, scratch = be.empty(prev.shape), be.empty(prev.shape)
+            be.pyramid.gaussian_blur(prev, blurred, scratch, sigma)
+            out = be.empty((prev.shape[0], h, w, prev.shape[3]))
+            be.pyramid.resize_bilinear(blurred, out)
+            levels.append(out)
+        return levels
+
+    # -- the solver ---------------------------------------------------------
+
+    def _warp_step(self, lv: _Level, flow, quad_frac: float) -> None:
+        """One warping step at a level: IRLS system, SOR, update, median filtering (step 4)."""
+        be, s, fc = self.be, self.s, self.be.flow_classic
+        quad_weight = 2.0 / (s.quad_sigma * s.quad_sigma)
+        be.sampling.warp_bicubic(lv.pack2, flow, lv.warped, lv.inside)
+        self._zero(lv.du)
+        fc.data_coefficients(lv.i1, lv.i1x, lv.i1y, lv.warped, lv.inside, lv.du, lv.data,
+                             s.blend, s.a, s.eps, quad_frac, quad_weight)
+        fc.smoothness_weights(flow, lv.du, lv.smooth, s.a, s.eps, quad_frac, quad_weight)
+        for _ in range(s.sor_sweeps):
+            fc.sor_sweep(flow, lv.du, lv.data, lv.smooth, s.lam, s.sor_omega, 0)
+            fc.sor_sweep(flow, lv.du, lv.data, lv.smooth, s.lam, s.sor_omega, 1)
+        if not s.median:
+            fc.apply_update(flow, lv.du, flow, s.limit_update)
+            return
+        fc.apply_update(flow, lv.du, lv.raw, s.limit_update)
+        self._median(lv, lv.raw, flow)
+
+    def _median(self, lv: _Level, raw, out) -> None:
+        """5x5 median everywhere, 15x15 weighted median near flow edges: ``raw`` -> ``out``."""
+        be, s = self.be, self.s
+        n = raw.shape[0]
+        be.derivatives.divergence_negative(raw, lv.div)
+        be.maps.occlusion_soft(lv.occ_img, raw, lv.div, lv.occ, s.occ_sigma_i, s.occ_sigma_d)
+        # Flow edges as MATLAB's edge(., 'sobel') finds them (automatic threshold,
+        # thinned), for u and for v, then dilated into the weighted-median mask.
+        h, w = lv.shape
+        be.flow_classic.flow_sobel_components(raw, lv.sobel, lv.row_energy)
+        energy = be.numpy(lv.row_energy).reshape(n, h, 2).astype(np.float64).sum(axis=1)
+        cutoff = (s.edge_scale * energy / (h * w)).astype(np.float32)
+        be.flow_classic.thin_edges(lv.sobel, be.asarray(cutoff), lv.edges)
+        be.maps.motion_boundary(lv.edges, lv.mask, 0.5, s.edge_radius)
+        be.median.median5x5(raw, lv.med)
+        # Classic+NL averages the squared Lab differences over the 3 channels; the
+        # kernel sums them, hence sigma_i * sqrt(3).
+        be.median.weighted_median_flow(raw, lv.lab[0:n], lv.occ, lv.mask, lv.wmed,
+                                       s.wm_radius, s.sigma_x, s.sigma_i * math.sqrt(3.0))
+        be.flow_classic.select_masked(lv.mask, lv.wmed, lv.med, out)
+
+    def __call__(self, frames: np.ndarray, init: np.ndarray | None = None) -> np.ndarray:
+        """Flow between consecutive frames.
+
+        frames : (T, H, W, 3) float32 linear RGB in [0, 1], T >= 2 (validated by
+            :func:`ivkernels.flow.estimate_flow`).
+        init : optional (T-1, H, W, 2) float32 initial flow.
+        Returns (T-1, H, W, 2) float32 forward flow in pixels.
+        """
+        be, s = self.be, self.s
+        t_all, height, width, _ = frames.shape
+        n = t_all - 1
+        rgb = be.asarray(np.ascontiguousarray(frames, np.float32))
+        texture = self._texture(rgb)
+        lab = be.empty((t_all, height, width, 3))
+        be.colour.linear_rgb_to_lab(rgb, lab)
+        self._rescale(lab, 0.0, 255.0)
+
+        levels = auto_levels(height, width, s.spacing)
+        if s.max_levels:
+            levels = min(levels, s.max_levels)
+        stage1 = pyramid_sizes(height, width, s.spacing, levels)
+        later = pyramid_sizes(height, width, s.gnc_spacing, s.gnc_levels)
+
+        if init is None:
+            flow = be.zeros((n, *stage1[-1], 2))
+        else:
+            full = be.asarray(np.ascontiguousarray(init, np.float32))
+            flow = be.empty((n, *stage1[-1], 2))
+            be.pyramid.resize_flow(full, flow)
+
+        pyramids = {}
+        for stage, quad_frac in enumerate(gnc_schedule(s.gnc_stages)):
+            sizes, spacing = (stage1, s.spacing) if stage == 0 else (later, s.gnc_spacing)
+            if spacing not in pyramids:
+                tex_levels = self._pyramid(texture, sizes, spacing)
+                lab_levels = self._pyramid(lab, sizes, spacing)
+                pyramids[spacing] = [_Level(be, tx, lb, n) for tx, lb in zip(tex_levels, lab_levels)]
+            for lv in reversed(pyramids[spacing]):
+                if tuple(flow.shape[1:3]) != lv.shape:
+                    resized = be.empty((n, *lv.shape, 2))
+                    be.pyramid.resize_flow(flow, resized)
+                    flow = resized
+                for _ in range(s.warps):
+                    self._warp_step(lv, flow, quad_frac)
+        be.synchronize()
+        return np.array(be.numpy(flow), dtype=np.float32, copy=True)

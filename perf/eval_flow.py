@@ -1,0 +1,115 @@
+"""Accuracy and speed of the built-in optical flows, measured in one run.
+
+Prints, for every method, the end-point error (EPE, pixels) and average
+angular error (AAE, degrees) on each Middlebury training pair with ground
+truth (``shared/data/middlebury``), their means, and the seconds per pair
+(wall clock, Classic+NL kernels compiled beforehand on a small pair).
+``--synthetic`` adds the project's rendered sequences (the flow of each
+consecutive pair against the renderer's exact flow).
+
+    python perf/eval_flow.py                                  # all methods, Middlebury
+    python perf/eval_flow.py --methods classic_nl_fast dis --sequences RubberWhale Venus
+    python perf/eval_flow.py --synthetic --threads 1
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ivkernels.flow import FLOW_METHODS, estimate_flow
+from ivkernels.flowio import read_flo
+from ivkernels.io import read_image
+from ivkernels.kernels.launch import set_threads
+from ivkernels.metrics import flow_errors
+
+SEQUENCES = ("Dimetrodon", "Grove2", "Grove3", "Hydrangea", "RubberWhale", "Urban2", "Urban3", "Venus")
+
+
+def default_data_dir() -> Path:
+    here = Path(__file__).resolve()
+    for base in (here.parents[1], *here.parents[2:4]):
+        for cand in (base / "shared" / "data" / "middlebury", base / "data" / "middlebury"):
+            if cand.is_dir():
+                return cand
+    return Path("/work/shared/data/middlebury")
+
+
+def middlebury_pairs(root: Path, names):
+    for name in names:
+        d = root / name
+        frames = np.stack([read_image(d / "frame10.png"), read_image(d / "frame11.png")])
+        yield name, frames, read_flo(d / "flow10.flo")[None]
+
+
+def synthetic_pairs(size, n_frames: int):
+    from ivkernels.synthetic import KINDS, render_sequence
+
+    for kind in KINDS:
+        seq = render_sequence(kind, n_frames=n_frames, size=size, seed=1)
+        yield f"syn:{kind}", seq.frames, seq.flow
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--methods", nargs="+", default=list(FLOW_METHODS), choices=FLOW_METHODS)
+    ap.add_argument("--sequences", nargs="+", default=list(SEQUENCES))
+    ap.add_argument("--data", type=Path, default=None, help="Middlebury folder (default: shared/data/middlebury)")
+    ap.add_argument("--synthetic", action="store_true", help="also the rendered synthetic sequences")
+    ap.add_argument("--synthetic-size", type=int, nargs=2, default=(240, 320), metavar=("H", "W"))
+    ap.add_argument("--backend", default="warp")
+    ap.add_argument("--device", default="cpu")
+    ap.add_argument("--threads", type=int, default=2, choices=(1, 2))
+    args = ap.parse_args(argv)
+    set_threads(args.threads)
+
+    data = list(middlebury_pairs(args.data or default_data_dir(), args.sequences))
+    if args.synthetic:
+        data += list(synthetic_pairs(tuple(args.synthetic_size), 3))
+
+    # Compile every kernel once so that timings measure the flow, not the JIT.
+    warm = data[0][1][:, :48, :64]
+    for m in args.methods:
+        estimate_flow(warm, method=m, backend=args.backend, device=args.device)
+
+    results = {m: {} for m in args.methods}
+    for name, frames, gt in data:
+        for m in args.methods:
+            t0 = time.perf_counter()
+            flow = estimate_flow(frames, method=m, backend=args.backend, device=args.device)
+            seconds = (time.perf_counter() - t0) / (frames.shape[0] - 1)
+            err = flow_errors(flow, gt)
+            results[m][name] = (err["epe"], err["aae"], seconds)
+            print(f"  {name:22s} {m:16s} EPE {err['epe']:6.3f}  AAE {err['aae']:6.2f}  {seconds:6.2f} s/pair",
+                  file=sys.stderr, flush=True)
+
+    print(f"backend={args.backend} device={args.device} threads={args.threads}")
+    header = f"{'sequence':22s}" + "".join(f" | {m:>22s}" for m in args.methods)
+    print(header)
+    print(f"{'':22s}" + " | {:>6s} {:>6s} {:>8s}".format("EPE", "AAE", "s/pair") * len(args.methods))
+    print("-" * len(header))
+    for name, _, _ in data:
+        row = f"{name:22s}"
+        for m in args.methods:
+            e, a, s = results[m][name]
+            row += f" | {e:6.3f} {a:6.2f} {s:8.2f}"
+        print(row)
+    print("-" * len(header))
+    for label, keep in (("mean (Middlebury)", lambda n: not n.startswith("syn:")),
+                        ("mean (synthetic)", lambda n: n.startswith("syn:"))):
+        names = [n for n, _, _ in data if keep(n)]
+        if not names:
+            continue
+        row = f"{label:22s}"
+        for m in args.methods:
+            vals = np.array([results[m][n] for n in names])
+            row += f" | {vals[:, 0].mean():6.3f} {vals[:, 1].mean():6.2f} {vals[:, 2].mean():8.2f}"
+        print(row)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
