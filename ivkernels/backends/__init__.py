@@ -72,10 +72,10 @@ class WarpBackend(Backend):
         return wp.array(a, dtype=wp.dtype_from_numpy(a.dtype), device=self.device)
 
     def empty(self, shape, dtype=np.float32):
-        return self._wp.empty(tuple(shape), dtype=self._wp.dtype_from_numpy(np.dtype(dtype)), device=self.device)
+        return self._wp.empty(_shape(shape), dtype=self._wp.dtype_from_numpy(np.dtype(dtype)), device=self.device)
 
     def zeros(self, shape, dtype=np.float32):
-        return self._wp.zeros(tuple(shape), dtype=self._wp.dtype_from_numpy(np.dtype(dtype)), device=self.device)
+        return self._wp.zeros(_shape(shape), dtype=self._wp.dtype_from_numpy(np.dtype(dtype)), device=self.device)
 
     def numpy(self, a) -> np.ndarray:
         """NumPy view (CPU) or copy (CUDA) of a backend array."""
@@ -87,32 +87,42 @@ class WarpBackend(Backend):
 
 
 class TaichiBackend(Backend):
-    """NumPy arrays passed to Taichi kernels as ``ti.types.ndarray()``."""
+    """NumPy arrays passed to Taichi kernels as ``ti.types.ndarray()``.
+
+    Taichi threads its kernels itself; it starts with the launch thread count
+    of :mod:`ivkernels.kernels.launch` at the time the backend is first made.
+    """
 
     name = "taichi"
 
-    def __init__(self, device: str = "cpu", threads: int = 2):
+    def __init__(self, device: str = "cpu", threads: int | None = None):
         if device != "cpu":
             raise ValueError(f"the taichi backend runs on device='cpu' only, got {device!r}")
+        from ivkernels.kernels.launch import get_threads
         from ivkernels.kernels.taichi import init
 
-        init(threads)
+        init(get_threads() if threads is None else threads)
         super().__init__(device)
 
     def asarray(self, a: np.ndarray) -> np.ndarray:
         return np.ascontiguousarray(a)
 
     def empty(self, shape, dtype=np.float32) -> np.ndarray:
-        return np.empty(tuple(shape), dtype=dtype)
+        return np.empty(_shape(shape), dtype=dtype)
 
     def zeros(self, shape, dtype=np.float32) -> np.ndarray:
-        return np.zeros(tuple(shape), dtype=dtype)
+        return np.zeros(_shape(shape), dtype=dtype)
 
     def numpy(self, a) -> np.ndarray:
         return a
 
     def synchronize(self) -> None:
         pass
+
+
+def _shape(shape) -> tuple:
+    """An int or a sequence of ints as a shape tuple."""
+    return (int(shape),) if np.isscalar(shape) else tuple(int(n) for n in shape)
 
 
 _cache: dict = {}

@@ -1,0 +1,111 @@
+"""Speed and memory of decompose(), split by stage.
+
+Every configuration runs in a fresh subprocess, so its peak resident memory
+(``ru_maxrss``) and its kernel-compile time are its own; compile time is
+reported apart (a warm-up decomposition of two tiny frames in the same
+process) and excluded from the stage times.
+
+Prints, in one run:
+  1. 8 frames at 320x240 and 640x480: Warp on 1 and 2 threads and Taichi,
+     seconds per stage (flow, maps, solve, ...), total, and the 2-thread speedup;
+  2. 8, 16 and 32 frames at 320x240 (Warp, 2 threads, windows of 8 frames):
+     seconds and peak memory, with the per-frame cost, to show linear growth.
+
+    python perf/bench_solver.py [--quick] [--flow classic_nl_fast]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import subprocess
+import sys
+import time
+
+
+def run_one(args) -> dict:
+    """One configuration, in this process (called through --one)."""
+    import numpy as np
+
+    import ivkernels as iv
+    from ivkernels import synthetic
+    from ivkernels.kernels.launch import set_threads
+
+    set_threads(args.threads)
+    tiny = synthetic.render_sequence("objects_camera", n_frames=2, size=(32, 40), seed=1)
+    t0 = time.perf_counter()
+    iv.decompose(tiny.frames, flow=args.flow, backend=args.backend)       # compile + load kernels
+    compile_s = time.perf_counter() - t0
+    seq = synthetic.render_sequence("objects_camera", n_frames=args.frames,
+                                    size=(args.height, args.width), seed=1)
+    rss_before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    t0 = time.perf_counter()
+    video = iv.decompose(seq.frames, flow=args.flow, backend=args.backend)
+    total = time.perf_counter() - t0
+    assert np.isfinite(video.albedo).all()
+    peak_kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return {"total": total, "compile": compile_s, "stages": video.diagnostics["seconds"],
+            "peak_mib": peak_kib / 1024, "rss_before_mib": rss_before / 1024}
+
+
+def spawn(backend: str, threads: int, frames: int, height: int, width: int, flow: str) -> dict:
+    cmd = [sys.executable, __file__, "--one", "--backend", backend, "--threads", str(threads),
+           "--frames", str(frames), "--height", str(height), "--width", str(width), "--flow", flow]
+    out = subprocess.run(cmd, capture_output=True, text=True)
+    if out.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} failed:\n{out.stderr[-3000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--one", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--backend", default="warp")
+    parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--frames", type=int, default=8)
+    parser.add_argument("--height", type=int, default=240)
+    parser.add_argument("--width", type=int, default=320)
+    parser.add_argument("--flow", default="classic_nl_fast",
+                        help="flow method for every configuration")
+    parser.add_argument("--quick", action="store_true", help="small sizes (a smoke run)")
+    args = parser.parse_args(argv)
+    if args.one:
+        print(json.dumps(run_one(args)))
+        return 0
+
+    sizes = [(120, 160)] if args.quick else [(240, 320), (480, 640)]
+    configs = [("warp", 1), ("warp", 2), ("taichi", 1), ("taichi", 2)]
+    print(f"decompose(), 8 frames, flow={args.flow}; seconds per stage (compile excluded)")
+    header = f"{'size':>9} {'backend':>8} {'thr':>3} {'flow':>6} {'maps':>6} {'solve':>7} " \
+             f"{'median':>7} {'total':>7} {'compile':>8} {'peak MiB':>9}"
+    print(header)
+    for h, w in sizes:
+        results = {}
+        for backend, threads in configs:
+            r = spawn(backend, threads, 8, h, w, args.flow)
+            results[(backend, threads)] = r
+            s = r["stages"]
+            print(f"{w}x{h:<5} {backend:>8} {threads:>3} {s.get('flow', 0):6.2f} {s.get('maps', 0):6.2f} "
+                  f"{s.get('solve', 0):7.2f} {s.get('median', 0):7.2f} {r['total']:7.2f} "
+                  f"{r['compile']:8.2f} {r['peak_mib']:9.0f}")
+        speedup = results[("warp", 1)]["total"] / results[("warp", 2)]["total"]
+        tspeed = results[("taichi", 1)]["total"] / results[("taichi", 2)]["total"]
+        ratio = results[("taichi", 2)]["total"] / results[("warp", 2)]["total"]
+        print(f"{w}x{h}: 2 threads vs 1: Warp {speedup:.2f}x, Taichi {tspeed:.2f}x; "
+              f"Taichi / Warp time ratio (2 threads) {ratio:.2f}")
+
+    h, w = sizes[0]
+    counts = [4, 8, 12] if args.quick else [8, 16, 32]
+    print(f"\nscaling in frames at {w}x{h} (Warp, 2 threads, windows of 8 frames)")
+    print(f"{'frames':>6} {'total s':>8} {'s/frame':>8} {'peak MiB':>9}")
+    base = None
+    for n in counts:
+        r = spawn("warp", 2, n, h, w, args.flow)
+        per = r["total"] / n
+        base = base or per
+        print(f"{n:6d} {r['total']:8.2f} {per:8.3f} {r['peak_mib']:9.0f}   (s/frame vs first: {per / base:.2f})")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,86 @@
+"""decompose(): the public API end to end on small synthetic sequences."""
+import numpy as np
+import pytest
+
+import ivkernels as iv
+from ivkernels import Params, metrics, synthetic
+
+# Small and fast: a few levels, few iterations; behaviour, not accuracy.
+FAST = Params(outer_iterations=2, lbfgs_iterations=15)
+
+
+@pytest.fixture(scope="module")
+def seq():
+    return synthetic.render_sequence("objects_camera", n_frames=3, size=(40, 56), seed=3)
+
+
+def test_outputs_have_the_documented_shapes_and_reconstruct_the_input(seq):
+    video = iv.decompose(seq.frames, flow=seq.flow, params=FAST)
+    T, H, W, _ = seq.frames.shape
+    assert video.albedo.shape == (T, H, W, 3) and video.albedo.dtype == np.float32
+    assert video.shading.shape == (T, H, W) and video.shading.dtype == np.float32
+    assert video.flow.shape == (T - 1, H, W, 2)
+    assert video.occlusion.shape == video.boundary.shape == (T - 1, H, W)
+    assert set(np.unique(video.occlusion)) <= {0.0, 1.0}
+    assert np.isfinite(video.albedo).all() and (video.shading > 0).all()
+    assert np.percentile(video.albedo, 99) == pytest.approx(1.0, rel=1e-3)
+    rel = np.abs(video.reconstruct() - seq.frames).mean() / seq.frames.mean()
+    assert rel < 0.05
+    d = video.diagnostics
+    assert d["energy"] and d["seconds"]["solve"] > 0
+    energies = [row[-1] for row in d["energy"] if row[1] == 0]    # finest level
+    assert energies[-1] <= energies[0]
+
+
+def test_uint8_input_and_single_frame(seq):
+    frames8 = seq.frames_srgb8()
+    video = iv.decompose(frames8[:1], params=FAST)
+    assert video.albedo.shape == (1, *frames8.shape[1:])
+    assert video.flow is None
+
+
+def test_without_temporal_terms_no_flow_is_estimated(seq):
+    video = iv.decompose(seq.frames, temporal=False, params=FAST)
+    assert video.flow is None and video.occlusion is None and video.boundary is None
+
+
+@pytest.mark.parametrize("bad, match", [
+    (np.zeros((3, 20, 20)), "3"),
+    (np.full((2, 20, 20, 3), np.nan, np.float32), "finite|NaN"),
+    (np.full((2, 20, 20, 3), 2.0, np.float32), r"\[0, 1\]|range"),
+])
+def test_bad_frames_raise(bad, match):
+    with pytest.raises((ValueError, TypeError), match=match):
+        iv.decompose(bad, params=FAST)
+
+
+def test_bad_arguments_raise(seq):
+    with pytest.raises(ValueError, match="flow must have shape"):
+        iv.decompose(seq.frames, flow=np.zeros((1, 4, 4, 2), np.float32), params=FAST)
+    with pytest.raises(ValueError, match="unknown flow method"):
+        iv.decompose(seq.frames, flow="nope", params=FAST)
+    with pytest.raises(ValueError, match="backend"):
+        iv.decompose(seq.frames, backend="torch", params=FAST)
+    with pytest.raises(TypeError, match="Params"):
+        iv.decompose(seq.frames, params={"lam_data": 1})
+
+
+@pytest.mark.slow
+def test_long_video_in_windows_stays_coherent():
+    seq = synthetic.render_sequence("static_moving_light", n_frames=14, size=(36, 48), seed=5)
+    params = FAST.replace(window=5, overlap=2)
+    video = iv.decompose(seq.frames, flow=seq.flow, params=params)
+    assert len(video.diagnostics["windows"]) > 2
+    # a static scene: the albedo should hardly change over the whole video, across windows
+    log_a = np.log(video.albedo)
+    spread = np.abs(log_a - np.median(log_a, axis=0)).mean()
+    input_spread = np.abs(np.log(seq.frames) - np.median(np.log(seq.frames), axis=0)).mean()
+    assert spread < 0.5 * input_spread
+
+
+@pytest.mark.slow
+def test_taichi_backend_gives_the_same_decomposition(seq):
+    a = iv.decompose(seq.frames, flow=seq.flow, params=FAST, backend="warp")
+    b = iv.decompose(seq.frames, flow=seq.flow, params=FAST, backend="taichi")
+    la = metrics.intrinsic_lmse(b.albedo, b.shading, a.albedo, a.shading)
+    assert la["mean"] < 0.02

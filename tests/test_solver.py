@@ -1,0 +1,117 @@
+"""The host solver: windows, pyramid shapes, L-BFGS, and the assembled energy."""
+import numpy as np
+import pytest
+
+from ivkernels import Params
+from ivkernels.decompose import window_ranges
+from ivkernels.priors import load_albedo_prior
+from ivkernels.solver.energy import WindowEnergy
+from ivkernels.solver.lbfgs import LBFGS
+from ivkernels.solver.pyramid import level_shapes
+
+
+@pytest.mark.parametrize("n, window, overlap", [(1, 8, 2), (8, 8, 2), (9, 8, 2), (30, 8, 2),
+                                                (300, 8, 2), (17, 5, 0), (10, 3, 2)])
+def test_windows_cover_every_frame_and_link_every_pair(n, window, overlap):
+    ranges = window_ranges(n, window, overlap)
+    assert ranges[0][0] == 0 and ranges[0][2] == 0
+    assert ranges[-1][1] == n
+    covered = set()
+    for i, (start, stop, carried) in enumerate(ranges):
+        assert stop - start == min(window, n)
+        if i:
+            prev_stop = ranges[i - 1][1]
+            assert carried == prev_stop - start >= 1          # the pair across windows is linked
+            assert start + carried == prev_stop
+        covered.update(range(start, stop))
+    assert covered == set(range(n))
+
+
+def test_level_shapes():
+    assert level_shapes(240, 320, 0.5, 24) == [(240, 320), (120, 160), (60, 80), (30, 40)]
+    assert level_shapes(10, 10, 0.5, 24) == [(10, 10)]
+    with pytest.raises(ValueError):
+        level_shapes(0, 5, 0.5, 24)
+
+
+def test_params_validation():
+    with pytest.raises(ValueError, match="overlap"):
+        Params(window=4, overlap=4)
+    with pytest.raises(ValueError, match="lam_data"):
+        Params(lam_data=-1.0)
+    with pytest.raises(TypeError, match="unknown"):
+        Params().replace(not_a_weight=1.0)
+    assert Params().replace(lam_data=3.0).lam_data == 3.0
+
+
+def test_lbfgs_minimises_an_ill_conditioned_quadratic(backend, rng):
+    n = 501
+    diag = np.logspace(0, 3, n).astype(np.float32)
+    target = rng.standard_normal(n).astype(np.float32)
+    d_be, t_be = backend.asarray(diag), backend.asarray(target)
+
+    def fun(x, g):
+        xn = backend.numpy(x)
+        r = xn - backend.numpy(t_be)
+        backend.vecops.copy(backend.asarray((backend.numpy(d_be) * r).astype(np.float32)), g)
+        return float(0.5 * np.sum(diag.astype(np.float64) * r.astype(np.float64) ** 2))
+
+    x, g = backend.zeros((n,)), backend.zeros((n,))
+    e0 = fun(x, g)
+    e = LBFGS(backend, n, memory=8).minimize(fun, x, g, 300, rel_tol=0.0)
+    assert e < 1e-6 * e0
+    np.testing.assert_allclose(backend.numpy(x), target, atol=1e-2)
+
+
+def _small_problem(backend, rng, T=3, h=11, w=13):
+    i = rng.uniform(0.05, 1.0, (T, h, w, 3)).astype(np.float32)
+    flow = rng.uniform(-1.5, 1.5, (T - 1, h, w, 2)).astype(np.float32)
+    occ = (rng.uniform(size=(T - 1, h, w)) > 0.2).astype(np.float32)
+    bnd = (rng.uniform(size=(T - 1, h, w)) > 0.7).astype(np.float32)
+    lum = (i @ np.array([0.2126, 0.7152, 0.0722], np.float32)) + 0.001
+    be = backend
+    params = Params(eps_data=0.2, eps_shading=0.2, lam_albedo_smooth=1.0)
+    energy = WindowEnergy(be, be.asarray(np.log(i)), be.asarray(lum.astype(np.float32)),
+                          be.asarray(flow), be.asarray(occ), be.asarray(bnd), params,
+                          load_albedo_prior())
+    x0 = rng.normal(0, 0.3, energy.X.shape).astype(np.float32)
+    be.vecops.copy(be.asarray(x0), energy.X)
+    be.vecops.copy(be.asarray(rng.normal(0, 0.3, (T, h, w)).astype(np.float32)).reshape((T * h * w,)),
+                   energy.S_tilde.reshape((T * h * w,)))
+    return energy, x0
+
+
+def test_assembled_gradient_matches_directional_difference(backend, rng):
+    energy, x0 = _small_problem(backend, rng)
+    be = backend
+    energy(energy.X, energy.G)
+    g = be.numpy(energy.G).astype(np.float64).copy()
+    for _ in range(3):
+        d = rng.standard_normal(x0.shape)
+        d /= np.linalg.norm(d)
+        h = 1e-2
+        vals = []
+        for sgn in (1, -1):
+            be.vecops.copy(be.asarray((x0 + sgn * h * d).astype(np.float32)), energy.X)
+            vals.append(energy(energy.X, energy.G))
+        fd = (vals[0] - vals[1]) / (2 * h)
+        assert fd == pytest.approx(g @ d, rel=2e-2, abs=1e-2 * np.abs(g).max())
+
+
+def test_fixed_frames_get_no_gradient(backend, rng):
+    energy, _ = _small_problem(backend, rng)
+    energy.n_fixed = 1
+    energy(energy.X, energy.G)
+    T, h, w = energy.shape
+    gA, gS = backend.numpy(energy.gA), backend.numpy(energy.gS)
+    assert not gA[0].any() and not gS[0].any()
+    assert gA[1:].any() and gS[1:].any()
+
+
+def test_term_energies_sum_to_total(backend, rng):
+    energy, _ = _small_problem(backend, rng)
+    total = energy(energy.X, energy.G)
+    terms = energy.term_energies()
+    assert set(terms) >= {"data", "temporal_albedo", "temporal_shading", "coupling",
+                          "shading_local", "albedo_smooth"}
+    assert sum(terms.values()) == pytest.approx(total, rel=1e-5)
