@@ -1,0 +1,155 @@
+"""Albedo smoothness of Eq. 11: a Gaussian scale mixture on 5x5 log-RGB differences.
+
+``E = lam * sum_x sum_{y in N(x)} g(r2)``,  ``r2 = d^T Sigma^-1 d``,
+``d = A(x) - A(y)``, where ``N(x)`` holds the other pixels of the
+``(2 radius + 1)^2`` window around ``x`` inside the image (24 for the paper's
+5x5) and ``g(r2) = -log sum_m alpha_m N(d; 0, sigma_m Sigma)`` (minus its
+value at 0).  All 40 components share ``Sigma``, so ``g`` depends on ``r2``
+only and is read from a 1-D table (:mod:`ivkernels.priors`): the grid is
+uniform in ``sqrt(r2)``, ``r2_i = (i sqrt(r2_max) / (n-1))^2``, so the cell is
+found in O(1) and ``g``, ``g'`` are interpolated linearly in ``r2`` inside it;
+beyond ``r2_max`` ``g`` continues linearly with the last slope.
+
+Gradient.  The double sum visits every unordered pair ``{x, y}`` twice
+(``y in N(x)`` and ``x in N(y)``), and ``d/dA(x) g(r2) = 2 g'(r2) Sigma^-1 d``
+for ``d = A(x) - A(y)`` (the other ordering has ``-d`` and the same ``r2``), so
+
+    dE/dA(x) = 4 lam sum_{y in N(x)} g'(r2(x, y)) Sigma^-1 (A(x) - A(y)),
+
+a gather: one thread per image row, each pixel visiting its window once for
+both the energy and the gradient.  Per neighbour: a 3x3 product, a square
+root and two table reads.
+"""
+from __future__ import annotations
+
+import math
+
+import warp as wp
+
+from ivkernels.kernels.launch import launch_rows
+
+wp.set_module_options({"enable_backward": False})
+
+
+@wp.func
+def gsm_lookup(r2: float, table_g: wp.array(dtype=float), table_dg: wp.array(dtype=float),
+               r2_max: float, cells_per_root: float):
+    """``(g, g')`` at ``r2`` from the tables; ``cells_per_root = (n - 1) / sqrt(r2_max)``."""
+    n = table_g.shape[0]
+    u = wp.sqrt(r2) * cells_per_root
+    g = float(0.0)
+    dg = float(0.0)
+    if u < float(n - 1):
+        i = int(u)
+        fi = float(i)
+        f = (u - fi) * (u + fi) / (2.0 * fi + 1.0)     # linear in r2 inside the cell
+        g = (1.0 - f) * table_g[i] + f * table_g[i + 1]
+        dg = (1.0 - f) * table_dg[i] + f * table_dg[i + 1]
+    else:
+        dg = table_dg[n - 1]
+        g = table_g[n - 1] + dg * (r2 - r2_max)
+    return g, dg
+
+
+@wp.func
+def load_vec3(a: wp.array4d(dtype=float), t: int, y: int, x: int):
+    return wp.vec3(a[t, y, x, 0], a[t, y, x, 1], a[t, y, x, 2])
+
+
+@wp.kernel
+def gsm_smoothness_rows(row_begin: int, A: wp.array4d(dtype=float), sigma_inv: wp.array2d(dtype=float),
+                        table_g: wp.array(dtype=float), table_dg: wp.array(dtype=float),
+                        r2_max: float, cells_per_root: float, lam: float, radius: int,
+                        gA: wp.array4d(dtype=float), energy_rows: wp.array(dtype=wp.float64)):
+    r = row_begin + wp.tid()
+    height = A.shape[1]
+    width = A.shape[2]
+    t = r // height
+    y = r - t * height
+    P = wp.mat33(sigma_inv[0, 0], sigma_inv[0, 1], sigma_inv[0, 2],
+                 sigma_inv[1, 0], sigma_inv[1, 1], sigma_inv[1, 2],
+                 sigma_inv[2, 0], sigma_inv[2, 1], sigma_inv[2, 2])
+    y_lo = wp.max(y - radius, 0)
+    y_hi = wp.min(y + radius, height - 1)
+    e = wp.float64(0.0)
+    for x in range(width):
+        a = load_vec3(A, t, y, x)
+        x_lo = wp.max(x - radius, 0)
+        x_hi = wp.min(x + radius, width - 1)
+        e_x = float(0.0)
+        grad = wp.vec3(0.0, 0.0, 0.0)
+        for yy in range(y_lo, y_hi + 1):
+            for xx in range(x_lo, x_hi + 1):
+                if yy != y or xx != x:
+                    d = a - load_vec3(A, t, yy, xx)
+                    q = P * d
+                    g, dg = gsm_lookup(wp.dot(d, q), table_g, table_dg, r2_max, cells_per_root)
+                    e_x += g
+                    grad += dg * q
+        s = 4.0 * lam
+        gA[t, y, x, 0] = gA[t, y, x, 0] + s * grad[0]
+        gA[t, y, x, 1] = gA[t, y, x, 1] + s * grad[1]
+        gA[t, y, x, 2] = gA[t, y, x, 2] + s * grad[2]
+        e += wp.float64(e_x)
+    energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
+
+
+def _check(name: str, a, shape: tuple, layout: str, device=None, dtype=wp.float32) -> None:
+    """Raise unless ``a`` is a ``wp.array`` of ``dtype`` and ``shape`` (None = any size) on ``device``."""
+    if not isinstance(a, wp.array):
+        raise TypeError(f"{name} must be a wp.array of {wp.types.type_repr(dtype)} {layout}, "
+                        f"got {type(a).__name__}")
+    if a.dtype != dtype:
+        raise TypeError(f"{name} must have dtype {wp.types.type_repr(dtype)}, got {wp.types.type_repr(a.dtype)}")
+    if len(a.shape) != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
+        want = tuple("?" if e is None else e for e in shape)
+        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
+    if device is not None and a.device != device:
+        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
+
+
+def check_gsm_scalars(r2_max, lam, radius) -> None:
+    """Shared checks of the scalar arguments (also used by the Taichi mirror)."""
+    if not (isinstance(r2_max, (int, float)) and math.isfinite(r2_max) and r2_max > 0):
+        raise ValueError(f"r2_max must be a finite float > 0, got {r2_max!r}")
+    if not (isinstance(lam, (int, float)) and math.isfinite(lam)):
+        raise ValueError(f"lam must be a finite float, got {lam!r}")
+    if isinstance(radius, bool) or not isinstance(radius, int) or radius < 1:
+        raise ValueError(f"radius must be an int >= 1 (2 for the paper's 5x5 window), got {radius!r}")
+
+
+def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_rows,
+                   lam: float, radius: int = 2) -> None:
+    """Add Eq. 11's GSM smoothness energy and gradient.
+
+    Parameters
+    ----------
+    A : wp.array float32 (T, H, W, 3), log albedo (natural log, linear RGB).
+    sigma_inv : wp.array float32 (3, 3), ``Sigma^-1`` (``AlbedoPrior.sigma_inv``).
+    table_g, table_dg : wp.array float32 (n,), n >= 2: ``g`` and ``g' = dg/dr2``
+        on the grid ``r2_i = (i sqrt(r2_max) / (n-1))^2`` (``AlbedoPrior.table_g``,
+        ``.table_dg``).
+    r2_max : float > 0, the last grid point.
+    gA : wp.array float32 (T, H, W, 3), accumulated: ``gA += dE/dA``
+        ``= 4 lam sum_y g'(r2) Sigma^-1 (A(x) - A(y))``.  Must not overlap ``A``.
+    energy_rows : wp.array float64 (T*H,), accumulated: row ``t*H + y`` gets
+        ``lam * sum_{x in row} sum_{y in N(x)} g(r2)``.
+    lam : Eq. 11's ``lambda_As``.
+    radius : window radius (2: the paper's 5x5 window, 24 neighbours).
+    """
+    _check("A", A, (None, None, None, 3), "(T, H, W, 3)")
+    T, H, W, _ = A.shape
+    dev = A.device
+    _check("sigma_inv", sigma_inv, (3, 3), "(3, 3)", dev)
+    _check("table_g", table_g, (None,), "(n,)", dev)
+    n = table_g.shape[0]
+    if n < 2:
+        raise ValueError(f"table_g must hold at least 2 entries, got {n}")
+    _check("table_dg", table_dg, (n,), "(n,) like table_g", dev)
+    _check("gA", gA, (T, H, W, 3), "(T, H, W, 3)", dev)
+    _check("energy_rows", energy_rows, (T * H,), "(T*H,)", dev, wp.float64)
+    check_gsm_scalars(r2_max, lam, radius)
+    cells_per_root = (n - 1) / math.sqrt(r2_max)
+    launch_rows(gsm_smoothness_rows, T * H,
+                [A, sigma_inv, table_g, table_dg, float(r2_max), float(cells_per_root), float(lam),
+                 int(radius), gA, energy_rows], device=dev)
