@@ -1,0 +1,303 @@
+"""Taichi mirror of :mod:`ivkernels.kernels.warp.energy_albedo_entropy` (Eq. 12): same host
+functions, same signatures, NumPy arrays passed as ``ti.types.ndarray()``.
+
+See the Warp module for the algorithm (trilinear splat of the whitened albedo,
+separable Gaussian blur skipping empty rows, ``<hist, blurred>``, sliced
+gradient) and the normalisation.  Outermost loops run in parallel over image
+rows or histogram rows; ``+=`` on an ndarray inside them is atomic.
+"""
+import math
+from typing import NamedTuple
+
+import numpy as np
+import taichi as ti
+
+nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
+nd2 = ti.types.ndarray(dtype=ti.f32, ndim=2)
+nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
+nd1_f64 = ti.types.ndarray(dtype=ti.f64, ndim=1)
+nd4_i32 = ti.types.ndarray(dtype=ti.i32, ndim=4)
+
+
+# ----------------------------------------------------------------------------
+# Device helpers
+# ----------------------------------------------------------------------------
+
+@ti.func
+def bin_coordinate(v, lo, h, bins):
+    """``(i0, f, inside)`` of whitened coordinate ``v`` (see the Warp module)."""
+    c = (v - lo) / h
+    cc = 0.0
+    inside = 0.0
+    if c >= 0.0:
+        cc = c
+        inside = 1.0
+    if cc > ti.cast(bins - 1, ti.f32):
+        cc = ti.cast(bins - 1, ti.f32)
+        inside = 0.0
+    i0 = ti.min(ti.cast(cc, ti.i32), bins - 2)
+    return i0, cc - ti.cast(i0, ti.f32), inside
+
+
+@ti.func
+def load_mat33(m: ti.template()):
+    return ti.Matrix([[m[0, 0], m[0, 1], m[0, 2]], [m[1, 0], m[1, 1], m[1, 2]],
+                      [m[2, 0], m[2, 1], m[2, 2]]])
+
+
+# ----------------------------------------------------------------------------
+# Kernels
+# ----------------------------------------------------------------------------
+
+@ti.kernel
+def _splat_whitened_rows(A: nd4, whiten: nd2, lo: ti.f32, h: ti.f32, hist: nd4, row_flags: nd4_i32):
+    for t, y in ti.ndrange(A.shape[0], A.shape[1]):
+        bins = hist.shape[1]
+        Wm = load_mat33(whiten)
+        for x in range(A.shape[2]):
+            u = Wm @ ti.Vector([A[t, y, x, 0], A[t, y, x, 1], A[t, y, x, 2]])
+            i0, fi, ini = bin_coordinate(u[0], lo, h, bins)
+            j0, fj, inj = bin_coordinate(u[1], lo, h, bins)
+            k0, fk, ink = bin_coordinate(u[2], lo, h, bins)
+            for a in ti.static(range(2)):
+                wa = (1.0 - fi) if a == 0 else fi
+                for b in ti.static(range(2)):
+                    wab = wa * ((1.0 - fj) if b == 0 else fj)
+                    row_flags[0, t, i0 + a, j0 + b] = 1
+                    hist[t, i0 + a, j0 + b, k0] += wab * (1.0 - fk)
+                    hist[t, i0 + a, j0 + b, k0 + 1] += wab * fk
+
+
+@ti.kernel
+def _blur_along_rows(src: nd4, taps: nd1, row_flags: nd4_i32, dst: nd4):
+    for t, i, j in ti.ndrange(src.shape[0], src.shape[1], src.shape[2]):
+        bins = src.shape[1]
+        radius = (taps.shape[0] - 1) // 2
+        if row_flags[0, t, i, j] == 0:
+            for k in range(bins):
+                dst[t, i, j, k] = 0.0
+        else:
+            for k in range(bins):
+                acc = 0.0
+                for o in range(ti.max(-radius, -k), ti.min(radius, bins - 1 - k) + 1):
+                    acc += taps[o + radius] * src[t, i, j, k + o]
+                dst[t, i, j, k] = acc
+
+
+@ti.kernel
+def _blur_across_rows(src: nd4, taps: nd1, axis: ti.i32, flag_in: ti.i32, flag_out: ti.i32,
+                      row_flags: nd4_i32, dst: nd4):
+    for t, i, j in ti.ndrange(src.shape[0], src.shape[1], src.shape[2]):
+        bins = src.shape[1]
+        radius = (taps.shape[0] - 1) // 2
+        di = 1 if axis == 1 else 0
+        dj = 1 - di
+        p = di * i + dj * j
+        for k in range(bins):
+            dst[t, i, j, k] = 0.0
+        touched = 0
+        for o in range(ti.max(-radius, -p), ti.min(radius, bins - 1 - p) + 1):
+            si = i + o * di
+            sj = j + o * dj
+            if row_flags[flag_in, t, si, sj] != 0:
+                touched = 1
+                w = taps[o + radius]
+                for k in range(bins):
+                    dst[t, i, j, k] += w * src[t, si, sj, k]
+        if flag_out >= 0:
+            row_flags[flag_out, t, i, j] = touched
+
+
+@ti.kernel
+def _frame_dot_rows(hist: nd4, blurred: nd4, dots: nd1_f64):
+    for t, i, j in ti.ndrange(hist.shape[0], hist.shape[1], hist.shape[2]):
+        acc = ti.cast(0.0, ti.f64)
+        for k in range(hist.shape[3]):
+            acc += ti.cast(hist[t, i, j, k] * blurred[t, i, j, k], ti.f64)
+        dots[t] += acc
+
+
+@ti.kernel
+def _slice_gradient_rows(A: nd4, whiten: nd2, lo: ti.f32, h: ti.f32, blurred: nd4, dots: nd1_f64,
+                         lam: ti.f32, gA: nd4):
+    for t, y in ti.ndrange(A.shape[0], A.shape[1]):
+        bins = blurred.shape[1]
+        Wm = load_mat33(whiten)
+        scale = ti.cast(ti.cast(-2.0 * lam, ti.f64) / dots[t], ti.f32) / h
+        for x in range(A.shape[2]):
+            u = Wm @ ti.Vector([A[t, y, x, 0], A[t, y, x, 1], A[t, y, x, 2]])
+            i0, fi, ini = bin_coordinate(u[0], lo, h, bins)
+            j0, fj, inj = bin_coordinate(u[1], lo, h, bins)
+            k0, fk, ink = bin_coordinate(u[2], lo, h, bins)
+            v000 = blurred[t, i0, j0, k0]
+            v001 = blurred[t, i0, j0, k0 + 1]
+            v010 = blurred[t, i0, j0 + 1, k0]
+            v011 = blurred[t, i0, j0 + 1, k0 + 1]
+            v100 = blurred[t, i0 + 1, j0, k0]
+            v101 = blurred[t, i0 + 1, j0, k0 + 1]
+            v110 = blurred[t, i0 + 1, j0 + 1, k0]
+            v111 = blurred[t, i0 + 1, j0 + 1, k0 + 1]
+            gi = ((1.0 - fj) * ((1.0 - fk) * (v100 - v000) + fk * (v101 - v001))
+                  + fj * ((1.0 - fk) * (v110 - v010) + fk * (v111 - v011)))
+            gj = ((1.0 - fi) * ((1.0 - fk) * (v010 - v000) + fk * (v011 - v001))
+                  + fi * ((1.0 - fk) * (v110 - v100) + fk * (v111 - v101)))
+            gk = ((1.0 - fi) * ((1.0 - fj) * (v001 - v000) + fj * (v011 - v010))
+                  + fi * ((1.0 - fj) * (v101 - v100) + fj * (v111 - v110)))
+            g = Wm.transpose() @ ti.Vector([gi * ini, gj * inj, gk * ink]) * scale
+            for c in ti.static(range(3)):
+                gA[t, y, x, c] += g[c]
+
+
+@ti.kernel
+def _entropy_energy_frames(dots: nd1_f64, log_norm: ti.f64, lam: ti.f32, rows_per_frame: ti.i32,
+                           energy_rows: nd1_f64):
+    for t in range(dots.shape[0]):
+        energy_rows[t * rows_per_frame] -= ti.cast(lam, ti.f64) * (ti.log(dots[t]) + log_norm)
+
+
+# ----------------------------------------------------------------------------
+# Host functions
+# ----------------------------------------------------------------------------
+
+def _check(name: str, a, shape: tuple, layout: str, dtype=np.float32) -> None:
+    """Raise unless ``a`` is a C-contiguous ``dtype`` ndarray of ``shape`` (None = any size)."""
+    if not isinstance(a, np.ndarray):
+        raise TypeError(f"{name} must be a numpy array of {np.dtype(dtype).name} {layout}, "
+                        f"got {type(a).__name__}")
+    if a.dtype != dtype:
+        raise TypeError(f"{name} must have dtype {np.dtype(dtype).name}, got {a.dtype}")
+    if a.ndim != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
+        want = tuple("?" if e is None else e for e in shape)
+        raise ValueError(f"{name} must have shape {layout} = {want}, got {a.shape}")
+    if not a.flags.c_contiguous:
+        raise ValueError(f"{name} must be C-contiguous")
+
+
+def _check_float(name: str, v, positive: bool = False) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) \
+            or not math.isfinite(v) or (positive and v <= 0):
+        raise ValueError(f"{name} must be a finite float{' > 0' if positive else ''}, got {v!r}")
+    return float(v)
+
+
+def _check_hist(name: str, hist, T) -> int:
+    _check(name, hist, (T, None, None, None), "(T, B, B, B)")
+    B = hist.shape[1]
+    if hist.shape[2] != B or hist.shape[3] != B or B < 2:
+        raise ValueError(f"{name} must have shape (T, B, B, B) with B >= 2, got {hist.shape}")
+    return B
+
+
+class EntropyScratch(NamedTuple):
+    """Preallocated buffers of :func:`entropy_term` (see :func:`allocate_entropy_scratch`).
+
+    hist, tmp, blurred : float32 (T, B, B, B); row_flags : int32 (2, T, B, B);
+    dots : float64 (T,).
+    """
+
+    hist: np.ndarray
+    row_flags: np.ndarray
+    tmp: np.ndarray
+    blurred: np.ndarray
+    dots: np.ndarray
+
+
+def allocate_entropy_scratch(n_frames: int, bins: int, device="cpu") -> EntropyScratch:
+    """Allocate :class:`EntropyScratch` for ``n_frames`` frames and a ``bins^3`` cube."""
+    if device != "cpu":
+        raise ValueError(f"the taichi backend runs on device='cpu' only, got {device!r}")
+    if isinstance(n_frames, bool) or not isinstance(n_frames, int) or n_frames < 1:
+        raise ValueError(f"n_frames must be an int >= 1, got {n_frames!r}")
+    if isinstance(bins, bool) or not isinstance(bins, int) or bins < 2:
+        raise ValueError(f"bins must be an int >= 2, got {bins!r}")
+    cube = (n_frames, bins, bins, bins)
+    return EntropyScratch(hist=np.empty(cube, np.float32),
+                          row_flags=np.empty((2, n_frames, bins, bins), np.int32),
+                          tmp=np.empty(cube, np.float32), blurred=np.empty(cube, np.float32),
+                          dots=np.empty((n_frames,), np.float64))
+
+
+def entropy_histogram(A, whiten, lo: float, h: float, hist, row_flags) -> None:
+    """Overwrite ``hist`` (T, B, B, B) with the trilinear splat of ``W A(x)``; flag touched rows
+    in ``row_flags[0]`` (see the Warp module)."""
+    _check("A", A, (None, None, None, 3), "(T, H, W, 3)")
+    T, H, W, _ = A.shape
+    _check("whiten", whiten, (3, 3), "(3, 3)")
+    B = _check_hist("hist", hist, T)
+    _check("row_flags", row_flags, (2, T, B, B), "(2, T, B, B)", np.int32)
+    lo, h = _check_float("lo", lo), _check_float("h", h, positive=True)
+    hist.fill(0.0)
+    row_flags.fill(0)
+    if T * H and W:
+        _splat_whitened_rows(A, whiten, lo, h, hist, row_flags)
+
+
+def entropy_blur(hist, taps, row_flags, tmp, blurred) -> None:
+    """``blurred = G * hist`` per frame with the separable 1-D ``taps`` (see the Warp module)."""
+    B = _check_hist("hist", hist, None)
+    T = hist.shape[0]
+    _check("taps", taps, (None,), "(2r+1,)")
+    if taps.shape[0] % 2 != 1:
+        raise ValueError(f"taps must have an odd length 2r+1, got {taps.shape[0]}")
+    _check("row_flags", row_flags, (2, T, B, B), "(2, T, B, B)", np.int32)
+    _check("tmp", tmp, hist.shape, "(T, B, B, B) like hist")
+    _check("blurred", blurred, hist.shape, "(T, B, B, B) like hist")
+    _blur_along_rows(hist, taps, row_flags, blurred)
+    _blur_across_rows(blurred, taps, 2, 0, 1, row_flags, tmp)
+    _blur_across_rows(tmp, taps, 1, 1, -1, row_flags, blurred)
+
+
+def entropy_dot(hist, blurred, dots) -> None:
+    """Overwrite ``dots`` (float64 (T,)) with ``<hist_t, blurred_t>`` per frame."""
+    _check_hist("hist", hist, None)
+    T = hist.shape[0]
+    _check("blurred", blurred, hist.shape, "(T, B, B, B) like hist")
+    _check("dots", dots, (T,), "(T,)", np.float64)
+    dots.fill(0.0)
+    _frame_dot_rows(hist, blurred, dots)
+
+
+def entropy_slice_gradient(A, whiten, lo: float, h: float, blurred, dots, gA, lam: float) -> None:
+    """Add ``-2 lam W^T grad V(W A(x)) / dots[t]`` into ``gA`` (see the Warp module)."""
+    _check("A", A, (None, None, None, 3), "(T, H, W, 3)")
+    T, H, W, _ = A.shape
+    _check("whiten", whiten, (3, 3), "(3, 3)")
+    _check_hist("blurred", blurred, T)
+    _check("dots", dots, (T,), "(T,)", np.float64)
+    _check("gA", gA, (T, H, W, 3), "(T, H, W, 3)")
+    lo, h = _check_float("lo", lo), _check_float("h", h, positive=True)
+    lam = _check_float("lam", lam)
+    if T * H and W:
+        _slice_gradient_rows(A, whiten, lo, h, blurred, dots, lam, gA)
+
+
+def entropy_energy(dots, sigma_p: float, n_pixels: int, energy_rows, lam: float) -> None:
+    """Add ``E_t = -lam log(dots[t] / (n_pixels^2 sqrt(4 pi sigma_p^2)))`` into
+    ``energy_rows[t * (len(energy_rows) // T)]``."""
+    _check("dots", dots, (None,), "(T,)", np.float64)
+    T = dots.shape[0]
+    _check("energy_rows", energy_rows, (None,), "(T*H,)", np.float64)
+    if T == 0 or energy_rows.shape[0] % T:
+        raise ValueError(f"energy_rows length {energy_rows.shape[0]} is not a multiple of T = {T}")
+    sigma_p = _check_float("sigma_p", sigma_p, positive=True)
+    lam = _check_float("lam", lam)
+    if isinstance(n_pixels, bool) or not isinstance(n_pixels, (int, np.integer)) or n_pixels < 1:
+        raise ValueError(f"n_pixels must be an int >= 1, got {n_pixels!r}")
+    log_norm = -2.0 * math.log(n_pixels) - 0.5 * math.log(4.0 * math.pi * sigma_p ** 2)
+    _entropy_energy_frames(dots, log_norm, lam, energy_rows.shape[0] // T, energy_rows)
+
+
+def entropy_term(A, whiten, lo: float, h: float, taps, sigma_p: float, scratch: EntropyScratch,
+                 gA, energy_rows, lam: float) -> None:
+    """Add Eq. 12's energy (row ``t*H``) and gradient for every frame (see the Warp module)."""
+    _check("A", A, (None, None, None, 3), "(T, H, W, 3)")
+    T, H, W, _ = A.shape
+    _check("energy_rows", energy_rows, (T * H,), "(T*H,)", np.float64)
+    if not isinstance(scratch, EntropyScratch):
+        raise TypeError(f"scratch must be an EntropyScratch (allocate_entropy_scratch), "
+                        f"got {type(scratch).__name__}")
+    entropy_histogram(A, whiten, lo, h, scratch.hist, scratch.row_flags)
+    entropy_blur(scratch.hist, taps, scratch.row_flags, scratch.tmp, scratch.blurred)
+    entropy_dot(scratch.hist, scratch.blurred, scratch.dots)
+    entropy_slice_gradient(A, whiten, lo, h, scratch.blurred, scratch.dots, gA, lam)
+    entropy_energy(scratch.dots, sigma_p, H * W, energy_rows, lam)
