@@ -49,7 +49,7 @@ import time
 
 import numpy as np
 
-from ivkernels.priors import entropy_blur_weights, tabulate_gsm  # noqa: F401  (documented API)
+from ivkernels.priors import tabulate_gsm
 
 OBJECTS = ("apple", "box", "cup1", "dinosaur", "frog1", "panther", "paper1", "phone",
            "squirrel", "teabag2")
@@ -219,11 +219,12 @@ def fit(data_dir: str, verbose: bool = True) -> dict:
         f"moment of {n_diff} 5x5 centre-minus-neighbour differences scaled to det 1; "
         f"{N_COMPONENTS} sigma_m log2-spaced from p{LOW_PERCENTILE:g}(r2>0)/{SCALE_MARGIN:g} to "
         f"{SCALE_MARGIN:g}*max(r2); alpha_m by EM on all r2 binned in {N_EM_BINS} log bins "
-        f"({iters} iterations, mean log-likelihood {ll:.4f}; weights < {ALPHA_FLOOR:g} set to 0); table of {TABLE_SIZE} points "
-        "uniform in sqrt(r2) up to r2_max = sigma_40, g(0) = 0. Eq. 12: W = V diag(1/sqrt(D+"
+        f"({iters} iterations, mean log-likelihood {ll:.4f}; weights < {ALPHA_FLOOR:g} set to 0); "
+        f"table of {TABLE_SIZE} points uniform in sqrt(r2) up to r2_max = sigma_40, g(0) = 0. "
+        "Eq. 12: W = V diag(1/sqrt(D+"
         f"{WHITEN_EPS})) V^T of the masked log-albedo covariance / RMS of its entries; sigma_p = "
         f"{SIGMA_P} (SIRFS's value, not refitted); histogram cube = whitened range + {HIST_MARGIN} "
-        "rounded out to 0.5."
+        f"rounded out to 0.5, bin width {HIST_BIN_WIDTH}."
     )
     say(f"fit took {time.perf_counter() - t0:.1f} s")
     return dict(

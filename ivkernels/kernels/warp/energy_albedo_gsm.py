@@ -108,8 +108,7 @@ def _check(name: str, a, shape: tuple, layout: str, device=None, dtype=wp.float3
         raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
 
 
-def check_gsm_scalars(r2_max, lam, radius) -> None:
-    """Shared checks of the scalar arguments (also used by the Taichi mirror)."""
+def _check_scalars(r2_max, lam, radius) -> None:
     if not (isinstance(r2_max, (int, float)) and math.isfinite(r2_max) and r2_max > 0):
         raise ValueError(f"r2_max must be a finite float > 0, got {r2_max!r}")
     if not (isinstance(lam, (int, float)) and math.isfinite(lam)):
@@ -148,7 +147,7 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
     _check("table_dg", table_dg, (n,), "(n,) like table_g", dev)
     _check("gA", gA, (T, H, W, 3), "(T, H, W, 3)", dev)
     _check("energy_rows", energy_rows, (T * H,), "(T*H,)", dev, wp.float64)
-    check_gsm_scalars(r2_max, lam, radius)
+    _check_scalars(r2_max, lam, radius)
     cells_per_root = (n - 1) / math.sqrt(r2_max)
     launch_rows(gsm_smoothness_rows, T * H,
                 [A, sigma_inv, table_g, table_dg, float(r2_max), float(cells_per_root), float(lam),
