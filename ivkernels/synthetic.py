@@ -1,19 +1,43 @@
 """Lambertian synthetic video sequences with exact ground truth.
 
 A small ray caster (per pixel, vectorised NumPy) renders a room -- a textured
-floor and back wall -- holding a few spheres, boxes and cylinders, lit by an
-ambient term and grey (white) directional or point lights with cast shadows.
-Every surface carries a solid texture defined in its own object coordinates,
-so a surface point keeps its albedo as it moves: albedo is exactly constant
-along the true flow, which is what the temporal albedo term of the paper
-(Eq. 4) assumes.
+floor and back wall -- holding a few large spheres and cylinders and a box,
+lit by a low ambient term and two grey (white) disc-shaped area lights: a
+key lamp hanging not far above the objects and a large, dim fill on the
+camera side.  Every surface carries a solid texture defined in its own object
+coordinates, so a surface point keeps its albedo as it moves: albedo is
+exactly constant along the true flow, which is what the temporal albedo term
+of the paper (Eq. 4) assumes.
 
 The image formation is the paper's model (Eq. 1, ``i = a * s``)::
 
     frames[t]  = albedo[t] * shading[t][..., None]             (linear RGB)
-    shading(x) = ambient + sum_l  k_l * max(n . l, 0) * V_l(x) * falloff_l(x)
+    shading(x) = ambient + sum_l (P_l / S_l) sum_j V_lj(x)
+                     * max(n . w_lj, 0) * max(-e_l . w_lj, 0) / max(d_lj^2, r_l^2)
 
-with ``V_l`` the visibility of light ``l`` (a shadow ray against the objects).
+Light ``l`` is a Lambertian disc of radius ``r_l`` facing the unit direction
+``e_l``, sampled at ``S_l`` points ``y_lj``; ``d_lj`` is the distance from the
+surface point to ``y_lj``, ``w_lj`` the unit direction towards it and
+``V_lj`` (0 or 1) the visibility of ``y_lj`` (a shadow ray against the
+objects).  So shading falls off with the inverse square of the distance
+(clamped at the disc radius in the near field), varies smoothly across the
+floor, the wall and the curved objects, and shadows are soft: penumbrae are
+where only some of the ``S_l`` samples are visible.
+
+The sample points are a fixed golden-angle spiral on the disc (stratified,
+the same for every pixel and frame, turned by a seeded angle) carried
+rigidly with the light, so shading is a deterministic function of the
+surface point and the scene's state: where the scene, the light and the
+camera do not move, shading is bitwise the same in every frame.  With a
+finite number of samples a penumbra is a staircase of ``S_l`` small steps
+rather than a continuous ramp (32 key and 16 fill samples).
+
+Exposure: like a camera exposure fixed for the whole sequence, each light's
+power ``P_l`` is set so that its largest contribution to the visible
+surfaces (measured without shadows on a fixed grid of camera rays that does
+not depend on the image size) is ``KEY_SHARE`` = 0.72 for the key and
+``FILL_SHARE`` = 0.2 for the fill, so ``AMBIENT <= shading <= 1`` without
+clipping (the 0.05 left over absorbs what the grid misses between its rays).
 
 Geometry and conventions
 ------------------------
@@ -26,7 +50,9 @@ Geometry and conventions
   only, so the same scene at twice the resolution has exactly twice the flow.
 * One ray per pixel centre, no anti-aliasing: albedo, shading and frames are
   point samples, so ``frames == albedo * shading`` holds exactly and texture
-  and shadow edges are pixel-sharp.
+  edges are pixel-sharp.  Shading is sharp at creases and occluding contours;
+  cast shadows are sharp only where they touch their occluder, and their
+  penumbrae widen with the distance from it.
 * ``depth`` is the camera-space ``z`` of the surface seen at each pixel centre.
 * ``flow[t](x)``: the surface point ``q`` (object coordinates) seen at pixel
   ``x`` of frame ``t`` is moved by its object's pose at ``t + 1`` and
@@ -38,24 +64,28 @@ Geometry and conventions
   ``t + 1``: a ray cast at the sub-pixel position ``x + flow`` in frame
   ``t + 1`` (frame ``t+1``'s depth there) finds nothing nearer than the
   point's own depth (relative tolerance 1e-4).
+* Textures: crisp piecewise-constant ``patches`` and ``stripes`` cover the
+  floor, the wall and most objects; one object has smooth ``noise`` and one a
+  nearly ``uniform`` albedo.
 
 Sequence kinds (:data:`KINDS`)
 ------------------------------
 ``free_camera``
     Static objects; the camera translates and rotates (yaw, pitch, roll) along
-    a smooth path while the key directional light swings strongly in azimuth
-    and elevation from frame to frame.
+    a smooth path while the key lamp travels around the scene, nearer and
+    farther, up and down, changing the shading strongly from frame to frame.
 ``objects_camera``
     Objects slide back and forth on the floor (spheres roll without slipping,
     boxes and cylinders also turn about the vertical) while the camera
     translates without rotating; fixed lights.
 ``static_moving_light``
     Static scene and camera (flow exactly zero, visibility one everywhere);
-    a point light circles above the scene, so shading and shadows change.
+    the key lamp circles above the scene, so shading and shadows change.
 ``rotating_shadows``
-    Static camera and light; boxes turn about the vertical, tilted cylinders
-    precess, spheres spin, and a bar floating above the scene turns, so cast
-    shadows sweep over textured floor, wall and objects.
+    Static camera and lights; boxes turn about the vertical, tilted cylinders
+    precess, spheres spin, and a bar floating above the scene turns under a
+    small, high key lamp, so soft cast shadows sweep over textured floor, wall
+    and objects.
 
 Nothing here is used by the solver; it produces test and evaluation data.
 """
@@ -72,10 +102,16 @@ KINDS = ("free_camera", "objects_camera", "static_moving_light", "rotating_shado
 TEXTURE_KINDS = ("patches", "stripes", "noise", "uniform")
 
 ALBEDO_MIN = 0.03
-AMBIENT = 0.06
+AMBIENT = 0.03
 FOCAL_PER_WIDTH = 0.9
+KEY_SAMPLES = 32        # shadow rays per pixel towards the key lamp
+FILL_SAMPLES = 16       # ... and towards the fill
+KEY_SHARE = 0.72        # largest contribution of the key lamp to visible shading
+FILL_SHARE = 0.2        # ... and the fill's (AMBIENT + KEY_SHARE + FILL_SHARE <= 1)
 _EPS_T = 1e-6           # smallest accepted ray parameter
 _DEPTH_TOL = 1e-4       # relative depth tolerance of the visibility test
+_CHUNK = 2048           # points per block of shadow rays (keeps blocks in cache)
+_EXPOSURE_GRID = 128    # camera rays across the image that set the exposure
 
 
 @dataclass(frozen=True)
@@ -89,7 +125,7 @@ class SyntheticSequence:
     albedo : (T, H, W, 3) float32
         Linear RGB reflectance in ``[0.03, 1]``.
     shading : (T, H, W) float32
-        Grey linear shading, ``>= AMBIENT`` (0.06) and ``<= 1``.
+        Grey linear shading, ``>= AMBIENT`` (0.03) and ``<= 1``.
     flow : (T-1, H, W, 2) float32
         Forward flow t -> t+1 in pixels, component 0 = x (columns), 1 = y.
     visibility : (T-1, H, W) float32
@@ -267,6 +303,61 @@ def _intersect(shape: str, size: np.ndarray, o: np.ndarray, d: np.ndarray) -> np
     raise ValueError(shape)  # pragma: no cover - internal
 
 
+def _segment_blocked(shape: str, size: np.ndarray, o, d) -> np.ndarray:
+    """Whether segments ``o + s d``, ``eps < s < 1``, cross a shape.
+
+    ``o`` and ``d`` are triples of broadcastable arrays (x, y, z components
+    in object coordinates; e.g. ``o`` (M,) per point and ``d`` (S, M) per
+    light sample and point).  The same tests as :func:`_intersect`, written
+    per component so that they run on 2-D blocks of shadow rays.
+    """
+    ox, oy, oz = o
+    dx, dy, dz = d
+
+    def inside(s):
+        return (s > _EPS_T) & (s < 1.0)
+
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if shape == "sphere":
+            a = dx * dx + dy * dy + dz * dz
+            b = ox * dx + oy * dy + oz * dz
+            c = ox * ox + oy * oy + oz * oz - size[0] ** 2
+            disc = b * b - a * c
+            sq = np.sqrt(np.maximum(disc, 0.0))
+            return (disc >= 0.0) & (inside((-b - sq) / a) | inside((-b + sq) / a))
+        if shape == "box":
+            tn = tf = None
+            for oc, dc, s in ((ox, dx, size[0]), (oy, dy, size[1]), (oz, dz, size[2])):
+                t1 = (-s - oc) / dc
+                t2 = (s - oc) / dc
+                lo, hi = np.minimum(t1, t2), np.maximum(t1, t2)
+                par = dc == 0.0
+                if np.any(par):  # parallel to the slab: inside -> (-inf, inf), else miss
+                    ins = np.abs(oc) <= s
+                    lo = np.where(par, np.where(ins, -np.inf, np.inf), lo)
+                    hi = np.where(par, np.where(ins, np.inf, -np.inf), hi)
+                tn = lo if tn is None else np.maximum(tn, lo)
+                tf = hi if tf is None else np.minimum(tf, hi)
+            return (tn <= tf) & (inside(tn) | inside(tf))
+        if shape == "cylinder":  # axis y, radius size[0], half height size[1]
+            r, h = size
+            a = dx * dx + dz * dz
+            b = ox * dx + oz * dz
+            c = ox * ox + oz * oz - r * r
+            disc = b * b - a * c
+            sq = np.sqrt(np.maximum(disc, 0.0))
+            hit = np.zeros(np.broadcast_shapes(np.shape(ox), np.shape(dx)), dtype=bool)
+            for s in ((-b - sq) / a, (-b + sq) / a):
+                hit |= (disc >= 0.0) & (a > 0.0) & inside(s) & (np.abs(oy + s * dy) <= h)
+            for cap in (-h, h):
+                s = (cap - oy) / dy
+                x = ox + s * dx
+                z = oz + s * dz
+                hit |= inside(s) & (x * x + z * z <= r * r)
+            return hit
+    raise ValueError(shape)  # pragma: no cover - internal
+
+
 def _normal(shape: str, size: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Outward unit normal (N, 3) at surface points ``q`` in object coordinates."""
     n = np.zeros_like(q)
@@ -328,18 +419,54 @@ class _Object:
             out[cand] = _intersect(self.shape, self.size, np.broadcast_to(o_c, d_c.shape), d_c)
         return out
 
+    def occludes(self, t, p, y) -> np.ndarray:
+        """Shadow test (S, M) of the segments from points ``p`` (M, 3) to
+        light samples ``y`` (S, 3) (world) against this object at frame ``t``;
+        True where the segment crosses the object (end points excluded)."""
+        o = _mul(p - self.translations[t], self.rotations[t])   # (M, 3)
+        e = _mul(y - self.translations[t], self.rotations[t])   # (S, 3)
+        o = tuple(o[:, k].copy() for k in range(3))
+        d = tuple(e[:, k:k + 1] - o[k] for k in range(3))
+        return _segment_blocked(self.shape, self.size, o, d)
+
+
+_GOLDEN_ANGLE = np.pi * (3.0 - np.sqrt(5.0))
+
+
+def _disc_pattern(n: int, rng) -> np.ndarray:
+    """``n`` stratified points (n, 2) on the unit disc: a golden-angle
+    (Vogel) spiral, equal area per point, turned by a random angle."""
+    k = np.arange(n) + 0.5
+    radius = np.sqrt(k / n)
+    angle = rng.uniform(0.0, 2.0 * np.pi) + _GOLDEN_ANGLE * np.arange(n)
+    return np.stack([radius * np.cos(angle), radius * np.sin(angle)], axis=1)
+
 
 @dataclass
-class _Light:
-    """Grey light: ``vectors[t]`` is the unit direction towards the light
-    (directional) or its position (point); point lights fall off as
-    ``d0^2 / (d0^2 + dist^2)`` so that their contribution never exceeds
-    ``intensity``."""
+class _AreaLight:
+    """Grey Lambertian disc emitter (a lamp shade, a soft box, a window).
 
-    kind: str
-    vectors: np.ndarray  # (T, 3)
-    intensity: float
-    d0: float = 3.0
+    ``centres[t]`` (T, 3) is the disc's centre and ``normals[t]`` (T, 3) the
+    unit direction it faces at frame ``t``; ``pattern`` (S, 2) holds the
+    fixed sample points on the unit disc, scaled by ``radius`` and carried
+    rigidly with the disc.  Each sample is a point emitter of power
+    ``power / S`` with a cosine lobe about the normal and inverse-square
+    falloff, clamped at distance ``radius`` (the near field of the disc).
+    """
+
+    centres: np.ndarray  # (T, 3)
+    normals: np.ndarray  # (T, 3)
+    radius: float
+    pattern: np.ndarray  # (S, 2)
+    power: float = 1.0
+
+    def samples(self, t: int) -> np.ndarray:
+        """World positions (S, 3) of the sample points at frame ``t``."""
+        e = self.normals[t]
+        helper = np.array([1.0, 0.0, 0.0]) if abs(e[0]) < 0.9 else np.array([0.0, 0.0, 1.0])
+        u = _unit(np.cross(e, helper))
+        v = np.cross(e, u)
+        return self.centres[t] + self.radius * (self.pattern[:, :1] * u + self.pattern[:, 1:] * v)
 
 
 @dataclass
@@ -361,13 +488,6 @@ def _camera_rotation(yaw, pitch, roll) -> np.ndarray:
     return c2w.T
 
 
-def _direction(azimuth, elevation) -> np.ndarray:
-    """Unit vector towards a light at ``azimuth`` (in the floor plane, from +x
-    towards +z) and ``elevation`` above the floor, radians."""
-    return np.array([np.cos(elevation) * np.cos(azimuth), np.sin(elevation),
-                     np.cos(elevation) * np.sin(azimuth)])
-
-
 def _segment_distance(a0, a1, b0, b1) -> float:
     s = np.linspace(0.0, 1.0, 33)
     pa = a0 + s[:, None] * (a1 - a0)
@@ -375,7 +495,15 @@ def _segment_distance(a0, a1, b0, b1) -> float:
     return float(np.linalg.norm(pa[:, None] - pb[None], axis=-1).min())
 
 
-def _build_scene(kind: str, n_frames: int, rng) -> _Scene:
+def _aim(centres, target) -> np.ndarray:
+    """Unit directions (T, 3) from ``centres`` towards ``target``."""
+    return _unit(np.asarray(target, dtype=np.float64) - centres)
+
+
+def _build_scene(kind: str, n_frames: int, rng, aspect: float = 0.75) -> _Scene:
+    """The room, objects, camera path and lights of one sequence (see the
+    module docstring), drawn from ``rng``; ``aspect`` (``H / W``) sets the
+    field of view used for the exposure."""
     T = n_frames
     tt = np.arange(T, dtype=np.float64)
     z_wall = rng.uniform(5.5, 6.5)
@@ -384,44 +512,43 @@ def _build_scene(kind: str, n_frames: int, rng) -> _Scene:
     pitch0 = np.deg2rad(rng.uniform(12.0, 17.0))
     yaw0 = np.deg2rad(rng.uniform(-4.0, 4.0))
 
-    # textures: every kind appears, in a seed-dependent order
-    order = list(rng.permutation(len(TEXTURE_KINDS)))
-
-    def next_texture(scale=1.0):
-        if not order:
-            order.extend(rng.permutation(len(TEXTURE_KINDS)))
-        return _Texture(TEXTURE_KINDS[order.pop(0)], rng, scale)
-
+    # Textures: crisp patches and stripes dominate (floor, wall, most objects);
+    # exactly one object has smooth noise and one a nearly uniform albedo.
+    floor_kind, wall_kind = rng.permutation(["patches", "stripes"])
     identity = np.broadcast_to(np.eye(3), (T, 3, 3))
     wall_rot = np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]])  # local +y -> world -z
     objects = [
         # coarser textures on the floor and wall limit aliasing at grazing angles
-        _Object("plane", (), next_texture(1.8), identity, np.zeros((T, 3)), casts_shadow=False),
-        _Object("plane", (), next_texture(1.5), np.broadcast_to(wall_rot, (T, 3, 3)),
+        _Object("plane", (), _Texture(floor_kind, rng, 2.4), identity, np.zeros((T, 3)),
+                casts_shadow=False),
+        _Object("plane", (), _Texture(wall_kind, rng, 2.0), np.broadcast_to(wall_rot, (T, 3, 3)),
                 np.broadcast_to([0.0, 0.0, z_wall], (T, 3)), casts_shadow=False),
     ]
 
-    # ---- objects: shape, size, footprint, rest pose, then motion per kind
-    n_obj = int(rng.integers(4, 7))
-    shapes = ["sphere", "box", "cylinder"] + list(rng.choice(["sphere", "box", "cylinder"], n_obj - 3))
+    # ---- objects: shape, size, footprint, rest pose, then motion per kind.
+    # Mostly large curved shapes; under the floating bar of rotating_shadows
+    # everything stays below 1.35.
+    low = kind == "rotating_shadows"
+    n_obj = int(rng.integers(4, 6))
+    shapes = ["sphere", "sphere", "cylinder", "box"] + list(rng.choice(["sphere", "cylinder"], n_obj - 4))
     shapes = [shapes[i] for i in rng.permutation(n_obj)]
     placed = []  # (segment start, segment end, footprint radius)
     for shape in shapes:
         if shape == "sphere":
-            size = np.array([rng.uniform(0.3, 0.55)])
+            size = np.array([rng.uniform(0.35, 0.6) if low else rng.uniform(0.45, 0.85)])
             foot = size[0]
             rest_y = size[0]
         elif shape == "box":
-            size = rng.uniform(0.2, 0.45, 3)
+            size = rng.uniform(0.2, 0.4, 3)
             foot = float(np.hypot(size[0], size[2]))
             rest_y = size[1]
         else:
-            size = np.array([rng.uniform(0.18, 0.35),
-                             rng.uniform(0.3, 0.5 if kind == "rotating_shadows" else 0.6)])
+            size = np.array([rng.uniform(0.25, 0.42) if low else rng.uniform(0.3, 0.55),
+                             rng.uniform(0.3, 0.45) if low else rng.uniform(0.4, 0.75)])
             foot = size[0]
             rest_y = size[1]
         tilt = 0.0
-        if kind == "rotating_shadows" and shape == "cylinder":
+        if low and shape == "cylinder":
             tilt = np.deg2rad(rng.uniform(20.0, 40.0))
             foot = size[1] * np.sin(tilt) + size[0] * np.cos(tilt)
             rest_y = size[1] * np.cos(tilt) + size[0] * np.sin(tilt)
@@ -432,12 +559,12 @@ def _build_scene(kind: str, n_frames: int, rng) -> _Scene:
             a = rng.uniform(0, 2 * np.pi)
             direction = np.array([np.cos(a), 0.0, np.sin(a)])
         for _ in range(200):
-            z = rng.uniform(0.9, z_wall - 1.3)
+            z = 1.0 + (z_wall - 2.0) * rng.uniform() ** 1.5   # nearer objects more often
             half = 0.42 * (z - cam_z)
             x = rng.uniform(-half + foot, half - foot) if half > foot else 0.0
             c = np.array([x, rest_y, z])
             s0, s1 = c - amp * direction, c + amp * direction
-            if max(s0[2], s1[2]) + foot > z_wall - 0.2 or min(s0[2], s1[2]) < 0.6:
+            if max(s0[2], s1[2]) + foot > z_wall - 0.2 or min(s0[2], s1[2]) < 0.9:
                 continue
             if all(_segment_distance(s0, s1, p0, p1) > foot + f + 0.12 for p0, p1, f in placed):
                 break
@@ -468,15 +595,22 @@ def _build_scene(kind: str, n_frames: int, rng) -> _Scene:
             rate = np.deg2rad(rng.uniform(6.0, 12.0)) * rng.choice([-1, 1])
             axis = _unit(rng.normal(size=3)) if shape == "sphere" else np.array([0.0, 1.0, 0.0])
             rots = np.stack([_axis_angle(axis, rate * k) @ rot0 for k in tt])
-        objects.append(_Object(shape, size, next_texture(), rots, trans))
+        objects.append(_Object(shape, size, None, rots, trans))
 
-    if kind == "rotating_shadows":  # a bar floating above everything (tops < 1.3), turning
-        size = np.array([rng.uniform(0.9, 1.2), 0.05, rng.uniform(0.08, 0.14)])
-        c = np.array([rng.uniform(-0.5, 0.5), rng.uniform(1.5, 1.7), rng.uniform(2.2, 3.2)])
+    # object textures, assigned once the objects that fit are known
+    n_placed = len(objects) - 2
+    kinds = ["noise", "uniform"] + list(rng.choice(["patches", "stripes"], max(n_placed - 2, 0)))
+    for obj, i in zip(objects[2:], rng.permutation(n_placed)):
+        obj.texture = _Texture(kinds[i], rng)
+
+    if low:  # a bar floating above everything, turning
+        size = np.array([rng.uniform(0.9, 1.2), 0.05, rng.uniform(0.1, 0.16)])
+        c = np.array([rng.uniform(-0.5, 0.5), rng.uniform(1.55, 1.75), rng.uniform(2.2, 3.2)])
         rate = np.deg2rad(rng.uniform(7.0, 11.0)) * rng.choice([-1, 1])
         a0 = rng.uniform(0, 2 * np.pi)
         rots = np.stack([_axis_angle([0, 1, 0], a0 + rate * k) for k in tt])
-        objects.append(_Object("box", size, next_texture(), rots, np.broadcast_to(c, (T, 3))))
+        objects.append(_Object("box", size, _Texture(rng.choice(["patches", "stripes"]), rng),
+                               rots, np.broadcast_to(c, (T, 3))))
 
     # ---- camera path
     cam_pos = np.broadcast_to([0.0, cam_height, cam_z], (T, 3)).copy()
@@ -497,27 +631,46 @@ def _build_scene(kind: str, n_frames: int, rng) -> _Scene:
         roll = roll + amp[2] * np.sin(omega[2] * tt + phase[2])
     cam_rot = np.stack([_camera_rotation(y, p, r) for y, p, r in zip(yaw, pitch, roll)])
 
-    # ---- lights (all from the camera side of the wall: azimuth in (-pi, 0))
-    fill = _Light("directional", np.broadcast_to(
-        _direction(np.deg2rad(rng.uniform(-120, -60)), np.deg2rad(rng.uniform(55, 75))), (T, 3)), 0.14)
-    key_az = np.deg2rad(rng.uniform(-150, -30))
-    key_el = np.deg2rad(rng.uniform(40, 60))
-    if kind == "free_camera":
-        az = np.deg2rad(-90.0 + 62.0 * np.sin(0.45 * tt + rng.uniform(0, 2 * np.pi)))
-        el = np.deg2rad(45.0 + 17.0 * np.sin(0.35 * tt + rng.uniform(0, 2 * np.pi)))
-        key = _Light("directional", np.stack([_direction(a, e) for a, e in zip(az, el)]), 0.72)
-    elif kind == "static_moving_light":
-        centre = np.array([0.0, 0.0, 0.5 * z_wall])
+    # ---- lights: a key lamp above the objects, on the camera side of their
+    # centre, and a large dim fill beside the camera on the other side.
+    centre = np.array([0.0, 0.0, 0.0])
+    if len(objects) > 2:
+        centre = np.mean([obj.translations[0] for obj in objects[2:]], axis=0)
+    centre[1] = 0.0
+    target = centre + [0.0, 0.4, 0.0]
+    if kind == "free_camera":      # travels around the scene, nearer and farther, up and down
+        theta = rng.uniform(0, 2 * np.pi) + 0.55 * rng.choice([-1, 1]) * tt
+        rho = 2.0 + 0.8 * np.sin(0.7 * tt + rng.uniform(0, 2 * np.pi))
+        height = 3.0 + 0.6 * np.sin(0.6 * tt + rng.uniform(0, 2 * np.pi))
+        radius = rng.uniform(0.25, 0.4)
+    elif kind == "static_moving_light":   # circles above the scene
         theta = rng.uniform(0, 2 * np.pi) + 0.5 * rng.choice([-1, 1]) * tt
-        radius = rng.uniform(1.8, 2.3)
-        height = 2.9 + 0.3 * np.sin(0.7 * tt)
-        pos = centre + np.stack([radius * np.cos(theta), height, radius * np.sin(theta)], axis=1)
-        key = _Light("point", pos, 0.72, d0=rng.uniform(2.8, 3.4))
+        rho = np.full(T, rng.uniform(1.6, 2.2))
+        height = 3.0 + 0.3 * np.sin(0.7 * tt)
+        radius = rng.uniform(0.25, 0.4)
     else:
-        if kind == "rotating_shadows":
-            key_el = np.deg2rad(rng.uniform(50, 62))
-        key = _Light("directional", np.broadcast_to(_direction(key_az, key_el), (T, 3)), 0.72)
-    return _Scene(objects, [key, fill], cam_rot, cam_pos)
+        theta = np.full(T, np.deg2rad(rng.uniform(-150, -30)))
+        if low:   # small and high: the bar's shadow keeps a core
+            rho = np.full(T, rng.uniform(0.6, 1.4))
+            height = np.full(T, rng.uniform(3.3, 3.6))
+            radius = rng.uniform(0.12, 0.2)
+        else:
+            rho = np.full(T, rng.uniform(1.0, 2.0))
+            height = np.full(T, rng.uniform(2.8, 3.3))
+            radius = rng.uniform(0.25, 0.4)
+    key_pos = centre + np.stack([rho * np.cos(theta), height, rho * np.sin(theta)], axis=1)
+    key_pos[:, 2] = np.minimum(key_pos[:, 2], z_wall - 0.6)
+    key = _AreaLight(key_pos, _aim(key_pos, target), radius, _disc_pattern(KEY_SAMPLES, rng))
+
+    side = -np.sign(key_pos[0, 0] - centre[0]) or 1.0
+    fill_pos = np.array([centre[0] + side * rng.uniform(1.8, 2.8), rng.uniform(1.9, 2.5),
+                         cam_z + rng.uniform(-0.3, 1.2)])
+    fill_pos = np.broadcast_to(fill_pos, (T, 3)).copy()
+    fill = _AreaLight(fill_pos, _aim(fill_pos, target), rng.uniform(0.7, 1.0),
+                      _disc_pattern(FILL_SAMPLES, rng))
+    scene = _Scene(objects, [key, fill], cam_rot, cam_pos)
+    _set_exposure(scene, aspect)
+    return scene
 
 
 # --------------------------------------------------------------------------- #
@@ -543,32 +696,114 @@ def _cast(scene, t, o, d):
     return best, which
 
 
+def _irradiance(scene, light, t, p, n, which, shadows=True):
+    """Contribution (N,) of one area light to the shading of world points
+    ``p`` (N, 3) with unit normals ``n`` owned by objects ``which``: the sum
+    over the light's samples in the module docstring, with one shadow ray
+    per point and sample (none if ``shadows`` is False).
+
+    Every operation is element-wise per point (no BLAS, a fixed order of the
+    sum over samples), so a point's value depends only on the point, its
+    normal and the scene, never on the other points or on the chunking.
+    """
+    y = light.samples(t)                    # (S, 3)
+    y32 = y.astype(np.float32)
+    e32 = light.normals[t].astype(np.float32)
+    centre = light.centres[t]
+    r2 = light.radius ** 2
+    casters = [(k, obj) for k, obj in enumerate(scene.objects) if obj.casts_shadow and shadows]
+    out = np.empty(len(p))
+    for a in range(0, len(p), _CHUNK):
+        px, py, pz = (p[a:a + _CHUNK, k].copy() for k in range(3))
+        wc = which[a:a + _CHUNK]
+        # (S, M) blocks in float32: sample j, point i; l = y_j - p_i
+        lx = y32[:, 0:1] - px.astype(np.float32)
+        ly = y32[:, 1:2] - py.astype(np.float32)
+        lz = y32[:, 2:3] - pz.astype(np.float32)
+        d2 = lx * lx
+        d2 += ly * ly
+        d2 += lz * lz
+        nx, ny, nz = (n[a:a + _CHUNK, k].astype(np.float32) for k in range(3))
+        cos_s = nx * lx                     # cosines times d
+        cos_s += ny * ly
+        cos_s += nz * lz
+        cos_e = e32[0] * lx                 # -(e . l)
+        cos_e += e32[1] * ly
+        cos_e += e32[2] * lz
+        np.negative(cos_e, out=cos_e)
+        np.maximum(cos_s, 0.0, out=cos_s)
+        np.maximum(cos_e, 0.0, out=cos_e)
+        g = cos_s * cos_e
+        g /= d2 * np.maximum(d2, np.float32(r2))
+        if casters:
+            rows = np.flatnonzero((g > 0.0).any(axis=0))
+            # every shadow ray of p stays within ``radius`` of the segment p -> centre
+            vx, vy, vz = centre[0] - px[rows], centre[1] - py[rows], centre[2] - pz[rows]
+            vv = vx * vx + vy * vy + vz * vz
+            for k, obj in casters:
+                c = obj.translations[t]
+                wx, wy, wz = c[0] - px[rows], c[1] - py[rows], c[2] - pz[rows]
+                s = np.clip((wx * vx + wy * vy + wz * vz) / vv, 0.0, 1.0)
+                wx -= s * vx
+                wy -= s * vy
+                wz -= s * vz
+                near = wx * wx + wy * wy + wz * wz <= (obj.bound + light.radius) ** 2
+                # convex objects never shadow themselves where n.l > 0
+                cand = rows[near & (wc[rows] != k)]
+                if len(cand):
+                    blocked = obj.occludes(t, p[a + cand], y)     # (S, M')
+                    g[:, cand] = np.where(blocked, np.float32(0.0), g[:, cand])
+        total = np.zeros(g.shape[1])
+        for j in range(g.shape[0]):
+            total += g[j]
+        out[a:a + _CHUNK] = total
+    return (light.power / len(y)) * out
+
+
 def _shade(scene, t, p, n, which):
     """Shading (N,) of world points ``p`` with normals ``n`` owned by objects
-    ``which`` (the paper's grey shading s; Lambertian with cast shadows)."""
+    ``which`` (the paper's grey shading s; Lambertian with soft cast shadows)."""
     shading = np.full(len(p), AMBIENT)
     for light in scene.lights:
-        if light.kind == "directional":
-            l = np.broadcast_to(light.vectors[t], p.shape)
-            dist = np.full(len(p), np.inf)
-        else:
-            l = light.vectors[t] - p
-            dist = np.sqrt(np.einsum("ij,ij->i", l, l))
-            l = l / dist[:, None]
-        ndotl = np.einsum("ij,ij->i", n, l)
-        idx = np.flatnonzero(ndotl > 0)
-        p_i, l_i, w_i, dist_i = p[idx], l[idx], which[idx], dist[idx]
-        blocked = np.zeros(len(idx), dtype=bool)
-        for k, obj in enumerate(scene.objects):
-            if obj.casts_shadow:
-                # convex objects never shadow themselves where n.l > 0
-                blocked |= (obj.intersect(t, p_i, l_i) < dist_i) & (w_i != k)
-        lit = idx[~blocked]
-        gain = light.intensity * ndotl[lit]
-        if light.kind == "point":
-            gain = gain * light.d0 ** 2 / (light.d0 ** 2 + dist[lit] ** 2)
-        shading[lit] += gain
+        shading += _irradiance(scene, light, t, p, n, which)
     return shading
+
+
+def _set_exposure(scene, aspect: float) -> None:
+    """Set each light's ``power`` so that its largest unshadowed contribution
+    to what the camera sees, in any frame, equals its share (``KEY_SHARE``,
+    ``FILL_SHARE``): a camera exposure fixed for the whole sequence.
+
+    The contribution is measured at the surface points hit by a fixed grid of
+    ``_EXPOSURE_GRID`` camera rays across the image (the field of view
+    depends on the aspect ratio ``H / W`` only), so the exposure does not
+    depend on the image size.  Between grid rays the contribution can exceed
+    the share only by the little it changes over a grid spacing (0.45
+    degrees), which the margin ``1 - AMBIENT - KEY_SHARE - FILL_SHARE``
+    absorbs.
+    """
+    w = _EXPOSURE_GRID
+    h = max(2, int(round(w * aspect)))
+    ys, xs = np.mgrid[0:h, 0:w].astype(np.float64)
+    xs, ys = xs.ravel(), ys.ravel()
+    peaks = np.zeros(len(scene.lights))
+    for light in scene.lights:
+        light.power = 1.0
+    for t in range(len(scene.cam_pos)):
+        o, d = _rays(scene, t, xs, ys, FOCAL_PER_WIDTH * w, (w - 1) / 2.0, (h - 1) / 2.0)
+        depth, which = _cast(scene, t, o, d)
+        hit = which >= 0
+        p, which = o + depth[hit, None] * d[hit], which[hit]
+        n = np.empty_like(p)
+        for k, obj in enumerate(scene.objects):
+            m = which == k
+            if m.any():
+                q = obj.to_local(t, p[m])
+                n[m] = _mul(_normal(obj.shape, obj.size, q), obj.rotations[t].T)
+        for i, light in enumerate(scene.lights):
+            peaks[i] = max(peaks[i], float(_irradiance(scene, light, t, p, n, which, shadows=False).max()))
+    for light, share, peak in zip(scene.lights, (KEY_SHARE, FILL_SHARE), peaks):
+        light.power = share / peak if peak > 0.0 else 0.0
 
 
 def _project(scene, t, p, focal, cx, cy):
@@ -609,8 +844,9 @@ def render_sequence(kind: str, n_frames: int = 8, size: tuple[int, int] = (240, 
     n_frames : int
         Number of frames T >= 2.
     size : (H, W)
-        Image size in pixels, both >= 16.  The scene and its motion depend on
-        ``seed`` only, so a larger size renders the same sequence with flow
+        Image size in pixels, both >= 16.  The scene, its motion and its
+        lighting depend on ``seed`` (and the exposure on the aspect ratio
+        ``H / W``) only, so a larger size renders the same sequence with flow
         scaled by the size ratio.
     seed : int
         Seed of ``numpy.random.default_rng`` for the scene and motion.
@@ -630,7 +866,7 @@ def render_sequence(kind: str, n_frames: int = 8, size: tuple[int, int] = (240, 
     True
     """
     T, H, W, seed = _check_args(kind, n_frames, size, seed)
-    scene = _build_scene(kind, T, np.random.default_rng(seed))
+    scene = _build_scene(kind, T, np.random.default_rng(seed), aspect=H / W)
     focal = FOCAL_PER_WIDTH * W
     cx, cy = (W - 1) / 2.0, (H - 1) / 2.0
     ys, xs = np.mgrid[0:H, 0:W].astype(np.float64)
