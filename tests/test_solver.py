@@ -70,7 +70,7 @@ def _small_problem(backend, rng, T=3, h=11, w=13):
     bnd = (rng.uniform(size=(T - 1, h, w)) > 0.7).astype(np.float32)
     lum = (i @ np.array([0.2126, 0.7152, 0.0722], np.float32)) + 0.001
     be = backend
-    params = Params(eps_data=0.2, eps_shading=0.2, lam_albedo_smooth=1.0)
+    params = Params(eps_data=0.2, eps_shading=0.2, lam_albedo_smooth=1.0, lam_albedo_sparsity=1.0)
     energy = WindowEnergy(be, be.asarray(np.log(i)), be.asarray(lum.astype(np.float32)),
                           be.asarray(flow), be.asarray(occ), be.asarray(bnd), params,
                           load_albedo_prior())

@@ -72,6 +72,15 @@ class WindowEnergy:
                          be.asarray(prior.table_dg.astype(np.float32)),
                          float(prior.r2_max))
         self._entropy = None
+        if params.lam_albedo_sparsity > 0:
+            from ivkernels.priors import entropy_blur_weights
+
+            ent = be.energy_albedo_entropy
+            self._entropy = (be.asarray(prior.whiten.astype(np.float32)), float(prior.hist_lo),
+                             float(prior.hist_bin_width),
+                             be.asarray(entropy_blur_weights(prior.sigma_p, prior.hist_bin_width)),
+                             float(prior.sigma_p),
+                             ent.allocate_entropy_scratch(T, int(prior.hist_bins), device=be.device))
 
     @property
     def temporal(self) -> bool:
@@ -105,7 +114,9 @@ class WindowEnergy:
             be.energy_albedo_gsm.gsm_smoothness(self.A, sigma_inv, table_g, table_dg, r2_max,
                                                 self.gA, rows, lam=p.lam_albedo_smooth)
         if want("albedo_sparsity") and self._entropy is not None:
-            self._entropy.add(self.A, self.gA, rows, lam=p.lam_albedo_sparsity)
+            whiten, lo, h, taps, sigma_p, scratch = self._entropy
+            be.energy_albedo_entropy.entropy_term(self.A, whiten, lo, h, taps, sigma_p, scratch,
+                                                  self.gA, rows, lam=p.lam_albedo_sparsity)
 
     def __call__(self, X, G) -> float:
         """Energy at ``X`` (must be ``self.X``); writes dE/dX into ``G`` (``self.G``)."""
