@@ -226,7 +226,7 @@ class _Decomposer:
 
 def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
               device: str = "cpu", params: Params | None = None,
-              progress: bool = False) -> IntrinsicVideo:
+              progress: bool = False, flow_from_albedo: bool = False) -> IntrinsicVideo:
     """Decompose a video into albedo, shading, flow, occlusion and boundaries.
 
     Minimises Eq. 2 of Kong, Gehler & Black (ECCV 2014) coarse to fine over
@@ -245,6 +245,11 @@ def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
     device : ``"cpu"`` or ``"cuda"`` (Warp only).
     params : :class:`ivkernels.Params`; defaults are the paper's weights.
     progress : show a progress bar per stage.
+    flow_from_albedo : solve once, re-estimate the flow on the recovered
+        albedo (which obeys brightness constancy better than the input under
+        changing light; paper Sec. 5.1 and 6) with the same flow method, and
+        solve again with it.  Needs ``flow`` to be ``None`` or a method name.
+        The first pass's diagnostics are kept under ``diagnostics["first_pass"]``.
 
     Returns
     -------
@@ -258,6 +263,19 @@ def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
     >>> video.albedo.shape, video.shading.shape
     ((3, 48, 64, 3), (3, 48, 64))
     """
+    if flow_from_albedo:
+        if not (flow is None or isinstance(flow, str)) or not temporal:
+            raise ValueError("flow_from_albedo needs temporal=True and flow=None or a flow method name")
+        from ivkernels.flow import estimate_flow
+
+        first = decompose(frames, flow, temporal, backend, device, params, progress)
+        method = first.diagnostics["flow_method"]
+        albedo_flow = estimate_flow(np.clip(first.albedo, 0.0, 1.0), method=method,
+                                    backend=backend, device=device)
+        second = decompose(frames, albedo_flow, temporal, backend, device, params, progress)
+        second.diagnostics["flow_method"] = f"{method} on the albedo"
+        second.diagnostics["first_pass"] = first.diagnostics
+        return second
     job = _Decomposer(frames, flow, temporal, backend, device, params, progress)
     T, H, W, _ = job.frames.shape
     albedo = np.empty((T, H, W, 3), np.float32)

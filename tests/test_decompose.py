@@ -85,3 +85,13 @@ def test_taichi_backend_gives_the_same_decomposition(seq):
     b = iv.decompose(seq.frames, flow=seq.flow, params=FAST, backend="taichi")
     la = metrics.intrinsic_lmse(b.albedo, b.shading, a.albedo, a.shading)
     assert la["mean"] < 0.02
+
+
+@pytest.mark.slow
+def test_flow_from_albedo_solves_twice(seq):
+    video = iv.decompose(seq.frames, flow="dis", params=FAST, flow_from_albedo=True)
+    assert video.diagnostics["flow_method"] == "dis on the albedo"
+    assert "first_pass" in video.diagnostics
+    assert video.flow.shape == seq.flow.shape
+    with pytest.raises(ValueError, match="flow_from_albedo"):
+        iv.decompose(seq.frames, flow=seq.flow, params=FAST, flow_from_albedo=True)
