@@ -53,7 +53,7 @@ class WarpBackend(Backend):
     def __init__(self, device: str = "cpu"):
         import warp as wp
 
-        wp.config.quiet = True
+        wp.config.log_level = wp.LOG_WARNING
         wp.init()
         if device.startswith("cuda") and not wp.is_cuda_available():
             raise RuntimeError(

@@ -4,4 +4,4 @@ Host functions launch on the device of their first array argument.
 """
 import warp as wp
 
-wp.config.quiet = True
+wp.config.log_level = wp.LOG_WARNING
