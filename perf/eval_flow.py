@@ -14,6 +14,7 @@ consecutive pair against the renderer's exact flow).
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -78,24 +79,29 @@ def main(argv=None) -> int:
     results = {m: {} for m in args.methods}
     for name, frames, gt in data:
         for m in args.methods:
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             flow = estimate_flow(frames, method=m, backend=args.backend, device=args.device)
-            seconds = (time.perf_counter() - t0) / (frames.shape[0] - 1)
+            pairs = frames.shape[0] - 1
+            seconds = (time.perf_counter() - t0) / pairs
+            cpu = (time.process_time() - c0) / pairs
             err = flow_errors(flow, gt)
-            results[m][name] = (err["epe"], err["aae"], seconds)
-            print(f"  {name:22s} {m:16s} EPE {err['epe']:6.3f}  AAE {err['aae']:6.2f}  {seconds:6.2f} s/pair",
-                  file=sys.stderr, flush=True)
+            results[m][name] = (err["epe"], err["aae"], seconds, cpu)
+            print(f"  {name:22s} {m:16s} EPE {err['epe']:6.3f}  AAE {err['aae']:6.2f}  {seconds:6.2f} s/pair"
+                  f"  ({cpu:.2f} CPU s)", file=sys.stderr, flush=True)
 
-    print(f"backend={args.backend} device={args.device} threads={args.threads}")
-    header = f"{'sequence':22s}" + "".join(f" | {m:>22s}" for m in args.methods)
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(f"backend={args.backend} device={args.device} threads={args.threads} "
+          f"cores={os.cpu_count()} load average at the end={load:.2f}")
+    print("s/pair: wall-clock seconds per frame pair; cpu: CPU seconds of this process per pair")
+    header = f"{'sequence':22s}" + "".join(f" | {m:>29s}" for m in args.methods)
     print(header)
-    print(f"{'':22s}" + " | {:>6s} {:>6s} {:>8s}".format("EPE", "AAE", "s/pair") * len(args.methods))
+    print(f"{'':22s}" + " | {:>6s} {:>6s} {:>7s} {:>6s}".format("EPE", "AAE", "s/pair", "cpu") * len(args.methods))
     print("-" * len(header))
     for name, _, _ in data:
         row = f"{name:22s}"
         for m in args.methods:
-            e, a, s = results[m][name]
-            row += f" | {e:6.3f} {a:6.2f} {s:8.2f}"
+            e, a, s, c = results[m][name]
+            row += f" | {e:6.3f} {a:6.2f} {s:7.2f} {c:6.2f}"
         print(row)
     print("-" * len(header))
     for label, keep in (("mean (Middlebury)", lambda n: not n.startswith("syn:")),
@@ -106,7 +112,8 @@ def main(argv=None) -> int:
         row = f"{label:22s}"
         for m in args.methods:
             vals = np.array([results[m][n] for n in names])
-            row += f" | {vals[:, 0].mean():6.3f} {vals[:, 1].mean():6.2f} {vals[:, 2].mean():8.2f}"
+            row += (f" | {vals[:, 0].mean():6.3f} {vals[:, 1].mean():6.2f} {vals[:, 2].mean():7.2f}"
+                    f" {vals[:, 3].mean():6.2f}")
         print(row)
     return 0
 

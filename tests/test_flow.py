@@ -52,6 +52,7 @@ def test_settings_and_schedule():
     assert pyramid_sizes(388, 584, 1.25, 2) == [(388, 584), (311, 468)]
     assert PRESETS["classic_nl_fast"].gnc_stages == 2 and PRESETS["classic_nl_fast"].warps == 3
     assert PRESETS["classic_nl"].gnc_stages == 3 and PRESETS["classic_nl"].warps == 10
+    assert PRESETS["classic_nl"].quadratic_wm_finest and not PRESETS["classic_nl_fast"].quadratic_wm_finest
     assert settings_for("classic_nl_fast", sor_sweeps=7).sor_sweeps == 7
     with pytest.raises(TypeError, match="unknown option"):
         settings_for("classic_nl", no_such_thing=1)
