@@ -113,11 +113,12 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
         return energy
 
     def upsample(energy, shape):
-        A_up = resize(be, energy.A, shape)
-        S_up = resize(be, energy.S.reshape((*energy.shape, 1)), shape)
+        # Shading is smooth and survives resampling; albedo carries the texture the
+        # coarser level could not see, so it restarts data-consistent: A = I - S.
+        S_up = be.numpy(resize(be, energy.S.reshape((*energy.shape, 1)), shape))[..., 0]
         level = shapes.index(shape)
         finer = make_energy(level, shape)
-        _set(be, finer, be.numpy(A_up), be.numpy(S_up)[..., 0])
+        _set(be, finer, be.numpy(finer.I) - S_up[..., None], S_up)
         return finer
 
     def solve_level(level, shape, energy):
