@@ -110,18 +110,36 @@ def test_smoothness_weights(backend, rng, quad_frac):
     assert np.all(out[:, :, -1, 0] == 0) and np.all(out[:, -1, :, 1] == 0)
 
 
+def irls_system(rng, t=T, h=H, w=W, quad_frac=0.0, quad_weight=2e6, lam=3.0):
+    """Data coefficients, smoothness weights and assembled system of a random problem (float32)."""
+    i1, i1x, i1y, warped, inside, flow, _ = linear_system(rng, t, h, w)
+    zero = np.zeros((t, h, w, 2), np.float32)
+    data = ref.data_coefficients(i1, i1x, i1y, warped, inside, zero, quad_frac=quad_frac,
+                                 quad_weight=quad_weight).astype(np.float32)
+    smooth = ref.smoothness_weights(flow, zero, quad_frac=quad_frac, quad_weight=quad_weight).astype(np.float32)
+    system = ref.assemble_system(flow, data, smooth, lam).astype(np.float32)
+    return flow, data, smooth, system
+
+
+def test_assemble_system(backend, rng):
+    flow, data, smooth, _ = irls_system(rng)
+    f_b, d_b, s_b = backend.asarray(flow), backend.asarray(data), backend.asarray(smooth)
+    out = backend.zeros((T, H, W, 5))
+    backend.flow_classic.assemble_system(f_b, d_b, s_b, 3.0, out)
+    want = ref.assemble_system(flow, data, smooth, 3.0)
+    np.testing.assert_allclose(backend.numpy(out), want, rtol=1e-4, atol=1e-5 * np.abs(want).max())
+
+
 def test_sor_half_sweeps_match_reference(backend, rng):
-    i1, i1x, i1y, warped, inside, flow, du = linear_system(rng)
-    data = ref.data_coefficients(i1, i1x, i1y, warped, inside, np.zeros_like(du)).astype(np.float32)
-    smooth = ref.smoothness_weights(flow, np.zeros_like(du)).astype(np.float32)
+    flow, data, smooth, system = irls_system(rng)
+    du = rng.normal(scale=0.3, size=(T, H, W, 2)).astype(np.float32)
     want = du.astype(np.float64)
     got = backend.asarray(du.copy())
-    args = [backend.asarray(a) for a in (flow,)]
-    d_b, s_b = backend.asarray(data), backend.asarray(smooth)
+    sys_b, s_b = backend.asarray(system), backend.asarray(smooth)
     for sweep in range(3):
         for parity in (0, 1):
-            backend.flow_classic.sor_sweep(args[0], got, d_b, s_b, 3.0, 1.7, parity)
-            want = ref.sor_sweep(flow, want, data, smooth, 3.0, 1.7, parity)
+            backend.flow_classic.sor_sweep(got, sys_b, s_b, 3.0, 1.7, parity)
+            want = ref.sor_sweep(want, system, smooth, 3.0, 1.7, parity)
     np.testing.assert_allclose(backend.numpy(got), want, rtol=1e-3, atol=1e-4)
 
 
@@ -129,20 +147,16 @@ def test_sor_half_sweeps_match_reference(backend, rng):
 def test_sor_converges_to_solution_of_system(backend, rng, quad_frac):
     """Enough red-black sweeps solve the IRLS system: the float64 residual falls by orders of magnitude."""
     t, h, w = 1, 19, 23
-    i1, i1x, i1y, warped, inside, flow, _ = linear_system(rng, t, h, w)
-    zero = np.zeros((t, h, w, 2), np.float32)
-    qw = 2.0
-    data = ref.data_coefficients(i1, i1x, i1y, warped, inside, zero, quad_frac=quad_frac,
-                                 quad_weight=qw).astype(np.float32)
-    smooth = ref.smoothness_weights(flow, zero, quad_frac=quad_frac, quad_weight=qw).astype(np.float32)
     lam = 3.0
-    r0 = np.abs(ref.system_residual(flow, zero, data, smooth, lam)).max()
+    flow, data, smooth, system = irls_system(rng, t, h, w, quad_frac, 2.0, lam)
+    zero = np.zeros((t, h, w, 2), np.float32)
+    r0 = np.abs(ref.system_residual(zero, system, smooth, lam)).max()
     du = backend.asarray(zero.copy())
-    f_b, d_b, s_b = backend.asarray(flow), backend.asarray(data), backend.asarray(smooth)
+    sys_b, s_b = backend.asarray(system), backend.asarray(smooth)
     for _ in range(300):
         for parity in (0, 1):
-            backend.flow_classic.sor_sweep(f_b, du, d_b, s_b, lam, 1.8, parity)
-    r = np.abs(ref.system_residual(flow, backend.numpy(du), data, smooth, lam)).max()
+            backend.flow_classic.sor_sweep(du, sys_b, s_b, lam, 1.8, parity)
+    r = np.abs(ref.system_residual(backend.numpy(du), system, smooth, lam)).max()
     # float32 sweeps on robust weights spanning three decades stall near 1e-3
     assert r < (1e-2 if quad_frac == 0.0 else 1e-4) * r0
 
@@ -195,11 +209,13 @@ def test_one_thread_equals_two_threads(rng):
         with threads(n):
             data = run(be, "data_coefficients", [i1, i1x, i1y, warped, inside, du], [np.zeros((T, H, W, 5))])
             smooth = run(be, "smoothness_weights", [flow, du], [np.zeros((T, H, W, 4))])
+            system = be.zeros((T, H, W, 5))
+            be.flow_classic.assemble_system(be.asarray(flow), be.asarray(data), be.asarray(smooth), 3.0, system)
             d = be.asarray(du.copy())
             for parity in (0, 1, 0, 1):
-                be.flow_classic.sor_sweep(be.asarray(flow), d, be.asarray(data), be.asarray(smooth), 3.0, 1.9, parity)
+                be.flow_classic.sor_sweep(d, system, be.asarray(smooth), 3.0, 1.9, parity)
             p = run(be, "rof_dual_step", [i1 / 255, np.zeros((T, H, W, 2))], [np.zeros((T, H, W, 2))], 0.125, 2.0)
-            results.append([data, smooth, be.numpy(d).copy(), p])
+            results.append([data, smooth, be.numpy(system).copy(), be.numpy(d).copy(), p])
     for a, b in zip(*results):
         np.testing.assert_array_equal(a, b)
 
@@ -211,10 +227,12 @@ def test_warp_and_taichi_agree(rng):
     for be in (wpb, tib):
         data = run(be, "data_coefficients", [i1, i1x, i1y, warped, inside, du], [np.zeros((T, H, W, 5))])
         smooth = run(be, "smoothness_weights", [flow, du], [np.zeros((T, H, W, 4))])
+        system = be.zeros((T, H, W, 5))
+        be.flow_classic.assemble_system(be.asarray(flow), be.asarray(data), be.asarray(smooth), 3.0, system)
         d = be.asarray(du.copy())
         for parity in (0, 1, 0, 1):
-            be.flow_classic.sor_sweep(be.asarray(flow), d, be.asarray(data), be.asarray(smooth), 3.0, 1.9, parity)
-        outs.append([data, smooth, be.numpy(d).copy()])
+            be.flow_classic.sor_sweep(d, system, be.asarray(smooth), 3.0, 1.9, parity)
+        outs.append([data, smooth, be.numpy(system).copy(), be.numpy(d).copy()])
     for a, b in zip(*outs):
         np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-4 * max(1.0, np.abs(a).max()))
 
@@ -230,7 +248,10 @@ def test_bad_input_raises(backend):
     with pytest.raises(ValueError, match="different arrays"):
         be.flow_classic.rof_dual_step(good3, good4, good4, 0.125, 2.0)
     with pytest.raises(ValueError, match="parity"):
-        be.flow_classic.sor_sweep(good4, good4, be.zeros((T, H, W, 5)), be.zeros((T, H, W, 4)), 3.0, 1.9, 2)
+        be.flow_classic.sor_sweep(good4, be.zeros((T, H, W, 5)), be.zeros((T, H, W, 4)), 3.0, 1.9, 2)
+    with pytest.raises(ValueError, match="shape"):
+        be.flow_classic.assemble_system(good4, be.zeros((T, H, W, 4)), be.zeros((T, H, W, 4)), 3.0,
+                                        be.zeros((T, H, W, 5)))
     with pytest.raises(TypeError, match="float32"):
         be.flow_classic.apply_update(be.zeros((T, H, W, 2), np.float64), good4, good4)
     with pytest.raises(TypeError):

@@ -221,6 +221,7 @@ class _Level:
         self.du = be.zeros((n, h, w, 2))
         self.data = be.empty((n, h, w, 5))
         self.smooth = be.empty((n, h, w, 4))
+        self.system = be.empty((n, h, w, 5))
         self.raw = be.empty((n, h, w, 2))
         self.med = be.empty((n, h, w, 2))
         self.wmed = be.empty((n, h, w, 2))
@@ -316,9 +317,10 @@ class ClassicNL:
                              s.blend, s.a, s.eps, quad_frac, quad_weight)
         fc.smoothness_weights(flow, lv.du, lv.smooth, s.a, s.eps, quad_frac, quad_weight)
         sweeps = s.sor_sweeps_quadratic if quad_frac == 1.0 and s.sor_sweeps_quadratic else s.sor_sweeps
+        fc.assemble_system(flow, lv.data, lv.smooth, s.lam, lv.system)
         for _ in range(sweeps):
-            fc.sor_sweep(flow, lv.du, lv.data, lv.smooth, s.lam, s.sor_omega, 0)
-            fc.sor_sweep(flow, lv.du, lv.data, lv.smooth, s.lam, s.sor_omega, 1)
+            fc.sor_sweep(lv.du, lv.system, lv.smooth, s.lam, s.sor_omega, 0)
+            fc.sor_sweep(lv.du, lv.system, lv.smooth, s.lam, s.sor_omega, 1)
         if not s.median:
             fc.apply_update(flow, lv.du, flow, s.limit_update)
             return

@@ -94,42 +94,43 @@ def smoothness_weights(flow, du, a=0.45, eps=1e-3, quad_frac=0.0, quad_weight=2e
     return out
 
 
-def _neighbour_sums(flow, du, smooth, lam):
-    """Per pixel: sum of lam * w over neighbours, and sum of lam * w * (u_n + du_n - u), per component."""
-    f = np.asarray(flow, np.float64)
-    d = np.asarray(du, np.float64)
+def _neighbour_sums(values, smooth, lam, centre=None):
+    """Per pixel and component: ``sum_n lam w_n`` and ``sum_n lam w_n (values_n - centre)``."""
+    f = np.asarray(values, np.float64)
+    c = np.zeros_like(f) if centre is None else np.asarray(centre, np.float64)
     s = lam * np.asarray(smooth, np.float64)
-    t, h, w, _ = f.shape
-    diag = np.zeros((t, h, w, 2))
-    rhs = np.zeros((t, h, w, 2))
-    g = f + d
-    for c in range(2):
-        wr, wd = s[..., 2 * c], s[..., 2 * c + 1]
-        # right neighbour
-        diag[:, :, :-1, c] += wr[:, :, :-1]
-        rhs[:, :, :-1, c] += wr[:, :, :-1] * (g[:, :, 1:, c] - f[:, :, :-1, c])
-        # left neighbour (the right edge of the pixel on the left)
-        diag[:, :, 1:, c] += wr[:, :, :-1]
-        rhs[:, :, 1:, c] += wr[:, :, :-1] * (g[:, :, :-1, c] - f[:, :, 1:, c])
-        # neighbour below
-        diag[:, :-1, :, c] += wd[:, :-1, :]
-        rhs[:, :-1, :, c] += wd[:, :-1, :] * (g[:, 1:, :, c] - f[:, :-1, :, c])
-        # neighbour above
-        diag[:, 1:, :, c] += wd[:, :-1, :]
-        rhs[:, 1:, :, c] += wd[:, :-1, :] * (g[:, :-1, :, c] - f[:, 1:, :, c])
-    return diag, rhs
+    diag = np.zeros(f.shape)
+    acc = np.zeros(f.shape)
+    for k in range(2):
+        wr, wd = s[..., 2 * k], s[..., 2 * k + 1]
+        pairs = [  # (weight slice, target slice, neighbour slice)
+            (wr[:, :, :-1], (slice(None), slice(None), slice(0, -1)), (slice(None), slice(None), slice(1, None))),
+            (wr[:, :, :-1], (slice(None), slice(None), slice(1, None)), (slice(None), slice(None), slice(0, -1))),
+            (wd[:, :-1, :], (slice(None), slice(0, -1), slice(None)), (slice(None), slice(1, None), slice(None))),
+            (wd[:, :-1, :], (slice(None), slice(1, None), slice(None)), (slice(None), slice(0, -1), slice(None))),
+        ]
+        for wgt, tgt, nbr in pairs:
+            diag[tgt + (k,)] += wgt
+            acc[tgt + (k,)] += wgt * (f[nbr + (k,)] - c[tgt + (k,)])
+    return diag, acc
 
 
-def sor_sweep(flow, du, data, smooth, lam, omega, parity):
+def assemble_system(flow, data, smooth, lam):
+    """(T, H, W, 5): ``(a11, a12, a22, b_u, b_v)`` of every pixel's equations."""
+    data = np.asarray(data, np.float64)
+    diag, acc = _neighbour_sums(flow, smooth, lam, centre=flow)
+    return np.stack([data[..., 0] + diag[..., 0], data[..., 1], data[..., 2] + diag[..., 1],
+                     acc[..., 0] - data[..., 3], acc[..., 1] - data[..., 4]], -1)
+
+
+def sor_sweep(du, system, smooth, lam, omega, parity):
     """Returns ``du`` after updating the pixels with ``(x + y) % 2 == parity``."""
     du = np.array(du, np.float64)
-    data = np.asarray(data, np.float64)
-    diag, rhs = _neighbour_sums(flow, du, smooth, lam)
-    a11 = data[..., 0] + diag[..., 0]
-    a12 = data[..., 1]
-    a22 = data[..., 2] + diag[..., 1]
-    bu = rhs[..., 0] - data[..., 3]
-    bv = rhs[..., 1] - data[..., 4]
+    system = np.asarray(system, np.float64)
+    _, acc = _neighbour_sums(du, smooth, lam)
+    a11, a12, a22 = system[..., 0], system[..., 1], system[..., 2]
+    bu = system[..., 3] + acc[..., 0]
+    bv = system[..., 4] + acc[..., 1]
     det = a11 * a22 - a12 * a12
     ok = det > 1e-20 * (a11 * a22 + 1e-30)
     safe = np.where(ok, det, 1.0)
@@ -143,14 +144,13 @@ def sor_sweep(flow, du, data, smooth, lam, omega, parity):
     return du
 
 
-def system_residual(flow, du, data, smooth, lam):
-    """Residual ``b - A du`` of the full IRLS system (T, H, W, 2), for convergence checks."""
-    data = np.asarray(data, np.float64)
-    diag, rhs = _neighbour_sums(flow, du, smooth, lam)
+def system_residual(du, system, smooth, lam):
+    """Residual ``b + lam sum_n w_n du_n - A_p du_p`` of the IRLS equations (T, H, W, 2)."""
+    system = np.asarray(system, np.float64)
     d = np.asarray(du, np.float64)
-    # rhs already holds sum w (u_n + du_n - u); the du_p part of the Laplacian is diag * du_p.
-    ru = rhs[..., 0] - data[..., 3] - (data[..., 0] * d[..., 0] + data[..., 1] * d[..., 1] + diag[..., 0] * d[..., 0])
-    rv = rhs[..., 1] - data[..., 4] - (data[..., 1] * d[..., 0] + data[..., 2] * d[..., 1] + diag[..., 1] * d[..., 1])
+    _, acc = _neighbour_sums(d, smooth, lam)
+    ru = system[..., 3] + acc[..., 0] - system[..., 0] * d[..., 0] - system[..., 1] * d[..., 1]
+    rv = system[..., 4] + acc[..., 1] - system[..., 1] * d[..., 0] - system[..., 2] * d[..., 1]
     return np.stack([ru, rv], axis=-1)
 
 

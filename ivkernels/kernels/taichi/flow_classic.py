@@ -163,50 +163,77 @@ def _smoothness_weights(flow: nd4, du: nd4, out: nd4, a: ti.f32, eps: ti.f32,
 
 
 @ti.kernel
-def _sor_sweep(flow: nd4, du: nd4, data: nd4, smooth: nd4, lam: ti.f32, omega: ti.f32, parity: ti.i32):
+def _assemble_system(flow: nd4, data: nd4, smooth: nd4, out: nd4, lam: ti.f32):
     height = flow.shape[1]
     width = flow.shape[2]
     for t, y in ti.ndrange(flow.shape[0], height):
-        x0 = (parity + y) % 2
-        for k in range((width - x0 + 1) // 2):
-            x = x0 + 2 * k
+        for x in range(width):
+            u = flow[t, y, x, 0]
+            v = flow[t, y, x, 1]
             diag_u = 0.0
             diag_v = 0.0
             rhs_u = -data[t, y, x, 3]
             rhs_v = -data[t, y, x, 4]
-            u = flow[t, y, x, 0]
-            v = flow[t, y, x, 1]
             if x < width - 1:
                 wu = lam * smooth[t, y, x, 0]
                 wv = lam * smooth[t, y, x, 2]
                 diag_u += wu
                 diag_v += wv
-                rhs_u += wu * (flow[t, y, x + 1, 0] + du[t, y, x + 1, 0] - u)
-                rhs_v += wv * (flow[t, y, x + 1, 1] + du[t, y, x + 1, 1] - v)
+                rhs_u += wu * (flow[t, y, x + 1, 0] - u)
+                rhs_v += wv * (flow[t, y, x + 1, 1] - v)
             if x > 0:
                 wu = lam * smooth[t, y, x - 1, 0]
                 wv = lam * smooth[t, y, x - 1, 2]
                 diag_u += wu
                 diag_v += wv
-                rhs_u += wu * (flow[t, y, x - 1, 0] + du[t, y, x - 1, 0] - u)
-                rhs_v += wv * (flow[t, y, x - 1, 1] + du[t, y, x - 1, 1] - v)
+                rhs_u += wu * (flow[t, y, x - 1, 0] - u)
+                rhs_v += wv * (flow[t, y, x - 1, 1] - v)
             if y < height - 1:
                 wu = lam * smooth[t, y, x, 1]
                 wv = lam * smooth[t, y, x, 3]
                 diag_u += wu
                 diag_v += wv
-                rhs_u += wu * (flow[t, y + 1, x, 0] + du[t, y + 1, x, 0] - u)
-                rhs_v += wv * (flow[t, y + 1, x, 1] + du[t, y + 1, x, 1] - v)
+                rhs_u += wu * (flow[t, y + 1, x, 0] - u)
+                rhs_v += wv * (flow[t, y + 1, x, 1] - v)
             if y > 0:
                 wu = lam * smooth[t, y - 1, x, 1]
                 wv = lam * smooth[t, y - 1, x, 3]
                 diag_u += wu
                 diag_v += wv
-                rhs_u += wu * (flow[t, y - 1, x, 0] + du[t, y - 1, x, 0] - u)
-                rhs_v += wv * (flow[t, y - 1, x, 1] + du[t, y - 1, x, 1] - v)
-            a11 = data[t, y, x, 0] + diag_u
-            a12 = data[t, y, x, 1]
-            a22 = data[t, y, x, 2] + diag_v
+                rhs_u += wu * (flow[t, y - 1, x, 0] - u)
+                rhs_v += wv * (flow[t, y - 1, x, 1] - v)
+            out[t, y, x, 0] = data[t, y, x, 0] + diag_u
+            out[t, y, x, 1] = data[t, y, x, 1]
+            out[t, y, x, 2] = data[t, y, x, 2] + diag_v
+            out[t, y, x, 3] = rhs_u
+            out[t, y, x, 4] = rhs_v
+
+
+@ti.kernel
+def _sor_sweep(du: nd4, system: nd4, smooth: nd4, lam: ti.f32, omega: ti.f32, parity: ti.i32):
+    height = du.shape[1]
+    width = du.shape[2]
+    for t, y in ti.ndrange(du.shape[0], height):
+        x0 = (parity + y) % 2
+        for k in range((width - x0 + 1) // 2):
+            x = x0 + 2 * k
+            rhs_u = system[t, y, x, 3]
+            rhs_v = system[t, y, x, 4]
+            if x < width - 1:
+                rhs_u += lam * smooth[t, y, x, 0] * du[t, y, x + 1, 0]
+                rhs_v += lam * smooth[t, y, x, 2] * du[t, y, x + 1, 1]
+            if x > 0:
+                rhs_u += lam * smooth[t, y, x - 1, 0] * du[t, y, x - 1, 0]
+                rhs_v += lam * smooth[t, y, x - 1, 2] * du[t, y, x - 1, 1]
+            if y < height - 1:
+                rhs_u += lam * smooth[t, y, x, 1] * du[t, y + 1, x, 0]
+                rhs_v += lam * smooth[t, y, x, 3] * du[t, y + 1, x, 1]
+            if y > 0:
+                rhs_u += lam * smooth[t, y - 1, x, 1] * du[t, y - 1, x, 0]
+                rhs_v += lam * smooth[t, y - 1, x, 3] * du[t, y - 1, x, 1]
+            a11 = system[t, y, x, 0]
+            a12 = system[t, y, x, 1]
+            a22 = system[t, y, x, 2]
             det = a11 * a22 - a12 * a12
             if det > 1.0e-20 * (a11 * a22 + 1.0e-30):
                 new_u = (a22 * rhs_u - a12 * rhs_v) / det
@@ -400,16 +427,25 @@ def smoothness_weights(flow, du, out, a: float = 0.45, eps: float = 1e-3, quad_f
     _smoothness_weights(flow, du, out, float(a), float(eps), float(quad_frac), float(quad_weight))
 
 
-def sor_sweep(flow, du, data, smooth, lam: float, omega: float, parity: int) -> None:
-    """See :func:`ivkernels.kernels.warp.flow_classic.sor_sweep`."""
+def assemble_system(flow, data, smooth, lam: float, out) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.assemble_system`."""
     _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
     t, h, w, _ = flow.shape
-    _check("du", du, (t, h, w, 2), "(T, H, W, 2)")
     _check("data", data, (t, h, w, 5), "(T, H, W, 5)")
+    _check("smooth", smooth, (t, h, w, 4), "(T, H, W, 4)")
+    _check("out", out, (t, h, w, 5), "(T, H, W, 5)")
+    _assemble_system(flow, data, smooth, out, float(lam))
+
+
+def sor_sweep(du, system, smooth, lam: float, omega: float, parity: int) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.sor_sweep`."""
+    _check("du", du, (None, None, None, 2), "(T, H, W, 2)")
+    t, h, w, _ = du.shape
+    _check("system", system, (t, h, w, 5), "(T, H, W, 5)")
     _check("smooth", smooth, (t, h, w, 4), "(T, H, W, 4)")
     if parity not in (0, 1):
         raise ValueError(f"parity must be 0 or 1, got {parity!r}")
-    _sor_sweep(flow, du, data, smooth, float(lam), float(omega), int(parity))
+    _sor_sweep(du, system, smooth, float(lam), float(omega), int(parity))
 
 
 def apply_update(flow, du, out, limit: float = 1.0) -> None:

@@ -30,6 +30,10 @@ host uses to normalise images the way the public Classic+NL code does.
 Array layout: see :mod:`ivkernels.kernels`.  Every kernel runs one thread per
 image row (``row = t * H + y``) and loops over ``x``; all are gathers except
 :func:`sor_sweep`, which updates ``du`` in place one colour at a time.
+
+The sweep reads only ``du``: :func:`assemble_system` first folds the data
+coefficients, the smoothness weights and the current flow into each pixel's
+2x2 block and right-hand side, which keeps a sweep's memory traffic low.
 """
 from __future__ import annotations
 
@@ -230,53 +234,82 @@ def smoothness_weights_rows(row_begin: int, flow: wp.array4d(dtype=float), du: w
 
 
 @wp.kernel
-def sor_sweep_rows(row_begin: int, flow: wp.array4d(dtype=float), du: wp.array4d(dtype=float),
-                   data: wp.array4d(dtype=float), smooth: wp.array4d(dtype=float),
-                   lam: float, omega: float, parity: int):
+def assemble_system_rows(row_begin: int, flow: wp.array4d(dtype=float), data: wp.array4d(dtype=float),
+                         smooth: wp.array4d(dtype=float), out: wp.array4d(dtype=float), lam: float):
     r = row_begin + wp.tid()
     height = flow.shape[1]
     width = flow.shape[2]
     t = r // height
     y = r - t * height
-    x = (parity + y) % 2
-    while x < width:
-        diag_u = 0.0
-        diag_v = 0.0
-        rhs_u = -data[t, y, x, 3]
-        rhs_v = -data[t, y, x, 4]
+    for x in range(width):
         u = flow[t, y, x, 0]
         v = flow[t, y, x, 1]
+        diag_u = float(0.0)
+        diag_v = float(0.0)
+        rhs_u = -data[t, y, x, 3]
+        rhs_v = -data[t, y, x, 4]
         if x < width - 1:
             wu = lam * smooth[t, y, x, 0]
             wv = lam * smooth[t, y, x, 2]
             diag_u += wu
             diag_v += wv
-            rhs_u += wu * (flow[t, y, x + 1, 0] + du[t, y, x + 1, 0] - u)
-            rhs_v += wv * (flow[t, y, x + 1, 1] + du[t, y, x + 1, 1] - v)
+            rhs_u += wu * (flow[t, y, x + 1, 0] - u)
+            rhs_v += wv * (flow[t, y, x + 1, 1] - v)
         if x > 0:
             wu = lam * smooth[t, y, x - 1, 0]
             wv = lam * smooth[t, y, x - 1, 2]
             diag_u += wu
             diag_v += wv
-            rhs_u += wu * (flow[t, y, x - 1, 0] + du[t, y, x - 1, 0] - u)
-            rhs_v += wv * (flow[t, y, x - 1, 1] + du[t, y, x - 1, 1] - v)
+            rhs_u += wu * (flow[t, y, x - 1, 0] - u)
+            rhs_v += wv * (flow[t, y, x - 1, 1] - v)
         if y < height - 1:
             wu = lam * smooth[t, y, x, 1]
             wv = lam * smooth[t, y, x, 3]
             diag_u += wu
             diag_v += wv
-            rhs_u += wu * (flow[t, y + 1, x, 0] + du[t, y + 1, x, 0] - u)
-            rhs_v += wv * (flow[t, y + 1, x, 1] + du[t, y + 1, x, 1] - v)
+            rhs_u += wu * (flow[t, y + 1, x, 0] - u)
+            rhs_v += wv * (flow[t, y + 1, x, 1] - v)
         if y > 0:
             wu = lam * smooth[t, y - 1, x, 1]
             wv = lam * smooth[t, y - 1, x, 3]
             diag_u += wu
             diag_v += wv
-            rhs_u += wu * (flow[t, y - 1, x, 0] + du[t, y - 1, x, 0] - u)
-            rhs_v += wv * (flow[t, y - 1, x, 1] + du[t, y - 1, x, 1] - v)
-        a11 = data[t, y, x, 0] + diag_u
-        a12 = data[t, y, x, 1]
-        a22 = data[t, y, x, 2] + diag_v
+            rhs_u += wu * (flow[t, y - 1, x, 0] - u)
+            rhs_v += wv * (flow[t, y - 1, x, 1] - v)
+        out[t, y, x, 0] = data[t, y, x, 0] + diag_u
+        out[t, y, x, 1] = data[t, y, x, 1]
+        out[t, y, x, 2] = data[t, y, x, 2] + diag_v
+        out[t, y, x, 3] = rhs_u
+        out[t, y, x, 4] = rhs_v
+
+
+@wp.kernel
+def sor_sweep_rows(row_begin: int, du: wp.array4d(dtype=float), system: wp.array4d(dtype=float),
+                   smooth: wp.array4d(dtype=float), lam: float, omega: float, parity: int):
+    r = row_begin + wp.tid()
+    height = du.shape[1]
+    width = du.shape[2]
+    t = r // height
+    y = r - t * height
+    x = (parity + y) % 2
+    while x < width:
+        rhs_u = system[t, y, x, 3]
+        rhs_v = system[t, y, x, 4]
+        if x < width - 1:
+            rhs_u += lam * smooth[t, y, x, 0] * du[t, y, x + 1, 0]
+            rhs_v += lam * smooth[t, y, x, 2] * du[t, y, x + 1, 1]
+        if x > 0:
+            rhs_u += lam * smooth[t, y, x - 1, 0] * du[t, y, x - 1, 0]
+            rhs_v += lam * smooth[t, y, x - 1, 2] * du[t, y, x - 1, 1]
+        if y < height - 1:
+            rhs_u += lam * smooth[t, y, x, 1] * du[t, y + 1, x, 0]
+            rhs_v += lam * smooth[t, y, x, 3] * du[t, y + 1, x, 1]
+        if y > 0:
+            rhs_u += lam * smooth[t, y - 1, x, 1] * du[t, y - 1, x, 0]
+            rhs_v += lam * smooth[t, y - 1, x, 3] * du[t, y - 1, x, 1]
+        a11 = system[t, y, x, 0]
+        a12 = system[t, y, x, 1]
+        a22 = system[t, y, x, 2]
         det = a11 * a22 - a12 * a12
         if det > 1.0e-20 * (a11 * a22 + 1.0e-30):
             new_u = (a22 * rhs_u - a12 * rhs_v) / det
@@ -550,28 +583,49 @@ def smoothness_weights(flow, du, out, a: float = 0.45, eps: float = 1e-3, quad_f
                 [flow, du, out, float(a), float(eps), float(quad_frac), float(quad_weight)], flow.device)
 
 
-def sor_sweep(flow, du, data, smooth, lam: float, omega: float, parity: int) -> None:
-    """One half-sweep of red-black block SOR on the IRLS system, in place on ``du``.
+def assemble_system(flow, data, smooth, lam: float, out) -> None:
+    """The 2x2 block and right-hand side of every pixel's IRLS equations.
 
-    Updates the pixels with ``(x + y) % 2 == parity``: solves their 2x2 block
-    (data coefficients plus ``lam`` times the smoothness weights) with the
-    neighbours fixed, and relaxes by ``omega`` (1 = Gauss-Seidel).  Call with
-    parity 0 then 1 for a full sweep.
+    ``out = (a11, a12, a22, b_u, b_v)`` with ``a11 = psi_D Ix^2 + lam sum_n w^u_n``,
+    ``a12 = psi_D Ix Iy``, ``a22 = psi_D Iy^2 + lam sum_n w^v_n`` and
+    ``b_u = -psi_D Ix It + lam sum_n w^u_n (u_n - u)`` (likewise ``b_v``), so
+    that the equations read ``A_p du_p - lam sum_n w_n du_n = b_p``.
 
     flow : (T, H, W, 2) float32, flow ``u`` the increment is added to.
-    du : (T, H, W, 2) float32, increment, read and written.
     data : (T, H, W, 5) float32 from :func:`data_coefficients`.
     smooth : (T, H, W, 4) float32 from :func:`smoothness_weights`.
+    out : (T, H, W, 5) float32.
     """
     _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
     t, h, w, _ = flow.shape
     dev = flow.device
-    _check("du", du, (t, h, w, 2), "(T, H, W, 2)", dev)
     _check("data", data, (t, h, w, 5), "(T, H, W, 5)", dev)
+    _check("smooth", smooth, (t, h, w, 4), "(T, H, W, 4)", dev)
+    _check("out", out, (t, h, w, 5), "(T, H, W, 5)", dev)
+    launch_rows(assemble_system_rows, t * h, [flow, data, smooth, out, float(lam)], dev)
+
+
+def sor_sweep(du, system, smooth, lam: float, omega: float, parity: int) -> None:
+    """One half-sweep of red-black block SOR on the IRLS system, in place on ``du``.
+
+    Updates the pixels with ``(x + y) % 2 == parity``: solves their 2x2 block
+    ``A_p du_p = b_p + lam sum_n w_n du_n`` with the neighbours fixed, and
+    relaxes by ``omega`` (1 = Gauss-Seidel).  Call with parity 0 then 1 for a
+    full sweep.
+
+    du : (T, H, W, 2) float32, increment, read and written.
+    system : (T, H, W, 5) float32 from :func:`assemble_system`.
+    smooth : (T, H, W, 4) float32 from :func:`smoothness_weights` (the same
+        ``lam`` as given to :func:`assemble_system`).
+    """
+    _check("du", du, (None, None, None, 2), "(T, H, W, 2)")
+    t, h, w, _ = du.shape
+    dev = du.device
+    _check("system", system, (t, h, w, 5), "(T, H, W, 5)", dev)
     _check("smooth", smooth, (t, h, w, 4), "(T, H, W, 4)", dev)
     if parity not in (0, 1):
         raise ValueError(f"parity must be 0 or 1, got {parity!r}")
-    launch_rows(sor_sweep_rows, t * h, [flow, du, data, smooth, float(lam), float(omega), int(parity)], dev)
+    launch_rows(sor_sweep_rows, t * h, [du, system, smooth, float(lam), float(omega), int(parity)], dev)
 
 
 def apply_update(flow, du, out, limit: float = 1.0) -> None:
