@@ -794,16 +794,19 @@ def build_cases() -> list[Case]:
                 out = _e(1, H, W, 4)
                 args = [A(v) for v in (q["flow"], q["du"], out)]
                 return Call(lambda: F.smoothness_weights(*args), (q["flow"], q["du"]), (out,))
-            if name == "sor_sweep (red+black)":
-                data, sm = _e(1, H, W, 5), _e(1, H, W, 4)
+            if name in ("assemble_system", "sor_sweep (red+black)"):
+                data, sm, system = _e(1, H, W, 5), _e(1, H, W, 4), _e(1, H, W, 5)
                 F.data_coefficients(*[A(q[k]) for k in ("i1", "i1x", "i1y", "warped", "inside", "du")], A(data))
                 F.smoothness_weights(A(q["flow"]), A(q["du"]), A(sm))
-                fl, du, d, m = A(q["flow"]), A(q["du"]), A(data), A(sm)
+                fl, du, d, m, sy = A(q["flow"]), A(q["du"]), A(data), A(sm), A(system)
+                if name == "assemble_system":
+                    return Call(lambda: F.assemble_system(fl, d, m, 3.0, sy), (q["flow"], data, sm), (system,))
+                F.assemble_system(fl, d, m, 3.0, sy)
 
                 def sweep():
-                    F.sor_sweep(fl, du, d, m, 3.0, 1.9, 0)
-                    F.sor_sweep(fl, du, d, m, 3.0, 1.9, 1)
-                return Call(sweep, (q["flow"], data, sm), (), (q["du"],))
+                    F.sor_sweep(du, sy, m, 3.0, 1.9, 0)
+                    F.sor_sweep(du, sy, m, 3.0, 1.9, 1)
+                return Call(sweep, (system, sm), (), (q["du"],))
             if name == "apply_update":
                 out = np.empty_like(q["flow"])
                 args = [A(v) for v in (q["flow"], q["du"], out)]
@@ -847,13 +850,16 @@ def build_cases() -> list[Case]:
                 return lambda: Rf.data_coefficients(*[q[k] for k in ("i1", "i1x", "i1y", "warped", "inside", "du")])
             if name == "smoothness_weights":
                 return lambda: Rf.smoothness_weights(q["flow"], q["du"])
-            if name == "sor_sweep (red+black)":
+            if name in ("assemble_system", "sor_sweep (red+black)"):
                 data = Rf.data_coefficients(*[q[k] for k in ("i1", "i1x", "i1y", "warped", "inside", "du")])
                 sm = Rf.smoothness_weights(q["flow"], q["du"])
+                if name == "assemble_system":
+                    return lambda: Rf.assemble_system(q["flow"], data, sm, 3.0)
+                system = Rf.assemble_system(q["flow"], data, sm, 3.0)
 
                 def sweep():
-                    du = Rf.sor_sweep(q["flow"], q["du"], data, sm, 3.0, 1.9, 0)
-                    Rf.sor_sweep(q["flow"], du, data, sm, 3.0, 1.9, 1)
+                    du = Rf.sor_sweep(q["du"], system, sm, 3.0, 1.9, 0)
+                    Rf.sor_sweep(du, system, sm, 3.0, 1.9, 1)
                 return sweep
             if name == "apply_update":
                 return lambda: Rf.apply_update(q["flow"], q["du"], 1.0)
@@ -877,7 +883,8 @@ def build_cases() -> list[Case]:
         ("pack_image_gradient", "mem", "copies only"),
         ("data_coefficients", "compute", "1 pow (generalised Charbonnier) + 20 flops/px"),
         ("smoothness_weights", "compute", "4 pow + 16 flops/px"),
-        ("sor_sweep (red+black)", "compute", "2x2 block solve: 2 div + ~60 flops/px"),
+        ("assemble_system", "mem", "4-neighbour sums, ~30 flops/px"),
+        ("sor_sweep (red+black)", "compute", "4-neighbour sums + 2x2 solve: 2 div + ~30 flops/px"),
         ("apply_update", "mem", "2 clamps + 2 adds/px"),
         ("select_masked", "mem", "1 compare + 2 copies/px"),
         ("flow_sobel_components", "compute", "4 Sobel sums, ~40 flops/px"),
