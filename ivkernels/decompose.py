@@ -161,12 +161,13 @@ class _Decomposer:
 
         missing = [t for t in range(start, stop - 1) if t not in cached]
         if missing:
+            from tqdm.auto import tqdm
+
             t0 = time.perf_counter()
-            lo, hi = missing[0], missing[-1] + 2
-            new = estimate_flow(self.frames[lo:hi], method=self.flow_method,
-                                backend=self.be.name, device=self.be.device)
-            for i, t in enumerate(range(lo, hi - 1)):
-                cached[t] = new[i]
+            for t in tqdm(missing, desc=f"flow ({self.flow_method})", unit="pair",
+                          disable=not self.progress, leave=False):
+                cached[t] = estimate_flow(self.frames[t:t + 2], method=self.flow_method,
+                                          backend=self.be.name, device=self.be.device)[0]
             self.log.add_time("flow", time.perf_counter() - t0)
         for t in [t for t in cached if t < start]:
             del cached[t]

@@ -9,7 +9,9 @@ Prints, in one run:
   1. 8 frames at 320x240 and 640x480: Warp on 1 and 2 threads and Taichi,
      seconds per stage (flow, maps, solve, ...), total, and the 2-thread speedup;
   2. 8, 16 and 32 frames at 320x240 (Warp, 2 threads, windows of 8 frames):
-     seconds and peak memory, with the per-frame cost, to show linear growth.
+     seconds and peak memory, with the per-frame cost, to show linear growth;
+  3. long videos streamed window by window (iter_decompose, as the command
+     line does): 60 and 300 frames at 80x60, peak memory stays flat.
 
     python perf/bench_solver.py [--quick] [--flow classic_nl_fast]
 """
@@ -32,6 +34,8 @@ def run_one(args) -> dict:
     from ivkernels.kernels.launch import set_threads
 
     set_threads(args.threads)
+    if args.stream:
+        return run_stream(args)
     tiny = synthetic.render_sequence("objects_camera", n_frames=2, size=(32, 40), seed=1)
     t0 = time.perf_counter()
     iv.decompose(tiny.frames, flow=args.flow, backend=args.backend)       # compile + load kernels
@@ -48,9 +52,38 @@ def run_one(args) -> dict:
             "peak_mib": peak_kib / 1024, "rss_before_mib": rss_before / 1024}
 
 
-def spawn(backend: str, threads: int, frames: int, height: int, width: int, flow: str) -> dict:
+def run_stream(args) -> dict:
+    """A long video through iter_decompose, keeping nothing but a running checksum."""
+    import numpy as np
+
+    import ivkernels as iv
+    from ivkernels import synthetic
+
+    # A long sequence made of renders of shorter ones (the renderer keeps whole
+    # sequences in memory; the solver must not).
+    chunk = 20
+    parts = [synthetic.render_sequence("objects_camera", n_frames=chunk, size=(args.height, args.width),
+                                       seed=s).frames for s in range((args.frames + chunk - 1) // chunk)]
+    frames = np.concatenate(parts)[: args.frames]
+    rss_frames = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    t0 = time.perf_counter()
+    total, windows = 0.0, 0
+    for res in iv.iter_decompose(frames, flow="dis"):
+        total += float(res.albedo[res.n_carried:].sum())
+        windows += 1
+    seconds = time.perf_counter() - t0
+    assert np.isfinite(total)
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return {"total": seconds, "windows": windows, "peak_mib": peak / 1024,
+            "input_mib": frames.nbytes / 2**20, "rss_after_input_mib": rss_frames / 1024}
+
+
+def spawn(backend: str, threads: int, frames: int, height: int, width: int, flow: str,
+          stream: bool = False) -> dict:
     cmd = [sys.executable, __file__, "--one", "--backend", backend, "--threads", str(threads),
            "--frames", str(frames), "--height", str(height), "--width", str(width), "--flow", flow]
+    if stream:
+        cmd.append("--stream")
     out = subprocess.run(cmd, capture_output=True, text=True)
     if out.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} failed:\n{out.stderr[-3000:]}")
@@ -68,6 +101,7 @@ def main(argv=None) -> int:
     parser.add_argument("--flow", default="classic_nl_fast",
                         help="flow method for every configuration")
     parser.add_argument("--quick", action="store_true", help="small sizes (a smoke run)")
+    parser.add_argument("--stream", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.one:
         print(json.dumps(run_one(args)))
@@ -104,6 +138,14 @@ def main(argv=None) -> int:
         per = r["total"] / n
         base = base or per
         print(f"{n:6d} {r['total']:8.2f} {per:8.3f} {r['peak_mib']:9.0f}   (s/frame vs first: {per / base:.2f})")
+
+    print("\nlong videos streamed with iter_decompose at 80x60 (Warp, 2 threads, DIS flow)")
+    print(f"{'frames':>6} {'windows':>7} {'total s':>8} {'s/frame':>8} {'input MiB':>9} "
+          f"{'RSS after input':>15} {'peak MiB':>9}")
+    for n in ([30, 60] if args.quick else [60, 300]):
+        r = spawn("warp", 2, n, 60, 80, "dis", stream=True)
+        print(f"{n:6d} {r['windows']:7d} {r['total']:8.1f} {r['total'] / n:8.3f} {r['input_mib']:9.1f} "
+              f"{r['rss_after_input_mib']:15.0f} {r['peak_mib']:9.0f}")
     return 0
 
 
