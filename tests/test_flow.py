@@ -154,6 +154,8 @@ def test_bad_input_raises(rng):
         estimate_flow(good, init=np.zeros((1, 8, 8, 2), np.float32))
     with pytest.raises(ValueError, match="preset"):
         estimate_flow(good, method="dis", preset="slow")
+    with pytest.raises(ValueError, match="at least 16x16"):
+        estimate_flow(np.zeros((2, 15, 40, 3), np.float32), method="dis")
     with pytest.raises(ValueError, match="backend"):
         estimate_flow(good, backend="torch")
     assert FLOW_METHODS == ("classic_nl_fast", "classic_nl", "dis", "farneback")

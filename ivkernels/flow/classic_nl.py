@@ -32,10 +32,22 @@ Pipeline, following the public Classic+NL code (settings in
    distance, Lab similarity, soft occlusion) in a 5x5 dilation of the
    flow's Sobel edges.
 
-Where the public code solves each linear system exactly (sparse direct
-solve), this implementation runs a fixed number of red-black SOR sweeps
-starting from zero increment; the warm start from the coarser level and the
-previous warp makes a few dozen sweeps enough (see ``perf/eval_flow.py``).
+Differences from the public code, each measured with ``perf/eval_flow.py``
+on the 8 Middlebury training pairs:
+
+* Each linear system is solved by a fixed number of red-black SOR sweeps
+  from a zero increment (15 in the quadratic stage, 60 in the robust ones)
+  instead of a sparse direct solve; 300 sweeps change no EPE by more than
+  0.001 on Dimetrodon.
+* Bicubic warping uses Keys' kernel on the image and on its 5-point
+  derivative images (the public code differentiates a Hermite patch).
+* The fast setting skips the weighted median at the finest level of the
+  quadratic stage (see ``quadratic_wm_finest``).
+
+Measured (warp backend, 2 threads): ``classic_nl_fast`` mean EPE 0.243 px,
+``classic_nl`` 0.243 px (more warps converge to a solution that is better on
+Urban3 and worse on Dimetrodon; the fast setting stops earlier), DIS 0.61,
+Farneback 1.21.
 """
 from __future__ import annotations
 

@@ -17,6 +17,9 @@ import numpy as np
 #: Farneback parameters: pyramid scale, levels, window, iterations, poly_n, poly_sigma, flags.
 FARNEBACK_DEFAULTS = dict(pyr_scale=0.5, levels=5, winsize=15, iterations=3, poly_n=5, poly_sigma=1.2, flags=0)
 
+#: Smallest frame side DIS accepts here (OpenCV 4.x/5.x crash on e.g. 15x40 frames).
+DIS_MIN_SIZE = 16
+
 _DIS_PRESETS = {
     "ultrafast": cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST,
     "fast": cv2.DISOPTICAL_FLOW_PRESET_FAST,
@@ -41,6 +44,11 @@ def dis_flow(frames: np.ndarray, preset: str = "medium") -> np.ndarray:
     """
     if preset not in _DIS_PRESETS:
         raise ValueError(f"preset must be one of {tuple(_DIS_PRESETS)}, got {preset!r}")
+    if min(frames.shape[1:3]) < DIS_MIN_SIZE:
+        # OpenCV's DIS raises on some smaller frames and crashes the process on others
+        # (e.g. 15x40), so refuse them all.
+        raise ValueError(f"DIS needs frames of at least {DIS_MIN_SIZE}x{DIS_MIN_SIZE} pixels, got "
+                         f"{frames.shape[1]}x{frames.shape[2]}; use 'classic_nl_fast' or 'farneback'")
     grey = grey8(frames)
     dis = cv2.DISOpticalFlow_create(_DIS_PRESETS[preset])
     out = np.empty((grey.shape[0] - 1, *grey.shape[1:], 2), np.float32)
