@@ -5,8 +5,9 @@ NumPy arrays passed as ``ti.types.ndarray()``.
 Element-wise functions run a parallel loop over the flat buffer; the image
 functions run a parallel loop over the ``T * H`` rows.
 """
-import numpy as np
 import taichi as ti
+
+from ivkernels.kernels.taichi._checks import check_array, check_positive
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
@@ -99,28 +100,9 @@ def luminance_rows(rgb: nd4, out: nd3):
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _check(name: str, a, shape, layout: str, output: bool = False) -> np.ndarray:
-    """Raise unless ``a`` is a float32 NumPy array of ``shape`` (None = any size; ``shape=None``:
-    any shape).  Returns a C-contiguous array: inputs are copied if needed, outputs must already
-    be contiguous (they are written in place)."""
-    if not isinstance(a, np.ndarray):
-        raise TypeError(f"{name} must be a numpy.ndarray of float32 {layout}, got {type(a).__name__}")
-    if a.dtype != np.float32:
-        raise TypeError(f"{name} must have dtype float32, got {a.dtype.name}")
-    if shape is not None and (a.ndim != len(shape)
-                              or any(e is not None and e != s for e, s in zip(shape, a.shape))):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {a.shape}")
-    if not a.flags.c_contiguous:
-        if output:
-            raise ValueError(f"{name} is written in place and must be C-contiguous")
-        a = np.ascontiguousarray(a)
-    return a
-
-
 def _run_flat(kernel, src, out, *extra) -> None:
-    src = _check("src", src, None, "(any shape)")
-    _check("out", out, src.shape, "(same shape as src)", output=True)
+    src = check_array("src", src, None, "(any shape)")
+    check_array("out", out, src.shape, "(same shape as src)", output=True)
     if src.size:
         kernel(src.reshape(-1), out.reshape(-1), *extra)
 
@@ -139,17 +121,15 @@ def linear_to_srgb(src, out) -> None:
 def log_floor(src, out, floor: float) -> None:
     """``out = log(max(src, floor))``, any shape, ``floor > 0``; see
     :func:`ivkernels.kernels.warp.colour.log_floor`."""
-    floor = float(floor)
-    if not floor > 0.0:
-        raise ValueError(f"floor must be > 0, got {floor}")
+    floor = check_positive("floor", floor)
     _run_flat(log_floor_flat, src, out, floor)
 
 
 def linear_rgb_to_lab(rgb, out) -> None:
     """Linear sRGB (T, H, W, 3) -> CIE L*a*b* (D65, L in [0, 100]); see
     :func:`ivkernels.kernels.warp.colour.linear_rgb_to_lab`."""
-    rgb = _check("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
-    _check("out", out, rgb.shape, "(T, H, W, 3)", output=True)
+    rgb = check_array("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
+    check_array("out", out, rgb.shape, "(T, H, W, 3)", output=True)
     if rgb.size:
         lab_rows(rgb, out)
 
@@ -157,7 +137,7 @@ def linear_rgb_to_lab(rgb, out) -> None:
 def luminance(rgb, out) -> None:
     """Rec. 709 luminance (T, H, W, 3) -> (T, H, W) of linear RGB; see
     :func:`ivkernels.kernels.warp.colour.luminance`."""
-    rgb = _check("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
-    _check("out", out, rgb.shape[:3], "(T, H, W)", output=True)
+    rgb = check_array("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
+    check_array("out", out, rgb.shape[:3], "(T, H, W)", output=True)
     if rgb.size:
         luminance_rows(rgb, out)

@@ -4,8 +4,9 @@ functions and signatures, NumPy arrays passed as ``ti.types.ndarray()``.
 
 Parallel over the ``T * H`` rows; neighbour indices clamped (replicate border).
 """
-import numpy as np
 import taichi as ti
+
+from ivkernels.kernels.taichi._checks import check_array
 
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
@@ -74,32 +75,12 @@ def divergence_negative_rows(flow: nd4, out: nd3):
             out[t, y, x] = ti.min(div, 0.0)
 
 
-def _check(name: str, a, shape: tuple, layout: str, output: bool = False) -> np.ndarray:
-    """Raise unless ``a`` is a float32 NumPy array of ``shape`` (None = any size).
-
-    Returns a C-contiguous array: inputs are copied if needed, outputs must
-    already be contiguous (they are written in place).
-    """
-    if not isinstance(a, np.ndarray):
-        raise TypeError(f"{name} must be a numpy.ndarray of float32 {layout}, got {type(a).__name__}")
-    if a.dtype != np.float32:
-        raise TypeError(f"{name} must have dtype float32, got {a.dtype.name}")
-    if a.ndim != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {a.shape}")
-    if not a.flags.c_contiguous:
-        if output:
-            raise ValueError(f"{name} is written in place and must be C-contiguous")
-        a = np.ascontiguousarray(a)
-    return a
-
-
 def image_gradient(src, gx, gy) -> None:
     """x and y derivatives with ``[1 -8 0 8 -1] / 12``, replicate border; see
     :func:`ivkernels.kernels.warp.derivatives.image_gradient` (NumPy arrays here)."""
-    src = _check("src", src, (None, None, None, None), "(T, H, W, C)")
-    _check("gx", gx, src.shape, "(T, H, W, C)", output=True)
-    _check("gy", gy, src.shape, "(T, H, W, C)", output=True)
+    src = check_array("src", src, (None, None, None, None), "(T, H, W, C)")
+    check_array("gx", gx, src.shape, "(T, H, W, C)", output=True)
+    check_array("gy", gy, src.shape, "(T, H, W, C)", output=True)
     if src.size:
         five_point_gradient_rows(src, gx, gy)
 
@@ -107,8 +88,8 @@ def image_gradient(src, gx, gy) -> None:
 def flow_sobel_magnitude(flow, out) -> None:
     """``sqrt(sum_c Sx(u_c)^2 + Sy(u_c)^2)`` with 1/8-normalised Sobel kernels; see
     :func:`ivkernels.kernels.warp.derivatives.flow_sobel_magnitude`."""
-    flow = _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
-    _check("out", out, flow.shape[:3], "(T, H, W)", output=True)
+    flow = check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
+    check_array("out", out, flow.shape[:3], "(T, H, W)", output=True)
     if flow.size:
         flow_sobel_magnitude_rows(flow, out)
 
@@ -116,7 +97,7 @@ def flow_sobel_magnitude(flow, out) -> None:
 def divergence_negative(flow, out) -> None:
     """One-sided divergence ``min(du/dx + dv/dy, 0)`` of Eq. 7, central differences; see
     :func:`ivkernels.kernels.warp.derivatives.divergence_negative`."""
-    flow = _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
-    _check("out", out, flow.shape[:3], "(T, H, W)", output=True)
+    flow = check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
+    check_array("out", out, flow.shape[:3], "(T, H, W)", output=True)
     if flow.size:
         divergence_negative_rows(flow, out)

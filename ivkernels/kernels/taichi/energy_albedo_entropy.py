@@ -12,6 +12,8 @@ from typing import NamedTuple
 import numpy as np
 import taichi as ti
 
+from ivkernels.kernels.taichi._checks import check_array, check_float, check_int
+
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
 nd2 = ti.types.ndarray(dtype=ti.f32, ndim=2)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
@@ -159,29 +161,8 @@ def _entropy_energy_frames(dots: nd1_f64, log_norm: ti.f64, lam: ti.f32, rows_pe
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _check(name: str, a, shape: tuple, layout: str, dtype=np.float32) -> None:
-    """Raise unless ``a`` is a C-contiguous ``dtype`` ndarray of ``shape`` (None = any size)."""
-    if not isinstance(a, np.ndarray):
-        raise TypeError(f"{name} must be a numpy array of {np.dtype(dtype).name} {layout}, "
-                        f"got {type(a).__name__}")
-    if a.dtype != dtype:
-        raise TypeError(f"{name} must have dtype {np.dtype(dtype).name}, got {a.dtype}")
-    if a.ndim != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {a.shape}")
-    if not a.flags.c_contiguous:
-        raise ValueError(f"{name} must be C-contiguous")
-
-
-def _check_float(name: str, v, positive: bool = False) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) \
-            or not math.isfinite(v) or (positive and v <= 0):
-        raise ValueError(f"{name} must be a finite float{' > 0' if positive else ''}, got {v!r}")
-    return float(v)
-
-
 def _check_hist(name: str, hist, T) -> int:
-    _check(name, hist, (T, None, None, None), "(T, B, B, B)")
+    check_array(name, hist, (T, None, None, None), "(T, B, B, B)", copy=False)
     B = hist.shape[1]
     if hist.shape[2] != B or hist.shape[3] != B or B < 2:
         raise ValueError(f"{name} must have shape (T, B, B, B) with B >= 2, got {hist.shape}")
@@ -206,10 +187,8 @@ def allocate_entropy_scratch(n_frames: int, bins: int, device="cpu") -> EntropyS
     """Allocate :class:`EntropyScratch` for ``n_frames`` frames and a ``bins^3`` cube."""
     if device != "cpu":
         raise ValueError(f"the taichi backend runs on device='cpu' only, got {device!r}")
-    if isinstance(n_frames, bool) or not isinstance(n_frames, int) or n_frames < 1:
-        raise ValueError(f"n_frames must be an int >= 1, got {n_frames!r}")
-    if isinstance(bins, bool) or not isinstance(bins, int) or bins < 2:
-        raise ValueError(f"bins must be an int >= 2, got {bins!r}")
+    n_frames = check_int("n_frames", n_frames, 1)
+    bins = check_int("bins", bins, 2)
     cube = (n_frames, bins, bins, bins)
     return EntropyScratch(hist=np.empty(cube, np.float32),
                           row_flags=np.empty((2, n_frames, bins, bins), np.int32),
@@ -220,12 +199,12 @@ def allocate_entropy_scratch(n_frames: int, bins: int, device="cpu") -> EntropyS
 def entropy_histogram(A, whiten, lo: float, h: float, hist, row_flags) -> None:
     """Overwrite ``hist`` (T, B, B, B) with the trilinear splat of ``W A(x)``; flag touched rows
     in ``row_flags[0]`` (see the Warp module)."""
-    _check("A", A, (None, None, None, 3), "(T, H, W, 3)")
+    check_array("A", A, (None, None, None, 3), "(T, H, W, 3)", copy=False)
     T, H, W, _ = A.shape
-    _check("whiten", whiten, (3, 3), "(3, 3)")
+    check_array("whiten", whiten, (3, 3), "(3, 3)", copy=False)
     B = _check_hist("hist", hist, T)
-    _check("row_flags", row_flags, (2, T, B, B), "(2, T, B, B)", np.int32)
-    lo, h = _check_float("lo", lo), _check_float("h", h, positive=True)
+    check_array("row_flags", row_flags, (2, T, B, B), "(2, T, B, B)", dtype=np.int32, copy=False)
+    lo, h = check_float("lo", lo), check_float("h", h, positive=True)
     hist.fill(0.0)
     row_flags.fill(0)
     if T * H and W:
@@ -236,12 +215,12 @@ def entropy_blur(hist, taps, row_flags, tmp, blurred) -> None:
     """``blurred = G * hist`` per frame with the separable 1-D ``taps`` (see the Warp module)."""
     B = _check_hist("hist", hist, None)
     T = hist.shape[0]
-    _check("taps", taps, (None,), "(2r+1,)")
+    check_array("taps", taps, (None,), "(2r+1,)", copy=False)
     if taps.shape[0] % 2 != 1:
         raise ValueError(f"taps must have an odd length 2r+1, got {taps.shape[0]}")
-    _check("row_flags", row_flags, (2, T, B, B), "(2, T, B, B)", np.int32)
-    _check("tmp", tmp, hist.shape, "(T, B, B, B) like hist")
-    _check("blurred", blurred, hist.shape, "(T, B, B, B) like hist")
+    check_array("row_flags", row_flags, (2, T, B, B), "(2, T, B, B)", dtype=np.int32, copy=False)
+    check_array("tmp", tmp, hist.shape, "(T, B, B, B) like hist", copy=False)
+    check_array("blurred", blurred, hist.shape, "(T, B, B, B) like hist", copy=False)
     _blur_along_rows(hist, taps, row_flags, blurred)
     _blur_across_rows(blurred, taps, 2, 0, 1, row_flags, tmp)
     _blur_across_rows(tmp, taps, 1, 1, -1, row_flags, blurred)
@@ -251,22 +230,22 @@ def entropy_dot(hist, blurred, dots) -> None:
     """Overwrite ``dots`` (float64 (T,)) with ``<hist_t, blurred_t>`` per frame."""
     _check_hist("hist", hist, None)
     T = hist.shape[0]
-    _check("blurred", blurred, hist.shape, "(T, B, B, B) like hist")
-    _check("dots", dots, (T,), "(T,)", np.float64)
+    check_array("blurred", blurred, hist.shape, "(T, B, B, B) like hist", copy=False)
+    check_array("dots", dots, (T,), "(T,)", dtype=np.float64, copy=False)
     dots.fill(0.0)
     _frame_dot_rows(hist, blurred, dots)
 
 
 def entropy_slice_gradient(A, whiten, lo: float, h: float, blurred, dots, gA, lam: float) -> None:
     """Add ``-2 lam W^T grad V(W A(x)) / dots[t]`` into ``gA`` (see the Warp module)."""
-    _check("A", A, (None, None, None, 3), "(T, H, W, 3)")
+    check_array("A", A, (None, None, None, 3), "(T, H, W, 3)", copy=False)
     T, H, W, _ = A.shape
-    _check("whiten", whiten, (3, 3), "(3, 3)")
+    check_array("whiten", whiten, (3, 3), "(3, 3)", copy=False)
     _check_hist("blurred", blurred, T)
-    _check("dots", dots, (T,), "(T,)", np.float64)
-    _check("gA", gA, (T, H, W, 3), "(T, H, W, 3)")
-    lo, h = _check_float("lo", lo), _check_float("h", h, positive=True)
-    lam = _check_float("lam", lam)
+    check_array("dots", dots, (T,), "(T,)", dtype=np.float64, copy=False)
+    check_array("gA", gA, (T, H, W, 3), "(T, H, W, 3)", copy=False)
+    lo, h = check_float("lo", lo), check_float("h", h, positive=True)
+    lam = check_float("lam", lam)
     if T * H and W:
         _slice_gradient_rows(A, whiten, lo, h, blurred, dots, lam, gA)
 
@@ -274,15 +253,14 @@ def entropy_slice_gradient(A, whiten, lo: float, h: float, blurred, dots, gA, la
 def entropy_energy(dots, sigma_p: float, n_pixels: int, energy_rows, lam: float) -> None:
     """Add ``E_t = -lam log(dots[t] / (n_pixels^2 sqrt(4 pi sigma_p^2)))`` into
     ``energy_rows[t * (len(energy_rows) // T)]``."""
-    _check("dots", dots, (None,), "(T,)", np.float64)
+    check_array("dots", dots, (None,), "(T,)", dtype=np.float64, copy=False)
     T = dots.shape[0]
-    _check("energy_rows", energy_rows, (None,), "(T*H,)", np.float64)
+    check_array("energy_rows", energy_rows, (None,), "(T*H,)", dtype=np.float64, copy=False)
     if T == 0 or energy_rows.shape[0] % T:
         raise ValueError(f"energy_rows length {energy_rows.shape[0]} is not a multiple of T = {T}")
-    sigma_p = _check_float("sigma_p", sigma_p, positive=True)
-    lam = _check_float("lam", lam)
-    if isinstance(n_pixels, bool) or not isinstance(n_pixels, (int, np.integer)) or n_pixels < 1:
-        raise ValueError(f"n_pixels must be an int >= 1, got {n_pixels!r}")
+    sigma_p = check_float("sigma_p", sigma_p, positive=True)
+    lam = check_float("lam", lam)
+    n_pixels = check_int("n_pixels", n_pixels, 1)
     log_norm = -2.0 * math.log(n_pixels) - 0.5 * math.log(4.0 * math.pi * sigma_p ** 2)
     _entropy_energy_frames(dots, log_norm, lam, energy_rows.shape[0] // T, energy_rows)
 
@@ -290,9 +268,9 @@ def entropy_energy(dots, sigma_p: float, n_pixels: int, energy_rows, lam: float)
 def entropy_term(A, whiten, lo: float, h: float, taps, sigma_p: float, scratch: EntropyScratch,
                  gA, energy_rows, lam: float) -> None:
     """Add Eq. 12's energy (row ``t*H``) and gradient for every frame (see the Warp module)."""
-    _check("A", A, (None, None, None, 3), "(T, H, W, 3)")
+    check_array("A", A, (None, None, None, 3), "(T, H, W, 3)", copy=False)
     T, H, W, _ = A.shape
-    _check("energy_rows", energy_rows, (T * H,), "(T*H,)", np.float64)
+    check_array("energy_rows", energy_rows, (T * H,), "(T*H,)", dtype=np.float64, copy=False)
     if not isinstance(scratch, EntropyScratch):
         raise TypeError(f"scratch must be an EntropyScratch (allocate_entropy_scratch), "
                         f"got {type(scratch).__name__}")

@@ -10,6 +10,8 @@ import math
 import numpy as np
 import taichi as ti
 
+from ivkernels.kernels.taichi._checks import check_array, check_float, check_int
+
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
 nd2 = ti.types.ndarray(dtype=ti.f32, ndim=2)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
@@ -69,29 +71,6 @@ def _gsm_smoothness_rows(A: nd4, sigma_inv: nd2, table_g: nd1, table_dg: nd1, r2
         energy_rows[t * height + y] += ti.cast(lam, ti.f64) * e
 
 
-def _check(name: str, a, shape: tuple, layout: str, dtype=np.float32) -> None:
-    """Raise unless ``a`` is a C-contiguous ``dtype`` ndarray of ``shape`` (None = any size)."""
-    if not isinstance(a, np.ndarray):
-        raise TypeError(f"{name} must be a numpy array of {np.dtype(dtype).name} {layout}, "
-                        f"got {type(a).__name__}")
-    if a.dtype != dtype:
-        raise TypeError(f"{name} must have dtype {np.dtype(dtype).name}, got {a.dtype}")
-    if a.ndim != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {a.shape}")
-    if not a.flags.c_contiguous:
-        raise ValueError(f"{name} must be C-contiguous")
-
-
-def _check_scalars(r2_max, lam, radius) -> None:
-    if not (isinstance(r2_max, (int, float)) and math.isfinite(r2_max) and r2_max > 0):
-        raise ValueError(f"r2_max must be a finite float > 0, got {r2_max!r}")
-    if not (isinstance(lam, (int, float)) and math.isfinite(lam)):
-        raise ValueError(f"lam must be a finite float, got {lam!r}")
-    if isinstance(radius, bool) or not isinstance(radius, int) or radius < 1:
-        raise ValueError(f"radius must be an int >= 1 (2 for the paper's 5x5 window), got {radius!r}")
-
-
 def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_rows,
                    lam: float, radius: int = 2) -> None:
     """Add Eq. 11's GSM smoothness energy and gradient (see the Warp module).
@@ -100,17 +79,19 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
     ``table_g``, ``table_dg`` (n,) float32; ``gA`` (T, H, W, 3) float32 and
     ``energy_rows`` (T*H,) float64 accumulated.
     """
-    _check("A", A, (None, None, None, 3), "(T, H, W, 3)")
+    check_array("A", A, (None, None, None, 3), "(T, H, W, 3)", copy=False)
     T, H, W, _ = A.shape
-    _check("sigma_inv", sigma_inv, (3, 3), "(3, 3)")
-    _check("table_g", table_g, (None,), "(n,)")
+    check_array("sigma_inv", sigma_inv, (3, 3), "(3, 3)", copy=False)
+    check_array("table_g", table_g, (None,), "(n,)", copy=False)
     n = table_g.shape[0]
     if n < 2:
         raise ValueError(f"table_g must hold at least 2 entries, got {n}")
-    _check("table_dg", table_dg, (n,), "(n,) like table_g")
-    _check("gA", gA, (T, H, W, 3), "(T, H, W, 3)")
-    _check("energy_rows", energy_rows, (T * H,), "(T*H,)", np.float64)
-    _check_scalars(r2_max, lam, radius)
+    check_array("table_dg", table_dg, (n,), "(n,) like table_g", copy=False)
+    check_array("gA", gA, (T, H, W, 3), "(T, H, W, 3)", copy=False)
+    check_array("energy_rows", energy_rows, (T * H,), "(T*H,)", dtype=np.float64, copy=False)
+    r2_max = check_float("r2_max", r2_max, positive=True)
+    lam = check_float("lam", lam)
+    radius = check_int("radius", radius, 1, " (2 for the paper's 5x5 window)")
     if T * H == 0 or W == 0:
         return
     _gsm_smoothness_rows(A, sigma_inv, table_g, table_dg, float(r2_max),

@@ -9,6 +9,8 @@ iteration that owns it.
 import numpy as np
 import taichi as ti
 
+from ivkernels.kernels.taichi._checks import check_array
+
 nd1_f64 = ti.types.ndarray(dtype=ti.f64, ndim=1)
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
@@ -16,7 +18,7 @@ nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
 
 @ti.func
 def charbonnier(z, eps):
-    """``sqrt(z^2 + eps^2)``, the differentiable L1 of Eq. 3."""
+    """``sqrt(z^2 + eps^2)``, the differentiable L1 of Eq. 3 (and of the local shading smoothness, Eq. 9)."""
     return ti.sqrt(z * z + eps * eps)
 
 
@@ -43,37 +45,17 @@ def data_term_rows(I: nd4, A: nd4, S: nd3, w_lum: nd3, gA: nd4, gS: nd3, energy_
         energy_rows[r] += ti.cast(lam, ti.f64) * e
 
 
-def _check(name: str, a, shape: tuple, layout: str, dtype=np.float32, output: bool = False) -> np.ndarray:
-    """Raise unless ``a`` is a NumPy array of ``dtype`` and ``shape`` (None = any size).
-
-    Returns a C-contiguous array: inputs are copied if needed, outputs must
-    already be contiguous (they are updated in place).
-    """
-    if not isinstance(a, np.ndarray):
-        raise TypeError(f"{name} must be a numpy.ndarray of {np.dtype(dtype).name} {layout}, got {type(a).__name__}")
-    if a.dtype != dtype:
-        raise TypeError(f"{name} must have dtype {np.dtype(dtype).name}, got {a.dtype.name}")
-    if a.ndim != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {a.shape}")
-    if not a.flags.c_contiguous:
-        if output:
-            raise ValueError(f"{name} is updated in place and must be C-contiguous")
-        a = np.ascontiguousarray(a)
-    return a
-
-
 def data_term(I, A, S, w_lum, gA, gS, energy_rows, lam: float = 10.0, eps: float = 0.001) -> None:
     """Add the data term of Eq. 3 and its gradient; see
     :func:`ivkernels.kernels.warp.energy_data.data_term` (NumPy arrays here)."""
-    I = _check("I", I, (None, None, None, 3), "(T, H, W, 3)")
+    I = check_array("I", I, (None, None, None, 3), "(T, H, W, 3)")
     t, h, w, _ = I.shape
-    A = _check("A", A, (t, h, w, 3), "(T, H, W, 3)")
-    S = _check("S", S, (t, h, w), "(T, H, W)")
-    w_lum = _check("w_lum", w_lum, (t, h, w), "(T, H, W)")
-    _check("gA", gA, (t, h, w, 3), "(T, H, W, 3)", output=True)
-    _check("gS", gS, (t, h, w), "(T, H, W)", output=True)
-    _check("energy_rows", energy_rows, (t * h,), "(T*H,)", np.float64, output=True)
+    A = check_array("A", A, (t, h, w, 3), "(T, H, W, 3)")
+    S = check_array("S", S, (t, h, w), "(T, H, W)")
+    w_lum = check_array("w_lum", w_lum, (t, h, w), "(T, H, W)")
+    check_array("gA", gA, (t, h, w, 3), "(T, H, W, 3)", output=True)
+    check_array("gS", gS, (t, h, w), "(T, H, W)", output=True)
+    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dtype=np.float64, output=True)
     if t * h * w == 0:
         return
     data_term_rows(I, A, S, w_lum, gA, gS, energy_rows, float(lam), float(eps))

@@ -1,19 +1,17 @@
 """Taichi mirror of :mod:`ivkernels.kernels.warp.energy_shading` (Eq. 9 local
 smoothness, Eq. 13 coupling): same host functions and signatures, NumPy arrays
 passed as ``ti.types.ndarray()``.  The outermost loop runs over rows in parallel.
+The local term's Charbonnier penalty is the data term's (:mod:`ivkernels.kernels.taichi.energy_data`).
 """
 
 import numpy as np
 import taichi as ti
 
+from ivkernels.kernels.taichi._checks import check_array
+from ivkernels.kernels.taichi.energy_data import charbonnier
+
 nd1_f64 = ti.types.ndarray(dtype=ti.f64, ndim=1)
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
-
-
-@ti.func
-def charbonnier(z, eps):
-    """``sqrt(z^2 + eps^2)``."""
-    return ti.sqrt(z * z + eps * eps)
 
 
 @ti.kernel
@@ -58,33 +56,13 @@ def coupling_rows(S: nd3, S_tilde: nd3, w_bnd: nd3, gS: nd3, energy_rows: nd1_f6
         energy_rows[r] += ti.cast(lam, ti.f64) * e
 
 
-def _check(name: str, a, shape: tuple, layout: str, dtype=np.float32, output: bool = False) -> np.ndarray:
-    """Raise unless ``a`` is a NumPy array of ``dtype`` and ``shape`` (None = any size).
-
-    Returns a C-contiguous array: inputs are copied if needed, outputs must
-    already be contiguous (they are updated in place).
-    """
-    if not isinstance(a, np.ndarray):
-        raise TypeError(f"{name} must be a numpy.ndarray of {np.dtype(dtype).name} {layout}, got {type(a).__name__}")
-    if a.dtype != dtype:
-        raise TypeError(f"{name} must have dtype {np.dtype(dtype).name}, got {a.dtype.name}")
-    if a.ndim != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {a.shape}")
-    if not a.flags.c_contiguous:
-        if output:
-            raise ValueError(f"{name} is updated in place and must be C-contiguous")
-        a = np.ascontiguousarray(a)
-    return a
-
-
 def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
     """Add the local shading smoothness of Eq. 9 and its gradient; see
     :func:`ivkernels.kernels.warp.energy_shading.shading_smoothness`."""
-    S = _check("S", S, (None, None, None), "(T, H, W)")
+    S = check_array("S", S, (None, None, None), "(T, H, W)")
     t, h, w = S.shape
-    _check("gS", gS, (t, h, w), "(T, H, W)", output=True)
-    _check("energy_rows", energy_rows, (t * h,), "(T*H,)", np.float64, output=True)
+    check_array("gS", gS, (t, h, w), "(T, H, W)", output=True)
+    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dtype=np.float64, output=True)
     if t * h * w == 0:
         return
     shading_smoothness_rows(S, gS, energy_rows, float(lam), float(eps))
@@ -93,14 +71,14 @@ def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001)
 def coupling_term(S, S_tilde, w_bnd, gS, energy_rows, lam: float = 10.0) -> None:
     """Add the coupling term of Eq. 13 and its gradient in S; see
     :func:`ivkernels.kernels.warp.energy_shading.coupling_term`."""
-    S = _check("S", S, (None, None, None), "(T, H, W)")
+    S = check_array("S", S, (None, None, None), "(T, H, W)")
     t, h, w = S.shape
-    S_tilde = _check("S_tilde", S_tilde, (t, h, w), "(T, H, W)")
-    w_bnd = _check("w_bnd", w_bnd, (None, h, w), "(T', H, W)")
+    S_tilde = check_array("S_tilde", S_tilde, (t, h, w), "(T, H, W)")
+    w_bnd = check_array("w_bnd", w_bnd, (None, h, w), "(T', H, W)")
     if w_bnd.shape[0] > t:
         raise ValueError(f"w_bnd has {w_bnd.shape[0]} frames but S only {t}; expected T' <= T")
-    _check("gS", gS, (t, h, w), "(T, H, W)", output=True)
-    _check("energy_rows", energy_rows, (t * h,), "(T*H,)", np.float64, output=True)
+    check_array("gS", gS, (t, h, w), "(T, H, W)", output=True)
+    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dtype=np.float64, output=True)
     if w_bnd.shape[0] * h * w == 0:
         return
     coupling_rows(S, S_tilde, w_bnd, gS, energy_rows, float(lam))

@@ -11,6 +11,8 @@ position, as :mod:`ivkernels.kernels.warp.sampling` does.
 import numpy as np
 import taichi as ti
 
+from ivkernels.kernels.taichi._checks import check_array
+
 nd1_f64 = ti.types.ndarray(dtype=ti.f64, ndim=1)
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
@@ -79,41 +81,21 @@ def temporal_rows(X: nd4, flow: nd4, occ: nd3, gX: nd4, energy_rows: nd1_f64, la
         energy_rows[r] += ti.cast(lam, ti.f64) * e
 
 
-def _check(name: str, a, shape: tuple, layout: str, dtype=np.float32, output: bool = False) -> np.ndarray:
-    """Raise unless ``a`` is a NumPy array of ``dtype`` and ``shape`` (None = any size).
-
-    Returns a C-contiguous array: inputs are copied if needed, outputs must
-    already be contiguous (they are updated in place).
-    """
-    if not isinstance(a, np.ndarray):
-        raise TypeError(f"{name} must be a numpy.ndarray of {np.dtype(dtype).name} {layout}, got {type(a).__name__}")
-    if a.dtype != dtype:
-        raise TypeError(f"{name} must have dtype {np.dtype(dtype).name}, got {a.dtype.name}")
-    if a.ndim != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {a.shape}")
-    if not a.flags.c_contiguous:
-        if output:
-            raise ValueError(f"{name} is updated in place and must be C-contiguous")
-        a = np.ascontiguousarray(a)
-    return a
-
-
 def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0) -> None:
     """Add the temporal term of Eq. 4 (albedo) or Eq. 8 (shading) and its gradient; see
     :func:`ivkernels.kernels.warp.energy_temporal.temporal_term` (NumPy arrays here;
     ``X`` (T, H, W, C) or (T, H, W), ``gX`` shaped like ``X``)."""
     if isinstance(X, np.ndarray) and X.ndim == 3:
-        X = _check("X", X, (None, None, None), "(T, H, W)")
-        _check("gX", gX, X.shape, "(T, H, W) like X", output=True)
+        X = check_array("X", X, (None, None, None), "(T, H, W)")
+        check_array("gX", gX, X.shape, "(T, H, W) like X", output=True)
         X = X.reshape(*X.shape, 1)
         gX = gX.reshape(*gX.shape, 1)
-    X = _check("X", X, (None, None, None, None), "(T, H, W, C) or (T, H, W)")
+    X = check_array("X", X, (None, None, None, None), "(T, H, W, C) or (T, H, W)")
     t, h, w, c = X.shape
-    _check("gX", gX, (t, h, w, c), "(T, H, W, C) like X", output=True)
-    flow = _check("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)")
-    occ = _check("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)")
-    _check("energy_rows", energy_rows, (t * h,), "(T*H,)", np.float64, output=True)
+    check_array("gX", gX, (t, h, w, c), "(T, H, W, C) like X", output=True)
+    flow = check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)")
+    occ = check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)")
+    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dtype=np.float64, output=True)
     if t < 2 or h * w * c == 0:
         return
     temporal_rows(X, flow, occ, gX, energy_rows, float(lam), float(alpha))

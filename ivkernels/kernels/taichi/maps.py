@@ -5,11 +5,9 @@ NumPy arrays passed as ``ti.types.ndarray()``.
 The next frame's Lab colour at ``x + u`` is sampled with the bilinear helpers
 of :mod:`ivkernels.kernels.taichi.sampling`.  Parallel over the ``T * H`` rows.
 """
-import numbers
-
-import numpy as np
 import taichi as ti
 
+from ivkernels.kernels.taichi._checks import check_array, check_int, check_positive
 from ivkernels.kernels.taichi.sampling import bilinear_at, clamped_corners, inside_image
 
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
@@ -84,38 +82,15 @@ def boundary_dilate_rows(magnitude: nd3, out: nd3, threshold: ti.f32, radius: ti
             out[t, y, x] = hit
 
 
-def _check(name: str, a, shape: tuple, layout: str, output: bool = False) -> np.ndarray:
-    """Raise unless ``a`` is a float32 NumPy array of ``shape`` (None = any size).
-
-    Returns a C-contiguous array: inputs are copied if needed, outputs must
-    already be contiguous (they are written in place).
-    """
-    if not isinstance(a, np.ndarray):
-        raise TypeError(f"{name} must be a numpy.ndarray of float32 {layout}, got {type(a).__name__}")
-    if a.dtype != np.float32:
-        raise TypeError(f"{name} must have dtype float32, got {a.dtype.name}")
-    if a.ndim != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {a.shape}")
-    if not a.flags.c_contiguous:
-        if output:
-            raise ValueError(f"{name} is written in place and must be C-contiguous")
-        a = np.ascontiguousarray(a)
-    return a
-
-
 def _check_occlusion_args(lab, flow, div_neg, out, sigma_e, sigma_d):
-    lab = _check("lab", lab, (None, None, None, 3), "(T+1, H, W, 3)")
+    lab = check_array("lab", lab, (None, None, None, 3), "(T+1, H, W, 3)")
     if lab.shape[0] < 2:
         raise ValueError(f"lab must hold at least two frames (T+1, H, W, 3), got {lab.shape}")
     t, h, w = lab.shape[0] - 1, lab.shape[1], lab.shape[2]
-    flow = _check("flow", flow, (t, h, w, 2), "(T, H, W, 2) with T = lab frames - 1")
-    div_neg = _check("div_neg", div_neg, (t, h, w), "(T, H, W)")
-    _check("out", out, (t, h, w), "(T, H, W)", output=True)
-    sigma_e, sigma_d = float(sigma_e), float(sigma_d)
-    if not (sigma_e > 0.0 and sigma_d > 0.0):
-        raise ValueError(f"sigma_e and sigma_d must be > 0, got {sigma_e}, {sigma_d}")
-    return lab, flow, div_neg, sigma_e, sigma_d
+    flow = check_array("flow", flow, (t, h, w, 2), "(T, H, W, 2) with T = lab frames - 1")
+    div_neg = check_array("div_neg", div_neg, (t, h, w), "(T, H, W)")
+    check_array("out", out, (t, h, w), "(T, H, W)", output=True)
+    return lab, flow, div_neg, check_positive("sigma_e", sigma_e), check_positive("sigma_d", sigma_d)
 
 
 def occlusion_soft(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: float = 0.3) -> None:
@@ -138,9 +113,8 @@ def occlusion_binary(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: fl
 def motion_boundary(sobel_mag, out, threshold: float, radius: int) -> None:
     """``w_bnd``: 1 where the (2r+1)^2 window holds ``sobel_mag > threshold``; see
     :func:`ivkernels.kernels.warp.maps.motion_boundary`."""
-    sobel_mag = _check("sobel_mag", sobel_mag, (None, None, None), "(T, H, W)")
-    _check("out", out, sobel_mag.shape, "(T, H, W)", output=True)
-    if isinstance(radius, bool) or not isinstance(radius, numbers.Integral) or radius < 0:
-        raise ValueError(f"radius must be an int >= 0, got {radius!r}")
+    sobel_mag = check_array("sobel_mag", sobel_mag, (None, None, None), "(T, H, W)")
+    check_array("out", out, sobel_mag.shape, "(T, H, W)", output=True)
+    radius = check_int("radius", radius, 0)
     if out.size:
         boundary_dilate_rows(sobel_mag, out, float(threshold), int(radius))

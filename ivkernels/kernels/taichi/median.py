@@ -12,6 +12,7 @@ import threading
 import numpy as np
 import taichi as ti
 
+from ivkernels.kernels.taichi._checks import check_array, check_int, check_positive
 from ivkernels.kernels.warp.median import KMEANS_ITERATIONS, MIN_SEPARATION, median_network
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
@@ -266,39 +267,6 @@ def weighted_median_flow_rows(flow: nd4, lab: nd4, occ: nd3, mask: nd3, out: nd4
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _check(name: str, a, shape: tuple, layout: str, dtype=np.float32, output: bool = False) -> np.ndarray:
-    """Raise unless ``a`` is a NumPy array of ``dtype`` and ``shape`` (None = any size).
-
-    Returns a C-contiguous array: inputs are copied if needed, outputs must
-    already be contiguous (they are written in place).
-    """
-    if not isinstance(a, np.ndarray):
-        raise TypeError(f"{name} must be a numpy.ndarray of {np.dtype(dtype).name} {layout}, got {type(a).__name__}")
-    if a.dtype != dtype:
-        raise TypeError(f"{name} must have dtype {np.dtype(dtype).name}, got {a.dtype.name}")
-    if a.ndim != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {a.shape}")
-    if not a.flags.c_contiguous:
-        if output:
-            raise ValueError(f"{name} is written in place and must be C-contiguous")
-        a = np.ascontiguousarray(a)
-    return a
-
-
-def _check_radius(radius) -> int:
-    if isinstance(radius, bool) or not isinstance(radius, int) or radius < 0:
-        raise ValueError(f"radius must be a non-negative int, got {radius!r}")
-    return radius
-
-
-def _check_positive(name: str, value) -> float:
-    value = float(value)
-    if not value > 0.0:
-        raise ValueError(f"{name} must be > 0, got {value!r}")
-    return value
-
-
 def shading_scratch_shape(S_shape: tuple, radius: int) -> tuple:
     """Shape of the float32 scratch of :func:`weighted_median_shading`: ``(T*H, 2*(2r+1)^2)``."""
     return (S_shape[0] * S_shape[1], 2 * (2 * radius + 1) ** 2)
@@ -323,7 +291,7 @@ def _spatial_weights(radius: int, sigma: float) -> np.ndarray:
 def _scratch(scratch, shape: tuple) -> np.ndarray:
     """The caller's scratch (checked) or a cached one of ``shape`` for the calling thread."""
     if scratch is not None:
-        return _check("scratch", scratch, shape, "(rows, floats per row)", output=True)
+        return check_array("scratch", scratch, shape, "(rows, floats per row)", output=True)
     key = (shape, threading.get_ident())
     with _scratch_lock:
         buf = _scratch_cache.get(key)
@@ -336,9 +304,9 @@ def _scratch(scratch, shape: tuple) -> np.ndarray:
 def median5x5(src, out) -> None:
     """5x5 median of every channel, replicate border; see
     :func:`ivkernels.kernels.warp.median.median5x5` (NumPy arrays here)."""
-    src = _check("src", src, (None, None, None, None), "(T, H, W, C)")
+    src = check_array("src", src, (None, None, None, None), "(T, H, W, C)")
     t, h, w, c = src.shape
-    _check("out", out, (t, h, w, c), "(T, H, W, C)", output=True)
+    check_array("out", out, (t, h, w, c), "(T, H, W, C)", output=True)
     if src.size:
         median5x5_rows(src, out, _NETWORK25)
 
@@ -347,16 +315,16 @@ def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float
                             lam: float = 0.001, *, scratch=None) -> None:
     """S~ update of Eq. 13 (weighted median with surf of Eq. 10 and Li & Osher's
     quadratic pull); see :func:`ivkernels.kernels.warp.median.weighted_median_shading`."""
-    S = _check("S", S, (None, None, None), "(T, H, W)")
+    S = check_array("S", S, (None, None, None), "(T, H, W)")
     t, h, w = S.shape
-    flow = _check("flow", flow, (None, h, w, 2), "(T', H, W, 2)")
+    flow = check_array("flow", flow, (None, h, w, 2), "(T', H, W, 2)")
     tp = flow.shape[0]
     if tp > t:
         raise ValueError(f"flow has {tp} frames but S only {t}; expected T' <= T")
-    w_bnd = _check("w_bnd", w_bnd, (tp, h, w), "(T', H, W)")
-    _check("out", out, (t, h, w), "(T, H, W)", output=True)
-    radius = _check_radius(radius)
-    sigma_s = _check_positive("sigma_s", sigma_s)
+    w_bnd = check_array("w_bnd", w_bnd, (tp, h, w), "(T', H, W)")
+    check_array("out", out, (t, h, w), "(T, H, W)", output=True)
+    radius = check_int("radius", radius, 0)
+    sigma_s = check_positive("sigma_s", sigma_s)
     lam = float(lam)
     if not lam >= 0.0:
         raise ValueError(f"lam must be >= 0, got {lam!r}")
@@ -370,15 +338,15 @@ def weighted_median_flow(flow, lab, occ, mask, out, radius: int = 7, sigma_x: fl
                          sigma_i: float = 7.0, *, scratch=None) -> None:
     """Classic+NL's non-local flow median; see
     :func:`ivkernels.kernels.warp.median.weighted_median_flow` (NumPy arrays here)."""
-    flow = _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
+    flow = check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
     t, h, w, _ = flow.shape
-    lab = _check("lab", lab, (t, h, w, 3), "(T, H, W, 3)")
-    occ = _check("occ", occ, (t, h, w), "(T, H, W)")
-    mask = _check("mask", mask, (t, h, w), "(T, H, W)")
-    _check("out", out, (t, h, w, 2), "(T, H, W, 2)", output=True)
-    radius = _check_radius(radius)
-    sigma_x = _check_positive("sigma_x", sigma_x)
-    sigma_i = _check_positive("sigma_i", sigma_i)
+    lab = check_array("lab", lab, (t, h, w, 3), "(T, H, W, 3)")
+    occ = check_array("occ", occ, (t, h, w), "(T, H, W)")
+    mask = check_array("mask", mask, (t, h, w), "(T, H, W)")
+    check_array("out", out, (t, h, w, 2), "(T, H, W, 2)", output=True)
+    radius = check_int("radius", radius, 0)
+    sigma_x = check_positive("sigma_x", sigma_x)
+    sigma_i = check_positive("sigma_i", sigma_i)
     buf = _scratch(scratch, flow_scratch_shape(flow.shape, radius))
     if flow.size:
         weighted_median_flow_rows(flow, lab, occ, mask, out, buf, radius, sigma_x, sigma_i)

@@ -10,6 +10,7 @@ import math
 import numpy as np
 import taichi as ti
 
+from ivkernels.kernels.taichi._checks import check_array
 from ivkernels.kernels.taichi.sampling import bilinear_at, clamped_corners
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
@@ -71,26 +72,6 @@ def resize_flow_rows(src: nd4, out: nd4, scale_x: ti.f32, scale_y: ti.f32, gain_
             out[t, y, x, 1] = bilinear_at(src, t, 1, x0, x1, fx, y0, y1, fy) * gain_y
 
 
-def _check(name: str, a, shape: tuple, layout: str, output: bool = False) -> np.ndarray:
-    """Raise unless ``a`` is a float32 NumPy array of ``shape`` (None = any size).
-
-    Returns a C-contiguous array: inputs are copied if needed, outputs must
-    already be contiguous (they are written in place).
-    """
-    if not isinstance(a, np.ndarray):
-        raise TypeError(f"{name} must be a numpy.ndarray of float32 {layout}, got {type(a).__name__}")
-    if a.dtype != np.float32:
-        raise TypeError(f"{name} must have dtype float32, got {a.dtype.name}")
-    if a.ndim != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {a.shape}")
-    if not a.flags.c_contiguous:
-        if output:
-            raise ValueError(f"{name} is written in place and must be C-contiguous")
-        a = np.ascontiguousarray(a)
-    return a
-
-
 def gaussian_kernel(sigma: float) -> np.ndarray:
     """Normalised 1-D Gaussian taps ``exp(-k^2 / 2 sigma^2)``, k = -r..r, r = max(1, ceil(3 sigma))."""
     radius = max(1, math.ceil(3.0 * sigma))
@@ -103,9 +84,9 @@ def gaussian_blur(src, out, scratch, sigma: float) -> None:
     """Separable Gaussian blur truncated at 3 sigma, replicate border; ``sigma <= 0``
     copies.  Pyramid choice: ``sigma = 1 / sqrt(2 * scale)`` before resampling by
     ``scale < 1``.  See :func:`ivkernels.kernels.warp.pyramid.gaussian_blur`."""
-    src = _check("src", src, (None, None, None, None), "(T, H, W, C)")
-    _check("out", out, src.shape, "(T, H, W, C)", output=True)
-    _check("scratch", scratch, src.shape, "(T, H, W, C)", output=True)
+    src = check_array("src", src, (None, None, None, None), "(T, H, W, C)")
+    check_array("out", out, src.shape, "(T, H, W, C)", output=True)
+    check_array("scratch", scratch, src.shape, "(T, H, W, C)", output=True)
     if np.shares_memory(scratch, src) or np.shares_memory(scratch, out):
         raise ValueError("scratch must be a separate buffer from src and out")
     sigma = float(sigma)
@@ -124,9 +105,9 @@ def gaussian_blur(src, out, scratch, sigma: float) -> None:
 
 
 def _check_resize(src, out, channels):
-    src = _check("src", src, (None, None, None, channels), "(T, h, w, C)" if channels is None else "(T, h, w, 2)")
+    src = check_array("src", src, (None, None, None, channels), "(T, h, w, C)" if channels is None else "(T, h, w, 2)")
     t, h, w, c = src.shape
-    _check("out", out, (t, None, None, c), "(T, H, W, C)" if channels is None else "(T, H, W, 2)", output=True)
+    check_array("out", out, (t, None, None, c), "(T, H, W, C)" if channels is None else "(T, H, W, 2)", output=True)
     if min(h, w, out.shape[1], out.shape[2]) < 1:
         raise ValueError(f"image sizes must be >= 1, got src {src.shape}, out {out.shape}")
     return src, src.shape[2] / out.shape[2], src.shape[1] / out.shape[1]

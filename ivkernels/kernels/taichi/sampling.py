@@ -6,8 +6,9 @@ The outermost loop runs over the ``T * H`` rows in parallel, each iteration
 looping over ``x``.  The splat scatters with ``+=`` on the output ndarray,
 which Taichi makes atomic inside the parallel loop.
 """
-import numpy as np
 import taichi as ti
+
+from ivkernels.kernels.taichi._checks import check_array
 
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
@@ -145,34 +146,14 @@ def bicubic_warp_rows(src: nd4, flow: nd4, out: nd4, inside: nd3):
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _check(name: str, a, shape: tuple, layout: str, output: bool = False) -> np.ndarray:
-    """Raise unless ``a`` is a float32 NumPy array of ``shape`` (None = any size).
-
-    Returns a C-contiguous array: inputs are copied if needed, outputs must
-    already be contiguous (they are written in place).
-    """
-    if not isinstance(a, np.ndarray):
-        raise TypeError(f"{name} must be a numpy.ndarray of float32 {layout}, got {type(a).__name__}")
-    if a.dtype != np.float32:
-        raise TypeError(f"{name} must have dtype float32, got {a.dtype.name}")
-    if a.ndim != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {a.shape}")
-    if not a.flags.c_contiguous:
-        if output:
-            raise ValueError(f"{name} is written in place and must be C-contiguous")
-        a = np.ascontiguousarray(a)
-    return a
-
-
 def _check_warp_args(src, flow, out, inside):
-    src = _check("src", src, (None, None, None, None), "(T, H, W, C)")
+    src = check_array("src", src, (None, None, None, None), "(T, H, W, C)")
     t, h, w, c = src.shape
     if c < 1:
         raise ValueError(f"src must have at least one channel, got shape {src.shape}")
-    flow = _check("flow", flow, (t, h, w, 2), "(T, H, W, 2)")
-    _check("out", out, (t, h, w, c), "(T, H, W, C)", output=True)
-    _check("inside", inside, (t, h, w), "(T, H, W)", output=True)
+    flow = check_array("flow", flow, (t, h, w, 2), "(T, H, W, 2)")
+    check_array("out", out, (t, h, w, c), "(T, H, W, C)", output=True)
+    check_array("inside", inside, (t, h, w), "(T, H, W)", output=True)
     return src, flow
 
 
@@ -187,10 +168,10 @@ def warp_bilinear(src, flow, out, inside) -> None:
 def splat_bilinear(values, flow, out) -> None:
     """``out +=`` the transpose of :func:`warp_bilinear` applied to ``values`` (atomic
     adds); see :func:`ivkernels.kernels.warp.sampling.splat_bilinear`."""
-    values = _check("values", values, (None, None, None, None), "(T, H, W, C)")
+    values = check_array("values", values, (None, None, None, None), "(T, H, W, C)")
     t, h, w, c = values.shape
-    flow = _check("flow", flow, (t, h, w, 2), "(T, H, W, 2)")
-    _check("out", out, (t, h, w, c), "(T, H, W, C)", output=True)
+    flow = check_array("flow", flow, (t, h, w, 2), "(T, H, W, 2)")
+    check_array("out", out, (t, h, w, c), "(T, H, W, C)", output=True)
     if values.size:
         bilinear_splat_rows(values, flow, out)
 

@@ -9,6 +9,8 @@ the host finishes, so both backends reduce in the same order.
 import numpy as np
 import taichi as ti
 
+from ivkernels.kernels.taichi._checks import check_vector
+
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
 nd1_f64 = ti.types.ndarray(dtype=ti.f64, ndim=1)
 
@@ -68,27 +70,6 @@ def fill_flat(x: nd1, value: ti.f32):
         x[i] = value
 
 
-def _check(name: str, a, n=None, output: bool = False) -> np.ndarray:
-    """Raise unless ``a`` is a non-empty 1-D float32 NumPy array (of length ``n``).
-
-    Returns a C-contiguous array: inputs are copied if needed, outputs must
-    already be contiguous (they are written in place).
-    """
-    if not isinstance(a, np.ndarray):
-        raise TypeError(f"{name} must be a 1-D numpy.ndarray of float32, got {type(a).__name__}")
-    if a.dtype != np.float32:
-        raise TypeError(f"{name} must have dtype float32, got {a.dtype.name}")
-    if a.ndim != 1 or a.shape[0] < 1:
-        raise ValueError(f"{name} must be a non-empty 1-D vector (n,), got shape {a.shape}")
-    if n is not None and a.shape[0] != n:
-        raise ValueError(f"{name} must have the same length as the first vector ({n}), got {a.shape[0]}")
-    if not a.flags.c_contiguous:
-        if output:
-            raise ValueError(f"{name} is written in place and must be C-contiguous")
-        a = np.ascontiguousarray(a)
-    return a
-
-
 def _chunks(n: int) -> int:
     return (n + CHUNK - 1) // CHUNK
 
@@ -96,8 +77,8 @@ def _chunks(n: int) -> int:
 def dot(a, b) -> float:
     """``sum(a * b)`` as a Python float (float64 per chunk, summed on the host); see
     :func:`ivkernels.kernels.warp.vecops.dot` (NumPy arrays here)."""
-    a = _check("a", a)
-    b = _check("b", b, a.shape[0])
+    a = check_vector("a", a)
+    b = check_vector("b", b, a.shape[0])
     partial = np.empty(_chunks(a.shape[0]), np.float64)
     dot_chunks(a, b, partial, CHUNK)
     return float(partial.sum())
@@ -105,7 +86,7 @@ def dot(a, b) -> float:
 
 def norm_inf(x) -> float:
     """``max |x|`` as a Python float."""
-    x = _check("x", x)
+    x = check_vector("x", x)
     partial = np.empty(_chunks(x.shape[0]), np.float32)
     max_abs_chunks(x, partial, CHUNK)
     return float(partial.max())
@@ -113,33 +94,33 @@ def norm_inf(x) -> float:
 
 def axpy(alpha: float, x, y) -> None:
     """``y += alpha * x`` (float32)."""
-    x = _check("x", x)
-    _check("y", y, x.shape[0], output=True)
+    x = check_vector("x", x)
+    check_vector("y", y, x.shape[0], output=True)
     axpy_flat(float(alpha), x, y)
 
 
 def scale(alpha: float, x) -> None:
     """``x *= alpha`` (float32)."""
-    _check("x", x, output=True)
+    check_vector("x", x, output=True)
     scale_flat(float(alpha), x)
 
 
 def lincomb(out, a: float, x, b: float, y) -> None:
     """``out = a * x + b * y`` (float32); ``out`` may be ``x`` or ``y``."""
-    _check("out", out, output=True)
-    x = _check("x", x, out.shape[0])
-    y = _check("y", y, out.shape[0])
+    check_vector("out", out, output=True)
+    x = check_vector("x", x, out.shape[0])
+    y = check_vector("y", y, out.shape[0])
     lincomb_flat(out, float(a), x, float(b), y)
 
 
 def copy(src, dst) -> None:
     """``dst[:] = src``."""
-    src = _check("src", src)
-    _check("dst", dst, src.shape[0], output=True)
+    src = check_vector("src", src)
+    check_vector("dst", dst, src.shape[0], output=True)
     copy_flat(src, dst)
 
 
 def fill(x, value: float) -> None:
     """``x[:] = value``."""
-    _check("x", x, output=True)
+    check_vector("x", x, output=True)
     fill_flat(x, float(value))

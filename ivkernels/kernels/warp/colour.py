@@ -19,12 +19,12 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.warp._checks import check_array, check_positive
 
 wp.set_module_options({"enable_backward": False})
 
 #: Elements per kernel thread for the element-wise (any shape) functions.
 CHUNK = 4096
-
 
 
 # ----------------------------------------------------------------------------
@@ -131,24 +131,10 @@ def luminance_rows(row_begin: int, rgb: wp.array4d(dtype=float), out: wp.array3d
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _check(name: str, a, shape: tuple, layout: str, device=None) -> None:
-    """Raise unless ``a`` is a float32 ``wp.array`` of ``shape`` (None = any size) on ``device``."""
-    if not isinstance(a, wp.array):
-        raise TypeError(f"{name} must be a wp.array of float32 {layout}, got {type(a).__name__}")
-    if a.dtype != wp.float32:
-        raise TypeError(f"{name} must have dtype float32, got {wp.types.type_repr(a.dtype)}")
-    if shape is not None and (len(a.shape) != len(shape)
-                              or any(e is not None and e != s for e, s in zip(shape, a.shape))):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
-    if device is not None and a.device != device:
-        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
-
-
 def _flat_pair(src, out):
     """Flat views of two C-contiguous float32 arrays of the same (any) shape."""
-    _check("src", src, None, "(any shape)")
-    _check("out", out, tuple(src.shape), "(same shape as src)", src.device)
+    check_array("src", src, None, "(any shape)")
+    check_array("out", out, tuple(src.shape), "(same shape as src)", src.device)
     for name, a in (("src", src), ("out", out)):
         if not a.is_contiguous:
             raise ValueError(f"{name} must be C-contiguous (element-wise kernels run on the flat buffer)")
@@ -186,9 +172,7 @@ def log_floor(src, out, floor: float) -> None:
     ``floor`` must be > 0 (it bounds the log from below: ``log(floor)``).
     C-contiguous float32, ``out`` may be ``src``.
     """
-    floor = float(floor)
-    if not floor > 0.0:
-        raise ValueError(f"floor must be > 0, got {floor}")
+    floor = check_positive("floor", floor)
     _launch_chunks(log_floor_chunks, src, out, floor)
 
 
@@ -201,8 +185,8 @@ def linear_rgb_to_lab(rgb, out) -> None:
     out : wp.array float32 (T, H, W, 3), written: (L*, a*, b*), L* in [0, 100]
         (white (1, 1, 1) -> (100, 0, 0)).  May be ``rgb``.
     """
-    _check("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
-    _check("out", out, tuple(rgb.shape), "(T, H, W, 3)", rgb.device)
+    check_array("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
+    check_array("out", out, tuple(rgb.shape), "(T, H, W, 3)", rgb.device)
     launch_rows(lab_rows, rgb.shape[0] * rgb.shape[1], [rgb, out], device=rgb.device)
 
 
@@ -214,6 +198,6 @@ def luminance(rgb, out) -> None:
     rgb : wp.array float32 (T, H, W, 3), linear.
     out : wp.array float32 (T, H, W), written, linear.
     """
-    _check("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
-    _check("out", out, tuple(rgb.shape[:3]), "(T, H, W)", rgb.device)
+    check_array("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
+    check_array("out", out, tuple(rgb.shape[:3]), "(T, H, W)", rgb.device)
     launch_rows(luminance_rows, rgb.shape[0] * rgb.shape[1], [rgb, out], device=rgb.device)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.warp._checks import check_array
 
 wp.set_module_options({"enable_backward": False})
 
@@ -91,19 +92,6 @@ def divergence_negative_rows(row_begin: int, flow: wp.array4d(dtype=float), out:
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _check(name: str, a, shape: tuple, layout: str, device=None) -> None:
-    """Raise unless ``a`` is a float32 ``wp.array`` of ``shape`` (None = any size) on ``device``."""
-    if not isinstance(a, wp.array):
-        raise TypeError(f"{name} must be a wp.array of float32 {layout}, got {type(a).__name__}")
-    if a.dtype != wp.float32:
-        raise TypeError(f"{name} must have dtype float32, got {wp.types.type_repr(a.dtype)}")
-    if len(a.shape) != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
-    if device is not None and a.device != device:
-        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
-
-
 def image_gradient(src, gx, gy) -> None:
     """x and y derivatives with the 5-point filter ``[1 -8 0 8 -1] / 12``.
 
@@ -116,9 +104,9 @@ def image_gradient(src, gx, gy) -> None:
     src : wp.array float32 (T, H, W, C), any C >= 1.
     gx, gy : wp.array float32 (T, H, W, C), written (must not overlap src).
     """
-    _check("src", src, (None, None, None, None), "(T, H, W, C)")
-    _check("gx", gx, tuple(src.shape), "(T, H, W, C)", src.device)
-    _check("gy", gy, tuple(src.shape), "(T, H, W, C)", src.device)
+    check_array("src", src, (None, None, None, None), "(T, H, W, C)")
+    check_array("gx", gx, tuple(src.shape), "(T, H, W, C)", src.device)
+    check_array("gy", gy, tuple(src.shape), "(T, H, W, C)", src.device)
     launch_rows(five_point_gradient_rows, src.shape[0] * src.shape[1], [src, gx, gy], device=src.device)
 
 
@@ -134,8 +122,8 @@ def flow_sobel_magnitude(flow, out) -> None:
     flow : wp.array float32 (T, H, W, 2), pixels.
     out : wp.array float32 (T, H, W), written, pixels per pixel.
     """
-    _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
-    _check("out", out, tuple(flow.shape[:3]), "(T, H, W)", flow.device)
+    check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
+    check_array("out", out, tuple(flow.shape[:3]), "(T, H, W)", flow.device)
     launch_rows(flow_sobel_magnitude_rows, flow.shape[0] * flow.shape[1], [flow, out], device=flow.device)
 
 
@@ -150,6 +138,6 @@ def divergence_negative(flow, out) -> None:
     flow : wp.array float32 (T, H, W, 2), pixels.
     out : wp.array float32 (T, H, W), written, <= 0.
     """
-    _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
-    _check("out", out, tuple(flow.shape[:3]), "(T, H, W)", flow.device)
+    check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
+    check_array("out", out, tuple(flow.shape[:3]), "(T, H, W)", flow.device)
     launch_rows(divergence_negative_rows, flow.shape[0] * flow.shape[1], [flow, out], device=flow.device)

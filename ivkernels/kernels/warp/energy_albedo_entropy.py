@@ -45,10 +45,10 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-import numpy as np
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.warp._checks import check_array, check_float, check_int
 
 wp.set_module_options({"enable_backward": False})
 
@@ -244,29 +244,8 @@ def entropy_energy_frames(row_begin: int, dots: wp.array(dtype=wp.float64), log_
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _check(name: str, a, shape: tuple, layout: str, device=None, dtype=wp.float32) -> None:
-    """Raise unless ``a`` is a ``wp.array`` of ``dtype`` and ``shape`` (None = any size) on ``device``."""
-    if not isinstance(a, wp.array):
-        raise TypeError(f"{name} must be a wp.array of {wp.types.type_repr(dtype)} {layout}, "
-                        f"got {type(a).__name__}")
-    if a.dtype != dtype:
-        raise TypeError(f"{name} must have dtype {wp.types.type_repr(dtype)}, got {wp.types.type_repr(a.dtype)}")
-    if len(a.shape) != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
-    if device is not None and a.device != device:
-        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
-
-
-def _check_float(name: str, v, positive: bool = False) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) \
-            or not math.isfinite(v) or (positive and v <= 0):
-        raise ValueError(f"{name} must be a finite float{' > 0' if positive else ''}, got {v!r}")
-    return float(v)
-
-
 def _check_hist(name: str, hist, T: int | None, device) -> int:
-    _check(name, hist, (T, None, None, None), "(T, B, B, B)", device)
+    check_array(name, hist, (T, None, None, None), "(T, B, B, B)", device)
     B = hist.shape[1]
     if hist.shape[2] != B or hist.shape[3] != B or B < 2:
         raise ValueError(f"{name} must have shape (T, B, B, B) with B >= 2, got {tuple(hist.shape)}")
@@ -289,10 +268,8 @@ class EntropyScratch(NamedTuple):
 
 def allocate_entropy_scratch(n_frames: int, bins: int, device="cpu") -> EntropyScratch:
     """Allocate :class:`EntropyScratch` for ``n_frames`` frames and a ``bins^3`` cube on ``device``."""
-    if isinstance(n_frames, bool) or not isinstance(n_frames, int) or n_frames < 1:
-        raise ValueError(f"n_frames must be an int >= 1, got {n_frames!r}")
-    if isinstance(bins, bool) or not isinstance(bins, int) or bins < 2:
-        raise ValueError(f"bins must be an int >= 2, got {bins!r}")
+    n_frames = check_int("n_frames", n_frames, 1)
+    bins = check_int("bins", bins, 2)
     cube = (n_frames, bins, bins, bins)
     return EntropyScratch(
         hist=wp.empty(cube, dtype=wp.float32, device=device),
@@ -318,13 +295,13 @@ def entropy_histogram(A, whiten, lo: float, h: float, hist, row_flags) -> None:
         is 1 where the row ``hist[t, i, j, :]`` received mass, else 0 (plane
         1 is zeroed; :func:`entropy_blur` uses both to skip empty rows).
     """
-    _check("A", A, (None, None, None, 3), "(T, H, W, 3)")
+    check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
     T, H, W, _ = A.shape
     dev = A.device
-    _check("whiten", whiten, (3, 3), "(3, 3)", dev)
+    check_array("whiten", whiten, (3, 3), "(3, 3)", dev)
     B = _check_hist("hist", hist, T, dev)
-    _check("row_flags", row_flags, (2, T, B, B), "(2, T, B, B)", dev, wp.int32)
-    lo, h = _check_float("lo", lo), _check_float("h", h, positive=True)
+    check_array("row_flags", row_flags, (2, T, B, B), "(2, T, B, B)", dev, dtype=wp.int32)
+    lo, h = check_float("lo", lo), check_float("h", h, positive=True)
     hist.zero_()
     row_flags.zero_()
     launch_rows(splat_whitened_rows, T * H, [A, whiten, lo, h, hist, row_flags], device=dev, align=H)
@@ -349,12 +326,12 @@ def entropy_blur(hist, taps, row_flags, tmp, blurred) -> None:
     dev = hist.device if isinstance(hist, wp.array) else None
     B = _check_hist("hist", hist, None, dev)
     T = hist.shape[0]
-    _check("taps", taps, (None,), "(2r+1,)", dev)
+    check_array("taps", taps, (None,), "(2r+1,)", dev)
     if taps.shape[0] % 2 != 1:
         raise ValueError(f"taps must have an odd length 2r+1, got {taps.shape[0]}")
-    _check("row_flags", row_flags, (2, T, B, B), "(2, T, B, B)", dev, wp.int32)
-    _check("tmp", tmp, tuple(hist.shape), "(T, B, B, B) like hist", dev)
-    _check("blurred", blurred, tuple(hist.shape), "(T, B, B, B) like hist", dev)
+    check_array("row_flags", row_flags, (2, T, B, B), "(2, T, B, B)", dev, dtype=wp.int32)
+    check_array("tmp", tmp, tuple(hist.shape), "(T, B, B, B) like hist", dev)
+    check_array("blurred", blurred, tuple(hist.shape), "(T, B, B, B) like hist", dev)
     n = T * B * B
     launch_rows(blur_along_rows, n, [hist, taps, row_flags, blurred], device=dev)
     launch_rows(blur_across_rows, n, [blurred, taps, 2, 0, 1, row_flags, tmp], device=dev)
@@ -366,8 +343,8 @@ def entropy_dot(hist, blurred, dots) -> None:
     dev = hist.device if isinstance(hist, wp.array) else None
     B = _check_hist("hist", hist, None, dev)
     T = hist.shape[0]
-    _check("blurred", blurred, tuple(hist.shape), "(T, B, B, B) like hist", dev)
-    _check("dots", dots, (T,), "(T,)", dev, wp.float64)
+    check_array("blurred", blurred, tuple(hist.shape), "(T, B, B, B) like hist", dev)
+    check_array("dots", dots, (T,), "(T,)", dev, dtype=wp.float64)
     dots.zero_()
     launch_rows(frame_dot_rows, T * B * B, [hist, blurred, dots], device=dev, align=B * B)
 
@@ -379,15 +356,15 @@ def entropy_slice_gradient(A, whiten, lo: float, h: float, blurred, dots, gA, la
     the histogram), ``dots`` from :func:`entropy_dot`.  ``gA`` float32
     (T, H, W, 3) is accumulated.
     """
-    _check("A", A, (None, None, None, 3), "(T, H, W, 3)")
+    check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
     T, H, W, _ = A.shape
     dev = A.device
-    _check("whiten", whiten, (3, 3), "(3, 3)", dev)
+    check_array("whiten", whiten, (3, 3), "(3, 3)", dev)
     _check_hist("blurred", blurred, T, dev)
-    _check("dots", dots, (T,), "(T,)", dev, wp.float64)
-    _check("gA", gA, (T, H, W, 3), "(T, H, W, 3)", dev)
-    lo, h = _check_float("lo", lo), _check_float("h", h, positive=True)
-    lam = _check_float("lam", lam)
+    check_array("dots", dots, (T,), "(T,)", dev, dtype=wp.float64)
+    check_array("gA", gA, (T, H, W, 3), "(T, H, W, 3)", dev)
+    lo, h = check_float("lo", lo), check_float("h", h, positive=True)
+    lam = check_float("lam", lam)
     launch_rows(slice_gradient_rows, T * H, [A, whiten, lo, h, blurred, dots, lam, gA], device=dev)
 
 
@@ -395,15 +372,14 @@ def entropy_energy(dots, sigma_p: float, n_pixels: int, energy_rows, lam: float)
     """Add ``E_t = -lam log(dots[t] / (n_pixels^2 sqrt(4 pi sigma_p^2)))`` into
     ``energy_rows[t * (len(energy_rows) // T)]`` (the first row of frame ``t``)."""
     dev = dots.device if isinstance(dots, wp.array) else None
-    _check("dots", dots, (None,), "(T,)", dev, wp.float64)
+    check_array("dots", dots, (None,), "(T,)", dev, dtype=wp.float64)
     T = dots.shape[0]
-    _check("energy_rows", energy_rows, (None,), "(T*H,)", dev, wp.float64)
+    check_array("energy_rows", energy_rows, (None,), "(T*H,)", dev, dtype=wp.float64)
     if T == 0 or energy_rows.shape[0] % T:
         raise ValueError(f"energy_rows length {energy_rows.shape[0]} is not a multiple of T = {T}")
-    sigma_p = _check_float("sigma_p", sigma_p, positive=True)
-    lam = _check_float("lam", lam)
-    if isinstance(n_pixels, bool) or not isinstance(n_pixels, (int, np.integer)) or n_pixels < 1:
-        raise ValueError(f"n_pixels must be an int >= 1, got {n_pixels!r}")
+    sigma_p = check_float("sigma_p", sigma_p, positive=True)
+    lam = check_float("lam", lam)
+    n_pixels = check_int("n_pixels", n_pixels, 1)
     log_norm = -2.0 * math.log(n_pixels) - 0.5 * math.log(4.0 * math.pi * sigma_p ** 2)
     launch_rows(entropy_energy_frames, T,
                 [dots, wp.float64(log_norm), lam, energy_rows.shape[0] // T, energy_rows], device=dev)
@@ -429,9 +405,9 @@ def entropy_term(A, whiten, lo: float, h: float, taps, sigma_p: float, scratch: 
     energy_rows : wp.array float64 (T*H,), row ``t*H`` accumulates ``E_t``.
     lam : Eq. 12's ``lambda_Ap``.
     """
-    _check("A", A, (None, None, None, 3), "(T, H, W, 3)")
+    check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
     T, H, W, _ = A.shape
-    _check("energy_rows", energy_rows, (T * H,), "(T*H,)", A.device, wp.float64)
+    check_array("energy_rows", energy_rows, (T * H,), "(T*H,)", A.device, dtype=wp.float64)
     if not isinstance(scratch, EntropyScratch):
         raise TypeError(f"scratch must be an EntropyScratch (allocate_entropy_scratch), "
                         f"got {type(scratch).__name__}")

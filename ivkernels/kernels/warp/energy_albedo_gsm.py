@@ -27,6 +27,7 @@ import math
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.warp._checks import check_array, check_float, check_int
 
 wp.set_module_options({"enable_backward": False})
 
@@ -94,29 +95,6 @@ def gsm_smoothness_rows(row_begin: int, A: wp.array4d(dtype=float), sigma_inv: w
     energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
 
 
-def _check(name: str, a, shape: tuple, layout: str, device=None, dtype=wp.float32) -> None:
-    """Raise unless ``a`` is a ``wp.array`` of ``dtype`` and ``shape`` (None = any size) on ``device``."""
-    if not isinstance(a, wp.array):
-        raise TypeError(f"{name} must be a wp.array of {wp.types.type_repr(dtype)} {layout}, "
-                        f"got {type(a).__name__}")
-    if a.dtype != dtype:
-        raise TypeError(f"{name} must have dtype {wp.types.type_repr(dtype)}, got {wp.types.type_repr(a.dtype)}")
-    if len(a.shape) != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
-    if device is not None and a.device != device:
-        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
-
-
-def _check_scalars(r2_max, lam, radius) -> None:
-    if not (isinstance(r2_max, (int, float)) and math.isfinite(r2_max) and r2_max > 0):
-        raise ValueError(f"r2_max must be a finite float > 0, got {r2_max!r}")
-    if not (isinstance(lam, (int, float)) and math.isfinite(lam)):
-        raise ValueError(f"lam must be a finite float, got {lam!r}")
-    if isinstance(radius, bool) or not isinstance(radius, int) or radius < 1:
-        raise ValueError(f"radius must be an int >= 1 (2 for the paper's 5x5 window), got {radius!r}")
-
-
 def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_rows,
                    lam: float, radius: int = 2) -> None:
     """Add Eq. 11's GSM smoothness energy and gradient.
@@ -136,18 +114,20 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
     lam : Eq. 11's ``lambda_As``.
     radius : window radius (2: the paper's 5x5 window, 24 neighbours).
     """
-    _check("A", A, (None, None, None, 3), "(T, H, W, 3)")
+    check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
     T, H, W, _ = A.shape
     dev = A.device
-    _check("sigma_inv", sigma_inv, (3, 3), "(3, 3)", dev)
-    _check("table_g", table_g, (None,), "(n,)", dev)
+    check_array("sigma_inv", sigma_inv, (3, 3), "(3, 3)", dev)
+    check_array("table_g", table_g, (None,), "(n,)", dev)
     n = table_g.shape[0]
     if n < 2:
         raise ValueError(f"table_g must hold at least 2 entries, got {n}")
-    _check("table_dg", table_dg, (n,), "(n,) like table_g", dev)
-    _check("gA", gA, (T, H, W, 3), "(T, H, W, 3)", dev)
-    _check("energy_rows", energy_rows, (T * H,), "(T*H,)", dev, wp.float64)
-    _check_scalars(r2_max, lam, radius)
+    check_array("table_dg", table_dg, (n,), "(n,) like table_g", dev)
+    check_array("gA", gA, (T, H, W, 3), "(T, H, W, 3)", dev)
+    check_array("energy_rows", energy_rows, (T * H,), "(T*H,)", dev, dtype=wp.float64)
+    r2_max = check_float("r2_max", r2_max, positive=True)
+    lam = check_float("lam", lam)
+    radius = check_int("radius", radius, 1, " (2 for the paper's 5x5 window)")
     cells_per_root = (n - 1) / math.sqrt(r2_max)
     launch_rows(gsm_smoothness_rows, T * H,
                 [A, sigma_inv, table_g, table_dg, float(r2_max), float(cells_per_root), float(lam),

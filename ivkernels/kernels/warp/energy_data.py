@@ -10,13 +10,14 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.warp._checks import check_array
 
 wp.set_module_options({"enable_backward": False})
 
 
 @wp.func
 def charbonnier(z: float, eps: float):
-    """``sqrt(z^2 + eps^2)``, the differentiable L1 of Eq. 3."""
+    """``sqrt(z^2 + eps^2)``, the differentiable L1 of Eq. 3 (and of the local shading smoothness, Eq. 9)."""
     return wp.sqrt(z * z + eps * eps)
 
 
@@ -45,20 +46,6 @@ def data_term_rows(row_begin: int, I: wp.array4d(dtype=float), A: wp.array4d(dty
     energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
 
 
-def _check(name: str, a, shape: tuple, layout: str, device=None, dtype=wp.float32) -> None:
-    """Raise unless ``a`` is a ``wp.array`` of ``dtype`` and ``shape`` (None = any size) on ``device``."""
-    if not isinstance(a, wp.array):
-        raise TypeError(f"{name} must be a wp.array of {wp.types.type_repr(dtype)} {layout}, "
-                        f"got {type(a).__name__}")
-    if a.dtype != dtype:
-        raise TypeError(f"{name} must have dtype {wp.types.type_repr(dtype)}, got {wp.types.type_repr(a.dtype)}")
-    if len(a.shape) != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
-    if device is not None and a.device != device:
-        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
-
-
 def data_term(I, A, S, w_lum, gA, gS, energy_rows, lam: float = 10.0, eps: float = 0.001) -> None:
     """Add the data term of Eq. 3 and its gradient.
 
@@ -76,14 +63,14 @@ def data_term(I, A, S, w_lum, gA, gS, energy_rows, lam: float = 10.0, eps: float
         the energy of image row ``y`` of frame ``t``.
     lam : lambda_D.  eps : Charbonnier epsilon.
     """
-    _check("I", I, (None, None, None, 3), "(T, H, W, 3)")
+    check_array("I", I, (None, None, None, 3), "(T, H, W, 3)")
     t, h, w, _ = I.shape
     dev = I.device
-    _check("A", A, (t, h, w, 3), "(T, H, W, 3)", dev)
-    _check("S", S, (t, h, w), "(T, H, W)", dev)
-    _check("w_lum", w_lum, (t, h, w), "(T, H, W)", dev)
-    _check("gA", gA, (t, h, w, 3), "(T, H, W, 3)", dev)
-    _check("gS", gS, (t, h, w), "(T, H, W)", dev)
-    _check("energy_rows", energy_rows, (t * h,), "(T*H,)", dev, wp.float64)
+    check_array("A", A, (t, h, w, 3), "(T, H, W, 3)", dev)
+    check_array("S", S, (t, h, w), "(T, H, W)", dev)
+    check_array("w_lum", w_lum, (t, h, w), "(T, H, W)", dev)
+    check_array("gA", gA, (t, h, w, 3), "(T, H, W, 3)", dev)
+    check_array("gS", gS, (t, h, w), "(T, H, W)", dev)
+    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dev, dtype=wp.float64)
     launch_rows(data_term_rows, t * h, [I, A, S, w_lum, gA, gS, energy_rows, float(lam), float(eps)],
                 device=dev)

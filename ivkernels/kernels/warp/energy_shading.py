@@ -4,21 +4,18 @@ smoothness of Eq. 9 and the coupling to S~ of Eq. 13.
 Energy conventions as in :mod:`ivkernels.kernels`: gradients are *added* into
 ``gS``, energies *added* per row into ``energy_rows`` (float64, row ``t*H + y``).
 The non-local part of Eq. 9 is minimised through S~ by
-:func:`ivkernels.kernels.warp.median.weighted_median_shading`.
+:func:`ivkernels.kernels.warp.median.weighted_median_shading`.  The local
+term's Charbonnier penalty is the data term's (:mod:`ivkernels.kernels.warp.energy_data`).
 """
 from __future__ import annotations
 
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.warp._checks import check_array
+from ivkernels.kernels.warp.energy_data import charbonnier
 
 wp.set_module_options({"enable_backward": False})
-
-
-@wp.func
-def charbonnier(z: float, eps: float):
-    """``sqrt(z^2 + eps^2)``."""
-    return wp.sqrt(z * z + eps * eps)
 
 
 @wp.kernel
@@ -65,20 +62,6 @@ def coupling_rows(row_begin: int, S: wp.array3d(dtype=float), S_tilde: wp.array3
     energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
 
 
-def _check(name: str, a, shape: tuple, layout: str, device=None, dtype=wp.float32) -> None:
-    """Raise unless ``a`` is a ``wp.array`` of ``dtype`` and ``shape`` (None = any size) on ``device``."""
-    if not isinstance(a, wp.array):
-        raise TypeError(f"{name} must be a wp.array of {wp.types.type_repr(dtype)} {layout}, "
-                        f"got {type(a).__name__}")
-    if a.dtype != dtype:
-        raise TypeError(f"{name} must have dtype {wp.types.type_repr(dtype)}, got {wp.types.type_repr(a.dtype)}")
-    if len(a.shape) != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
-    if device is not None and a.device != device:
-        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
-
-
 def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
     """Add the local shading smoothness of Eq. 9 and its gradient.
 
@@ -94,10 +77,10 @@ def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001)
     energy_rows : wp.array float64 (T*H,), accumulated.
     lam : lambda_Ss.  eps : Charbonnier epsilon.
     """
-    _check("S", S, (None, None, None), "(T, H, W)")
+    check_array("S", S, (None, None, None), "(T, H, W)")
     t, h, w = S.shape
-    _check("gS", gS, (t, h, w), "(T, H, W)", S.device)
-    _check("energy_rows", energy_rows, (t * h,), "(T*H,)", S.device, wp.float64)
+    check_array("gS", gS, (t, h, w), "(T, H, W)", S.device)
+    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", S.device, dtype=wp.float64)
     launch_rows(shading_smoothness_rows, t * h, [S, gS, energy_rows, float(lam), float(eps)], device=S.device)
 
 
@@ -115,13 +98,13 @@ def coupling_term(S, S_tilde, w_bnd, gS, energy_rows, lam: float = 10.0) -> None
     energy_rows : wp.array float64 (T*H,), accumulated.
     lam : lambda_cpl.
     """
-    _check("S", S, (None, None, None), "(T, H, W)")
+    check_array("S", S, (None, None, None), "(T, H, W)")
     t, h, w = S.shape
     dev = S.device
-    _check("S_tilde", S_tilde, (t, h, w), "(T, H, W)", dev)
-    _check("w_bnd", w_bnd, (None, h, w), "(T', H, W)", dev)
+    check_array("S_tilde", S_tilde, (t, h, w), "(T, H, W)", dev)
+    check_array("w_bnd", w_bnd, (None, h, w), "(T', H, W)", dev)
     if w_bnd.shape[0] > t:
         raise ValueError(f"w_bnd has {w_bnd.shape[0]} frames but S only {t}; expected T' <= T")
-    _check("gS", gS, (t, h, w), "(T, H, W)", dev)
-    _check("energy_rows", energy_rows, (t * h,), "(T*H,)", dev, wp.float64)
+    check_array("gS", gS, (t, h, w), "(T, H, W)", dev)
+    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dev, dtype=wp.float64)
     launch_rows(coupling_rows, w_bnd.shape[0] * h, [S, S_tilde, w_bnd, gS, energy_rows, float(lam)], device=dev)

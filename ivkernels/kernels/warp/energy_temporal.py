@@ -24,6 +24,7 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.warp._checks import check_array
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners
 
 wp.set_module_options({"enable_backward": False})
@@ -98,20 +99,6 @@ def temporal_splat_rows(row_begin: int, X: wp.array4d(dtype=float), flow: wp.arr
                 wp.atomic_add(gX, t + 1, y1, x1, c, fx * fy * g)
 
 
-def _check(name: str, a, shape: tuple, layout: str, device=None, dtype=wp.float32) -> None:
-    """Raise unless ``a`` is a ``wp.array`` of ``dtype`` and ``shape`` (None = any size) on ``device``."""
-    if not isinstance(a, wp.array):
-        raise TypeError(f"{name} must be a wp.array of {wp.types.type_repr(dtype)} {layout}, "
-                        f"got {type(a).__name__}")
-    if a.dtype != dtype:
-        raise TypeError(f"{name} must have dtype {wp.types.type_repr(dtype)}, got {wp.types.type_repr(a.dtype)}")
-    if len(a.shape) != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
-    if device is not None and a.device != device:
-        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
-
-
 def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0) -> None:
     """Add the temporal term of Eq. 4 (albedo) or Eq. 8 (shading) and its gradient.
 
@@ -133,17 +120,17 @@ def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0)
     With T = 1 there is no pair and nothing is added.
     """
     if isinstance(X, wp.array) and len(X.shape) == 3:
-        _check("X", X, (None, None, None), "(T, H, W)")
-        _check("gX", gX, tuple(X.shape), "(T, H, W) like X", X.device)
+        check_array("X", X, (None, None, None), "(T, H, W)")
+        check_array("gX", gX, tuple(X.shape), "(T, H, W) like X", X.device)
         X = X.reshape((*X.shape, 1))
         gX = gX.reshape((*gX.shape, 1))
-    _check("X", X, (None, None, None, None), "(T, H, W, C) or (T, H, W)")
+    check_array("X", X, (None, None, None, None), "(T, H, W, C) or (T, H, W)")
     t, h, w, c = X.shape
     dev = X.device
-    _check("gX", gX, (t, h, w, c), "(T, H, W, C) like X", dev)
-    _check("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)", dev)
-    _check("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", dev)
-    _check("energy_rows", energy_rows, (t * h,), "(T*H,)", dev, wp.float64)
+    check_array("gX", gX, (t, h, w, c), "(T, H, W, C) like X", dev)
+    check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)", dev)
+    check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", dev)
+    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dev, dtype=wp.float64)
     if t < 2:
         return
     args = [X, flow, occ, gX]

@@ -11,11 +11,10 @@ bilinear helpers of :mod:`ivkernels.kernels.warp.sampling` (clamped corners).
 """
 from __future__ import annotations
 
-import numbers
-
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.warp._checks import check_array, check_int, check_positive
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners, inside_image
 
 wp.set_module_options({"enable_backward": False})
@@ -111,31 +110,15 @@ def boundary_dilate_rows(row_begin: int, magnitude: wp.array3d(dtype=float), out
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _check(name: str, a, shape: tuple, layout: str, device=None) -> None:
-    """Raise unless ``a`` is a float32 ``wp.array`` of ``shape`` (None = any size) on ``device``."""
-    if not isinstance(a, wp.array):
-        raise TypeError(f"{name} must be a wp.array of float32 {layout}, got {type(a).__name__}")
-    if a.dtype != wp.float32:
-        raise TypeError(f"{name} must have dtype float32, got {wp.types.type_repr(a.dtype)}")
-    if len(a.shape) != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
-    if device is not None and a.device != device:
-        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
-
-
 def _check_occlusion_args(lab, flow, div_neg, out, sigma_e, sigma_d):
-    _check("lab", lab, (None, None, None, 3), "(T+1, H, W, 3)")
+    check_array("lab", lab, (None, None, None, 3), "(T+1, H, W, 3)")
     if lab.shape[0] < 2:
         raise ValueError(f"lab must hold at least two frames (T+1, H, W, 3), got {tuple(lab.shape)}")
     t, h, w = lab.shape[0] - 1, lab.shape[1], lab.shape[2]
-    _check("flow", flow, (t, h, w, 2), "(T, H, W, 2) with T = lab frames - 1", lab.device)
-    _check("div_neg", div_neg, (t, h, w), "(T, H, W)", lab.device)
-    _check("out", out, (t, h, w), "(T, H, W)", lab.device)
-    sigma_e, sigma_d = float(sigma_e), float(sigma_d)
-    if not (sigma_e > 0.0 and sigma_d > 0.0):
-        raise ValueError(f"sigma_e and sigma_d must be > 0, got {sigma_e}, {sigma_d}")
-    return sigma_e, sigma_d
+    check_array("flow", flow, (t, h, w, 2), "(T, H, W, 2) with T = lab frames - 1", lab.device)
+    check_array("div_neg", div_neg, (t, h, w), "(T, H, W)", lab.device)
+    check_array("out", out, (t, h, w), "(T, H, W)", lab.device)
+    return check_positive("sigma_e", sigma_e), check_positive("sigma_d", sigma_d)
 
 
 def occlusion_soft(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: float = 0.3) -> None:
@@ -188,9 +171,8 @@ def motion_boundary(sobel_mag, out, threshold: float, radius: int) -> None:
     threshold : edge magnitude, pixels per pixel.
     radius : dilation radius in pixels, int >= 0 (0 = threshold only).
     """
-    _check("sobel_mag", sobel_mag, (None, None, None), "(T, H, W)")
-    _check("out", out, tuple(sobel_mag.shape), "(T, H, W)", sobel_mag.device)
-    if isinstance(radius, bool) or not isinstance(radius, numbers.Integral) or radius < 0:
-        raise ValueError(f"radius must be an int >= 0, got {radius!r}")
+    check_array("sobel_mag", sobel_mag, (None, None, None), "(T, H, W)")
+    check_array("out", out, tuple(sobel_mag.shape), "(T, H, W)", sobel_mag.device)
+    radius = check_int("radius", radius, 0)
     launch_rows(boundary_dilate_rows, sobel_mag.shape[0] * sobel_mag.shape[1],
                 [sobel_mag, out, float(threshold), int(radius)], device=sobel_mag.device)

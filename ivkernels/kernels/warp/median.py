@@ -23,6 +23,7 @@ import numpy as np
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.warp._checks import check_array, check_int, check_positive
 
 wp.set_module_options({"enable_backward": False})
 
@@ -325,32 +326,6 @@ def weighted_median_flow_rows(row_begin: int, flow: wp.array4d(dtype=float), lab
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _check(name: str, a, shape: tuple, layout: str, device=None) -> None:
-    """Raise unless ``a`` is a float32 ``wp.array`` of ``shape`` (None = any size) on ``device``."""
-    if not isinstance(a, wp.array):
-        raise TypeError(f"{name} must be a wp.array of float32 {layout}, got {type(a).__name__}")
-    if a.dtype != wp.float32:
-        raise TypeError(f"{name} must have dtype float32, got {wp.types.type_repr(a.dtype)}")
-    if len(a.shape) != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
-    if device is not None and a.device != device:
-        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
-
-
-def _check_radius(radius) -> int:
-    if isinstance(radius, bool) or not isinstance(radius, int) or radius < 0:
-        raise ValueError(f"radius must be a non-negative int, got {radius!r}")
-    return radius
-
-
-def _check_positive(name: str, value) -> float:
-    value = float(value)
-    if not value > 0.0:
-        raise ValueError(f"{name} must be > 0, got {value!r}")
-    return value
-
-
 def shading_scratch_shape(S_shape: tuple, radius: int) -> tuple:
     """Shape of the float32 scratch of :func:`weighted_median_shading`: ``(T*H, 2*(2r+1)^2)``."""
     return (S_shape[0] * S_shape[1], 2 * (2 * radius + 1) ** 2)
@@ -386,7 +361,7 @@ def _spatial_weights(radius: int, sigma: float) -> np.ndarray:
 def _scratch(scratch, shape: tuple, device):
     """The caller's scratch (checked) or a cached one of ``shape`` for this device and thread."""
     if scratch is not None:
-        _check("scratch", scratch, shape, "(rows, floats per row)", device)
+        check_array("scratch", scratch, shape, "(rows, floats per row)", device)
         return scratch
     key = (str(device), shape, threading.get_ident())
     with _scratch_lock:
@@ -405,9 +380,9 @@ def median5x5(src, out) -> None:
     src : wp.array float32 (T, H, W, C), any units.
     out : wp.array float32 (T, H, W, C), written.  Must not overlap ``src``.
     """
-    _check("src", src, (None, None, None, None), "(T, H, W, C)")
+    check_array("src", src, (None, None, None, None), "(T, H, W, C)")
     t, h, w, c = src.shape
-    _check("out", out, (t, h, w, c), "(T, H, W, C)", src.device)
+    check_array("out", out, (t, h, w, c), "(T, H, W, C)", src.device)
     network = _cached_table(("median25",), lambda: np.asarray(median_network(25), np.int32).ravel(),
                             wp.int32, src.device)
     launch_rows(median5x5_rows, t * h, [src, out, network, network.shape[0] // 2], device=src.device)
@@ -453,16 +428,16 @@ def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float
     scratch : optional float32 wp.array of shape :func:`shading_scratch_shape`;
         by default a buffer cached per (device, shape, thread) is used.
     """
-    _check("S", S, (None, None, None), "(T, H, W)")
+    check_array("S", S, (None, None, None), "(T, H, W)")
     t, h, w = S.shape
-    _check("flow", flow, (None, h, w, 2), "(T', H, W, 2)", S.device)
+    check_array("flow", flow, (None, h, w, 2), "(T', H, W, 2)", S.device)
     tp = flow.shape[0]
     if tp > t:
         raise ValueError(f"flow has {tp} frames but S only {t}; expected T' <= T")
-    _check("w_bnd", w_bnd, (tp, h, w), "(T', H, W)", S.device)
-    _check("out", out, (t, h, w), "(T, H, W)", S.device)
-    radius = _check_radius(radius)
-    sigma_s = _check_positive("sigma_s", sigma_s)
+    check_array("w_bnd", w_bnd, (tp, h, w), "(T', H, W)", S.device)
+    check_array("out", out, (t, h, w), "(T, H, W)", S.device)
+    radius = check_int("radius", radius, 0)
+    sigma_s = check_positive("sigma_s", sigma_s)
     lam = float(lam)
     if not lam >= 0.0:
         raise ValueError(f"lam must be >= 0, got {lam!r}")
@@ -494,15 +469,15 @@ def weighted_median_flow(flow, lab, occ, mask, out, radius: int = 7, sigma_x: fl
     scratch : optional float32 wp.array of shape :func:`flow_scratch_shape`;
         by default a buffer cached per (device, shape, thread) is used.
     """
-    _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
+    check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
     t, h, w, _ = flow.shape
-    _check("lab", lab, (t, h, w, 3), "(T, H, W, 3)", flow.device)
-    _check("occ", occ, (t, h, w), "(T, H, W)", flow.device)
-    _check("mask", mask, (t, h, w), "(T, H, W)", flow.device)
-    _check("out", out, (t, h, w, 2), "(T, H, W, 2)", flow.device)
-    radius = _check_radius(radius)
-    sigma_x = _check_positive("sigma_x", sigma_x)
-    sigma_i = _check_positive("sigma_i", sigma_i)
+    check_array("lab", lab, (t, h, w, 3), "(T, H, W, 3)", flow.device)
+    check_array("occ", occ, (t, h, w), "(T, H, W)", flow.device)
+    check_array("mask", mask, (t, h, w), "(T, H, W)", flow.device)
+    check_array("out", out, (t, h, w, 2), "(T, H, W, 2)", flow.device)
+    radius = check_int("radius", radius, 0)
+    sigma_x = check_positive("sigma_x", sigma_x)
+    sigma_i = check_positive("sigma_i", sigma_i)
     buf = _scratch(scratch, flow_scratch_shape(flow.shape, radius), flow.device)
     launch_rows(weighted_median_flow_rows, t * h,
                 [flow, lab, occ, mask, out, buf, radius, sigma_x, sigma_i], device=flow.device)

@@ -18,6 +18,7 @@ import numpy as np
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.warp._checks import check_array
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners
 
 wp.set_module_options({"enable_backward": False})
@@ -101,19 +102,6 @@ def resize_flow_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _check(name: str, a, shape: tuple, layout: str, device=None) -> None:
-    """Raise unless ``a`` is a float32 ``wp.array`` of ``shape`` (None = any size) on ``device``."""
-    if not isinstance(a, wp.array):
-        raise TypeError(f"{name} must be a wp.array of float32 {layout}, got {type(a).__name__}")
-    if a.dtype != wp.float32:
-        raise TypeError(f"{name} must have dtype float32, got {wp.types.type_repr(a.dtype)}")
-    if len(a.shape) != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
-    if device is not None and a.device != device:
-        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
-
-
 def gaussian_kernel(sigma: float) -> np.ndarray:
     """Normalised 1-D Gaussian taps ``exp(-k^2 / 2 sigma^2)``, k = -r..r, r = ceil(3 sigma)."""
     radius = max(1, math.ceil(3.0 * sigma))
@@ -138,9 +126,9 @@ def gaussian_blur(src, out, scratch, sigma: float) -> None:
         image); must overlap neither ``src`` nor ``out``.
     sigma : standard deviation in pixels; ``sigma <= 0`` copies ``src``.
     """
-    _check("src", src, (None, None, None, None), "(T, H, W, C)")
-    _check("out", out, tuple(src.shape), "(T, H, W, C)", src.device)
-    _check("scratch", scratch, tuple(src.shape), "(T, H, W, C)", src.device)
+    check_array("src", src, (None, None, None, None), "(T, H, W, C)")
+    check_array("out", out, tuple(src.shape), "(T, H, W, C)", src.device)
+    check_array("scratch", scratch, tuple(src.shape), "(T, H, W, C)", src.device)
     if scratch.ptr is not None and scratch.ptr in (src.ptr, out.ptr):
         raise ValueError("scratch must be a separate buffer from src and out")
     sigma = float(sigma)
@@ -159,9 +147,9 @@ def gaussian_blur(src, out, scratch, sigma: float) -> None:
 
 
 def _check_resize(src, out, channels):
-    _check("src", src, (None, None, None, channels), "(T, h, w, C)" if channels is None else "(T, h, w, 2)")
+    check_array("src", src, (None, None, None, channels), "(T, h, w, C)" if channels is None else "(T, h, w, 2)")
     t, h, w, c = src.shape
-    _check("out", out, (t, None, None, c), "(T, H, W, C)" if channels is None else "(T, H, W, 2)", src.device)
+    check_array("out", out, (t, None, None, c), "(T, H, W, C)" if channels is None else "(T, H, W, 2)", src.device)
     if min(h, w, out.shape[1], out.shape[2]) < 1:
         raise ValueError(f"image sizes must be >= 1, got src {tuple(src.shape)}, out {tuple(out.shape)}")
     return src.shape[2] / out.shape[2], src.shape[1] / out.shape[1]

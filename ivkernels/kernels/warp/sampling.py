@@ -21,6 +21,7 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.warp._checks import check_array
 
 wp.set_module_options({"enable_backward": False})
 
@@ -169,27 +170,14 @@ def bicubic_warp_rows(row_begin: int, src: wp.array4d(dtype=float), flow: wp.arr
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _check(name: str, a, shape: tuple, layout: str, device=None) -> None:
-    """Raise unless ``a`` is a float32 ``wp.array`` of ``shape`` (None = any size) on ``device``."""
-    if not isinstance(a, wp.array):
-        raise TypeError(f"{name} must be a wp.array of float32 {layout}, got {type(a).__name__}")
-    if a.dtype != wp.float32:
-        raise TypeError(f"{name} must have dtype float32, got {wp.types.type_repr(a.dtype)}")
-    if len(a.shape) != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
-    if device is not None and a.device != device:
-        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
-
-
 def _check_warp_args(src, flow, out, inside) -> None:
-    _check("src", src, (None, None, None, None), "(T, H, W, C)")
+    check_array("src", src, (None, None, None, None), "(T, H, W, C)")
     t, h, w, c = src.shape
     if c < 1:
         raise ValueError(f"src must have at least one channel, got shape {tuple(src.shape)}")
-    _check("flow", flow, (t, h, w, 2), "(T, H, W, 2)", src.device)
-    _check("out", out, (t, h, w, c), "(T, H, W, C)", src.device)
-    _check("inside", inside, (t, h, w), "(T, H, W)", src.device)
+    check_array("flow", flow, (t, h, w, 2), "(T, H, W, 2)", src.device)
+    check_array("out", out, (t, h, w, c), "(T, H, W, C)", src.device)
+    check_array("inside", inside, (t, h, w), "(T, H, W)", src.device)
 
 
 def warp_bilinear(src, flow, out, inside) -> None:
@@ -232,10 +220,10 @@ def splat_bilinear(values, flow, out) -> None:
     Atomic adds; the rows are split between CPU threads only at frame
     boundaries (``align=H``) so the two halves never write the same frame.
     """
-    _check("values", values, (None, None, None, None), "(T, H, W, C)")
+    check_array("values", values, (None, None, None, None), "(T, H, W, C)")
     t, h, w, c = values.shape
-    _check("flow", flow, (t, h, w, 2), "(T, H, W, 2)", values.device)
-    _check("out", out, (t, h, w, c), "(T, H, W, C)", values.device)
+    check_array("flow", flow, (t, h, w, 2), "(T, H, W, 2)", values.device)
+    check_array("out", out, (t, h, w, c), "(T, H, W, C)", values.device)
     launch_rows(bilinear_splat_rows, t * h, [values, flow, out], device=values.device, align=h)
 
 

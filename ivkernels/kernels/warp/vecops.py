@@ -15,6 +15,7 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.warp._checks import check_vector
 
 wp.set_module_options({"enable_backward": False})
 
@@ -94,21 +95,6 @@ def fill_chunks(row_begin: int, x: wp.array(dtype=float), value: float, chunk: i
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _check(name: str, a, n=None, device=None) -> int:
-    """Raise unless ``a`` is a 1-D float32 ``wp.array`` (of length ``n``, on ``device``); return its length."""
-    if not isinstance(a, wp.array):
-        raise TypeError(f"{name} must be a 1-D wp.array of float32, got {type(a).__name__}")
-    if a.dtype != wp.float32:
-        raise TypeError(f"{name} must have dtype float32, got {wp.types.type_repr(a.dtype)}")
-    if a.ndim != 1 or a.shape[0] < 1:
-        raise ValueError(f"{name} must be a non-empty 1-D vector (n,), got shape {tuple(a.shape)}")
-    if n is not None and a.shape[0] != n:
-        raise ValueError(f"{name} must have the same length as the first vector ({n}), got {a.shape[0]}")
-    if device is not None and a.device != device:
-        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
-    return a.shape[0]
-
-
 def _chunks(n: int) -> int:
     return (n + CHUNK - 1) // CHUNK
 
@@ -118,8 +104,8 @@ def dot(a, b) -> float:
 
     ``a``, ``b``: 1-D float32 wp.arrays of equal length n >= 1.
     """
-    n = _check("a", a)
-    _check("b", b, n, a.device)
+    n = check_vector("a", a)
+    check_vector("b", b, n, a.device)
     partial = wp.empty(_chunks(n), dtype=wp.float64, device=a.device)
     launch_rows(dot_chunks, _chunks(n), [a, b, partial, CHUNK], device=a.device)
     return float(partial.numpy().sum())
@@ -127,7 +113,7 @@ def dot(a, b) -> float:
 
 def norm_inf(x) -> float:
     """``max |x|`` as a Python float.  ``x``: 1-D float32 wp.array, n >= 1."""
-    n = _check("x", x)
+    n = check_vector("x", x)
     partial = wp.empty(_chunks(n), dtype=wp.float32, device=x.device)
     launch_rows(max_abs_chunks, _chunks(n), [x, partial, CHUNK], device=x.device)
     return float(partial.numpy().max())
@@ -135,14 +121,14 @@ def norm_inf(x) -> float:
 
 def axpy(alpha: float, x, y) -> None:
     """``y += alpha * x`` (float32).  ``x``, ``y``: 1-D float32 wp.arrays of equal length."""
-    n = _check("x", x)
-    _check("y", y, n, x.device)
+    n = check_vector("x", x)
+    check_vector("y", y, n, x.device)
     launch_rows(axpy_chunks, _chunks(n), [float(alpha), x, y, CHUNK], device=x.device)
 
 
 def scale(alpha: float, x) -> None:
     """``x *= alpha`` (float32).  ``x``: 1-D float32 wp.array."""
-    n = _check("x", x)
+    n = check_vector("x", x)
     launch_rows(scale_chunks, _chunks(n), [float(alpha), x, CHUNK], device=x.device)
 
 
@@ -151,21 +137,21 @@ def lincomb(out, a: float, x, b: float, y) -> None:
 
     ``out``, ``x``, ``y``: 1-D float32 wp.arrays of equal length.
     """
-    n = _check("out", out)
-    _check("x", x, n, out.device)
-    _check("y", y, n, out.device)
+    n = check_vector("out", out)
+    check_vector("x", x, n, out.device)
+    check_vector("y", y, n, out.device)
     launch_rows(lincomb_chunks, _chunks(n), [out, float(a), x, float(b), y, CHUNK], device=out.device)
 
 
 def copy(src, dst) -> None:
     """``dst[:] = src``.  1-D float32 wp.arrays of equal length."""
-    n = _check("src", src)
-    _check("dst", dst, n, src.device)
+    n = check_vector("src", src)
+    check_vector("dst", dst, n, src.device)
     launch_rows(copy_chunks, _chunks(n), [src, dst, CHUNK], device=src.device)
 
 
 def fill(x, value: float) -> None:
     """``x[:] = value``.  ``x``: 1-D float32 wp.array."""
-    n = _check("x", x)
+    n = check_vector("x", x)
     launch_rows(fill_chunks, _chunks(n), [x, float(value), CHUNK], device=x.device)
 

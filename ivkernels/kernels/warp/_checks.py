@@ -1,0 +1,81 @@
+"""Argument checks of the Warp host functions.
+
+Every host function checks its arguments up front, before any launch, and
+raises a ``TypeError`` (not a ``wp.array``, wrong dtype) or a ``ValueError``
+(wrong shape, wrong device, bad scalar) naming the argument, what was
+expected and what was given.  :mod:`ivkernels.kernels.taichi._checks` holds
+the same checks for NumPy arrays.
+"""
+from __future__ import annotations
+
+import math
+import numbers
+
+import warp as wp
+
+
+def check_array(name: str, a, shape: tuple | None, layout: str, device=None, *, dtype=wp.float32) -> None:
+    """Raise unless ``a`` is a ``wp.array`` of ``dtype`` and ``shape`` on ``device``.
+
+    ``shape`` is a tuple whose ``None`` entries match any size, or ``None`` for
+    any shape; ``layout`` names the axes in the messages (``"(T, H, W, 3)"``).
+    ``device``: the device of the function's first array (``None``: any).
+    """
+    if not isinstance(a, wp.array):
+        raise TypeError(f"{name} must be a wp.array of {wp.types.type_repr(dtype)} {layout}, "
+                        f"got {type(a).__name__}")
+    if a.dtype != dtype:
+        raise TypeError(f"{name} must have dtype {wp.types.type_repr(dtype)}, got {wp.types.type_repr(a.dtype)}")
+    if shape is not None and (len(a.shape) != len(shape)
+                              or any(e is not None and e != s for e, s in zip(shape, a.shape))):
+        want = tuple("?" if e is None else e for e in shape)
+        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
+    if device is not None and a.device != device:
+        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
+
+
+def check_vector(name: str, a, n: int | None = None, device=None) -> int:
+    """Raise unless ``a`` is a non-empty 1-D float32 ``wp.array`` (of length ``n``, on ``device``).
+
+    Returns its length.
+    """
+    if not isinstance(a, wp.array):
+        raise TypeError(f"{name} must be a 1-D wp.array of float32, got {type(a).__name__}")
+    if a.dtype != wp.float32:
+        raise TypeError(f"{name} must have dtype float32, got {wp.types.type_repr(a.dtype)}")
+    if a.ndim != 1 or a.shape[0] < 1:
+        raise ValueError(f"{name} must be a non-empty 1-D vector (n,), got shape {tuple(a.shape)}")
+    if n is not None and a.shape[0] != n:
+        raise ValueError(f"{name} must have the same length as the first vector ({n}), got {a.shape[0]}")
+    if device is not None and a.device != device:
+        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
+    return a.shape[0]
+
+
+def check_float(name: str, value, *, positive: bool = False) -> float:
+    """``value`` as a float; raise unless it is a finite real number (``> 0`` if ``positive``).
+
+    Python and NumPy ints and floats are accepted, ``bool`` is not.
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+            or not math.isfinite(value) or (positive and value <= 0):
+        raise ValueError(f"{name} must be a finite float{' > 0' if positive else ''}, got {value!r}")
+    return float(value)
+
+
+def check_positive(name: str, value) -> float:
+    """``float(value)``; raise unless it is ``> 0`` (``inf`` passes, ``nan`` does not)."""
+    value = float(value)
+    if not value > 0.0:
+        raise ValueError(f"{name} must be > 0, got {value!r}")
+    return value
+
+
+def check_int(name: str, value, minimum: int, hint: str = "") -> int:
+    """``value`` as an int; raise unless it is an integer (not ``bool``) ``>= minimum``.
+
+    ``hint`` is appended to the message, e.g. ``" (2 for the paper's 5x5 window)"``.
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
+        raise ValueError(f"{name} must be an int >= {minimum}{hint}, got {value!r}")
+    return int(value)
