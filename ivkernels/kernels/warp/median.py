@@ -8,7 +8,8 @@ row), then selects the minimiser from there in expected linear time
 (:func:`l1_quadratic_select`, a weighted quickselect).  The 225 weights of a
 15x15 window are never stored per pixel (the spatial factor of the shading
 weights is one shared (2r+1)^2 table).  The 5x5 median runs a branch-free
-compare-exchange network (:func:`median_network`) on a local 25-vector.
+compare-exchange network (:func:`median_network`) written out as straight-line
+code on 25 scalars (:func:`median25`).
 
 Scratch convention: the host functions take ``scratch=None`` and then allocate
 a float32 buffer lazily and cache it per (device, shape, calling thread); pass
@@ -31,9 +32,6 @@ wp.set_module_options({"enable_backward": False})
 KMEANS_ITERATIONS = 8
 #: Final cluster centres closer than this (pixels) mean "no motion boundary in the window".
 MIN_SEPARATION = 0.5
-
-vec25 = wp.types.vector(length=25, dtype=wp.float32)
-
 
 def median_network(n: int = 25) -> list:
     """Compare-exchange pairs ``(i, j)``, ``i < j``, after which wire ``n // 2``
@@ -145,6 +143,134 @@ def l1_quadratic_select(buf: wp.array2d(dtype=float), row: int, base: int, n: in
 
 
 @wp.func
+def sort2(a: float, b: float):
+    """``(min(a, b), max(a, b))``: one compare-exchange."""
+    return wp.min(a, b), wp.max(a, b)
+
+
+@wp.func
+def median25(v0: float, v1: float, v2: float, v3: float, v4: float, v5: float, v6: float, v7: float, v8: float,
+             v9: float, v10: float, v11: float, v12: float, v13: float, v14: float, v15: float, v16: float,
+             v17: float, v18: float, v19: float, v20: float, v21: float, v22: float, v23: float, v24: float):
+    """Median of 25 values: the 113 compare-exchanges of ``median_network(25)``
+    as straight-line code on scalars (wire ``k`` is ``v<k>``; the median ends on wire 12)."""
+    v0, v1 = sort2(v0, v1)
+    v2, v3 = sort2(v2, v3)
+    v4, v5 = sort2(v4, v5)
+    v6, v7 = sort2(v6, v7)
+    v8, v9 = sort2(v8, v9)
+    v10, v11 = sort2(v10, v11)
+    v12, v13 = sort2(v12, v13)
+    v14, v15 = sort2(v14, v15)
+    v16, v17 = sort2(v16, v17)
+    v18, v19 = sort2(v18, v19)
+    v20, v21 = sort2(v20, v21)
+    v22, v23 = sort2(v22, v23)
+    v0, v2 = sort2(v0, v2)
+    v1, v3 = sort2(v1, v3)
+    v4, v6 = sort2(v4, v6)
+    v5, v7 = sort2(v5, v7)
+    v8, v10 = sort2(v8, v10)
+    v9, v11 = sort2(v9, v11)
+    v12, v14 = sort2(v12, v14)
+    v13, v15 = sort2(v13, v15)
+    v16, v18 = sort2(v16, v18)
+    v17, v19 = sort2(v17, v19)
+    v20, v22 = sort2(v20, v22)
+    v21, v23 = sort2(v21, v23)
+    v1, v2 = sort2(v1, v2)
+    v5, v6 = sort2(v5, v6)
+    v9, v10 = sort2(v9, v10)
+    v13, v14 = sort2(v13, v14)
+    v17, v18 = sort2(v17, v18)
+    v21, v22 = sort2(v21, v22)
+    v0, v4 = sort2(v0, v4)
+    v1, v5 = sort2(v1, v5)
+    v2, v6 = sort2(v2, v6)
+    v3, v7 = sort2(v3, v7)
+    v8, v12 = sort2(v8, v12)
+    v9, v13 = sort2(v9, v13)
+    v10, v14 = sort2(v10, v14)
+    v11, v15 = sort2(v11, v15)
+    v16, v20 = sort2(v16, v20)
+    v17, v21 = sort2(v17, v21)
+    v18, v22 = sort2(v18, v22)
+    v19, v23 = sort2(v19, v23)
+    v2, v4 = sort2(v2, v4)
+    v3, v5 = sort2(v3, v5)
+    v10, v12 = sort2(v10, v12)
+    v11, v13 = sort2(v11, v13)
+    v18, v20 = sort2(v18, v20)
+    v19, v21 = sort2(v19, v21)
+    v1, v2 = sort2(v1, v2)
+    v3, v4 = sort2(v3, v4)
+    v5, v6 = sort2(v5, v6)
+    v9, v10 = sort2(v9, v10)
+    v11, v12 = sort2(v11, v12)
+    v13, v14 = sort2(v13, v14)
+    v17, v18 = sort2(v17, v18)
+    v19, v20 = sort2(v19, v20)
+    v21, v22 = sort2(v21, v22)
+    v0, v8 = sort2(v0, v8)
+    v1, v9 = sort2(v1, v9)
+    v2, v10 = sort2(v2, v10)
+    v3, v11 = sort2(v3, v11)
+    v4, v12 = sort2(v4, v12)
+    v5, v13 = sort2(v5, v13)
+    v6, v14 = sort2(v6, v14)
+    v7, v15 = sort2(v7, v15)
+    v16, v24 = sort2(v16, v24)
+    v4, v8 = sort2(v4, v8)
+    v5, v9 = sort2(v5, v9)
+    v6, v10 = sort2(v6, v10)
+    v7, v11 = sort2(v7, v11)
+    v20, v24 = sort2(v20, v24)
+    v2, v4 = sort2(v2, v4)
+    v3, v5 = sort2(v3, v5)
+    v6, v8 = sort2(v6, v8)
+    v7, v9 = sort2(v7, v9)
+    v10, v12 = sort2(v10, v12)
+    v11, v13 = sort2(v11, v13)
+    v18, v20 = sort2(v18, v20)
+    v19, v21 = sort2(v19, v21)
+    v22, v24 = sort2(v22, v24)
+    v1, v2 = sort2(v1, v2)
+    v3, v4 = sort2(v3, v4)
+    v5, v6 = sort2(v5, v6)
+    v7, v8 = sort2(v7, v8)
+    v9, v10 = sort2(v9, v10)
+    v11, v12 = sort2(v11, v12)
+    v13, v14 = sort2(v13, v14)
+    v17, v18 = sort2(v17, v18)
+    v19, v20 = sort2(v19, v20)
+    v21, v22 = sort2(v21, v22)
+    v23, v24 = sort2(v23, v24)
+    v0, v16 = sort2(v0, v16)
+    v1, v17 = sort2(v1, v17)
+    v2, v18 = sort2(v2, v18)
+    v3, v19 = sort2(v3, v19)
+    v4, v20 = sort2(v4, v20)
+    v5, v21 = sort2(v5, v21)
+    v6, v22 = sort2(v6, v22)
+    v7, v23 = sort2(v7, v23)
+    v8, v24 = sort2(v8, v24)
+    v8, v16 = sort2(v8, v16)
+    v9, v17 = sort2(v9, v17)
+    v10, v18 = sort2(v10, v18)
+    v11, v19 = sort2(v11, v19)
+    v12, v20 = sort2(v12, v20)
+    v13, v21 = sort2(v13, v21)
+    v6, v10 = sort2(v6, v10)
+    v7, v11 = sort2(v7, v11)
+    v12, v16 = sort2(v12, v16)
+    v13, v17 = sort2(v13, v17)
+    v10, v12 = sort2(v10, v12)
+    v11, v13 = sort2(v11, v13)
+    v11, v12 = sort2(v11, v12)
+    return v12
+
+
+@wp.func
 def nearer_second(fx: float, fy: float, c0x: float, c0y: float, c1x: float, c1y: float):
     """True if ``(fx, fy)`` is strictly nearer to centre 1 than to centre 0."""
     d0 = (fx - c0x) * (fx - c0x) + (fy - c0y) * (fy - c0y)
@@ -157,30 +283,28 @@ def nearer_second(fx: float, fy: float, c0x: float, c0y: float, c1x: float, c1y:
 # ----------------------------------------------------------------------------
 
 @wp.kernel
-def median5x5_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array4d(dtype=float),
-                   network: wp.array(dtype=wp.int32), n_pairs: int):
+def median5x5_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array4d(dtype=float)):
     r = row_begin + wp.tid()
     height = src.shape[1]
     width = src.shape[2]
     t = r // height
     y = r - t * height
+    y0 = wp.max(y - 2, 0)
+    y1 = wp.max(y - 1, 0)
+    y3 = wp.min(y + 1, height - 1)
+    y4 = wp.min(y + 2, height - 1)
     for x in range(width):
+        x0 = wp.max(x - 2, 0)
+        x1 = wp.max(x - 1, 0)
+        x3 = wp.min(x + 1, width - 1)
+        x4 = wp.min(x + 2, width - 1)
         for c in range(src.shape[3]):
-            v = vec25()
-            k = int(0)
-            for j in range(5):
-                yy = wp.clamp(y + j - 2, 0, height - 1)
-                for i in range(5):
-                    v[k] = src[t, yy, wp.clamp(x + i - 2, 0, width - 1), c]
-                    k += 1
-            for q in range(n_pairs):
-                a = network[2 * q]
-                b = network[2 * q + 1]
-                lo = wp.min(v[a], v[b])
-                hi = wp.max(v[a], v[b])
-                v[a] = lo
-                v[b] = hi
-            out[t, y, x, c] = v[12]
+            out[t, y, x, c] = median25(
+                src[t, y0, x0, c], src[t, y0, x1, c], src[t, y0, x, c], src[t, y0, x3, c], src[t, y0, x4, c],
+                src[t, y1, x0, c], src[t, y1, x1, c], src[t, y1, x, c], src[t, y1, x3, c], src[t, y1, x4, c],
+                src[t, y, x0, c], src[t, y, x1, c], src[t, y, x, c], src[t, y, x3, c], src[t, y, x4, c],
+                src[t, y3, x0, c], src[t, y3, x1, c], src[t, y3, x, c], src[t, y3, x3, c], src[t, y3, x4, c],
+                src[t, y4, x0, c], src[t, y4, x1, c], src[t, y4, x, c], src[t, y4, x3, c], src[t, y4, x4, c])
 
 
 @wp.kernel
@@ -383,9 +507,7 @@ def median5x5(src, out) -> None:
     check_array("src", src, (None, None, None, None), "(T, H, W, C)")
     t, h, w, c = src.shape
     check_array("out", out, (t, h, w, c), "(T, H, W, C)", src.device)
-    network = _cached_table(("median25",), lambda: np.asarray(median_network(25), np.int32).ravel(),
-                            wp.int32, src.device)
-    launch_rows(median5x5_rows, t * h, [src, out, network, network.shape[0] // 2], device=src.device)
+    launch_rows(median5x5_rows, t * h, [src, out], device=src.device)
 
 
 def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float = 7.0,
