@@ -86,19 +86,19 @@ def main(argv=None) -> int:
             cpu = (time.process_time() - c0) / pairs
             err = flow_errors(flow, gt)
             results[m][name] = (err["epe"], err["aae"], seconds, cpu)
-            print(f"  {name:22s} {m:16s} EPE {err['epe']:6.3f}  AAE {err['aae']:6.2f}  {seconds:6.2f} s/pair"
+            print(f"  {name:24s} {m:16s} EPE {err['epe']:6.3f}  AAE {err['aae']:6.2f}  {seconds:6.2f} s/pair"
                   f"  ({cpu:.2f} CPU s)", file=sys.stderr, flush=True)
 
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"backend={args.backend} device={args.device} threads={args.threads} "
           f"cores={os.cpu_count()} load average at the end={load:.2f}")
     print("s/pair: wall-clock seconds per frame pair; cpu: CPU seconds of this process per pair")
-    header = f"{'sequence':22s}" + "".join(f" | {m:>29s}" for m in args.methods)
+    header = f"{'sequence':24s}" + "".join(f" | {m:>29s}" for m in args.methods)
     print(header)
-    print(f"{'':22s}" + " | {:>6s} {:>6s} {:>7s} {:>6s}".format("EPE", "AAE", "s/pair", "cpu") * len(args.methods))
+    print(f"{'':24s}" + " | {:>6s} {:>6s} {:>7s} {:>6s}".format("EPE", "AAE", "s/pair", "cpu") * len(args.methods))
     print("-" * len(header))
     for name, _, _ in data:
-        row = f"{name:22s}"
+        row = f"{name:24s}"
         for m in args.methods:
             e, a, s, c = results[m][name]
             row += f" | {e:6.3f} {a:6.2f} {s:7.2f} {c:6.2f}"
@@ -109,7 +109,7 @@ def main(argv=None) -> int:
         names = [n for n, _, _ in data if keep(n)]
         if not names:
             continue
-        row = f"{label:22s}"
+        row = f"{label:24s}"
         for m in args.methods:
             vals = np.array([results[m][n] for n in names])
             row += (f" | {vals[:, 0].mean():6.3f} {vals[:, 1].mean():6.2f} {vals[:, 2].mean():7.2f}"
