@@ -9,8 +9,14 @@ threads share the work.
 Reductions (:func:`dot`, :func:`norm_inf`) write one partial result per chunk
 and finish on the host: the result depends on the chunking only, never on the
 number of threads.
+
+Contiguous vectors are read and written as ``wp.vec4`` (one address
+computation per four elements), with the last ``n % 4`` elements as scalars;
+the reductions keep four independent accumulators (float64 for :func:`dot`).
 """
 from __future__ import annotations
+
+import threading
 
 import warp as wp
 
@@ -25,69 +31,129 @@ CHUNK = 4096
 
 # ----------------------------------------------------------------------------
 # Kernels (one thread per chunk of CHUNK elements)
+#
+# Each kernel takes the vector both as float32 (``a``) and, where it is
+# contiguous, as a ``wp.vec4`` view of its first ``4 * (n // 4)`` elements
+# (``a4``; empty otherwise).  A chunk runs over its part of the view, then
+# over its elements at or beyond ``4 * a4.shape[0]`` as scalars.
 # ----------------------------------------------------------------------------
+
+@wp.func
+def chunk_begin(k: int, chunk: int):
+    return k * chunk
+
+
+@wp.func
+def chunk_end(k: int, chunk: int, n: int):
+    return wp.min(k * chunk + chunk, n)
+
+
+@wp.func
+def vec_range_end(k: int, chunk: int, n4: int):
+    """End (exclusive, in vec4 units) of chunk ``k``'s part of a view of ``n4`` vec4."""
+    return wp.min((k * chunk + chunk) // 4, n4)
+
+
+@wp.func
+def tail_begin(k: int, chunk: int, n4: int):
+    """First element of chunk ``k`` not covered by the vec4 view."""
+    return wp.max(k * chunk, 4 * n4)
+
 
 @wp.kernel
 def dot_chunks(row_begin: int, a: wp.array(dtype=float), b: wp.array(dtype=float),
+               a4: wp.array(dtype=wp.vec4), b4: wp.array(dtype=wp.vec4),
                partial: wp.array(dtype=wp.float64), chunk: int):
     k = row_begin + wp.tid()
-    begin = k * chunk
-    end = wp.min(begin + chunk, a.shape[0])
-    acc = wp.float64(0.0)
-    for i in range(begin, end):
-        acc += wp.float64(a[i]) * wp.float64(b[i])
-    partial[k] = acc
+    n4 = a4.shape[0]
+    acc0 = wp.float64(0.0)
+    acc1 = wp.float64(0.0)
+    acc2 = wp.float64(0.0)
+    acc3 = wp.float64(0.0)
+    for i in range(chunk_begin(k, chunk) // 4, vec_range_end(k, chunk, n4)):
+        u = a4[i]
+        v = b4[i]
+        acc0 += wp.float64(u[0]) * wp.float64(v[0])
+        acc1 += wp.float64(u[1]) * wp.float64(v[1])
+        acc2 += wp.float64(u[2]) * wp.float64(v[2])
+        acc3 += wp.float64(u[3]) * wp.float64(v[3])
+    for i in range(tail_begin(k, chunk, n4), chunk_end(k, chunk, a.shape[0])):
+        acc0 += wp.float64(a[i]) * wp.float64(b[i])
+    partial[k] = (acc0 + acc1) + (acc2 + acc3)
 
 
 @wp.kernel
-def max_abs_chunks(row_begin: int, x: wp.array(dtype=float), partial: wp.array(dtype=float), chunk: int):
+def max_abs_chunks(row_begin: int, x: wp.array(dtype=float), x4: wp.array(dtype=wp.vec4),
+                   partial: wp.array(dtype=float), chunk: int):
     k = row_begin + wp.tid()
-    begin = k * chunk
-    end = wp.min(begin + chunk, x.shape[0])
-    m = float(0.0)
-    for i in range(begin, end):
-        m = wp.max(m, wp.abs(x[i]))
-    partial[k] = m
+    n4 = x4.shape[0]
+    m0 = float(0.0)
+    m1 = float(0.0)
+    m2 = float(0.0)
+    m3 = float(0.0)
+    for i in range(chunk_begin(k, chunk) // 4, vec_range_end(k, chunk, n4)):
+        v = x4[i]
+        m0 = wp.max(m0, wp.abs(v[0]))
+        m1 = wp.max(m1, wp.abs(v[1]))
+        m2 = wp.max(m2, wp.abs(v[2]))
+        m3 = wp.max(m3, wp.abs(v[3]))
+    for i in range(tail_begin(k, chunk, n4), chunk_end(k, chunk, x.shape[0])):
+        m0 = wp.max(m0, wp.abs(x[i]))
+    partial[k] = wp.max(wp.max(m0, m1), wp.max(m2, m3))
 
 
 @wp.kernel
-def axpy_chunks(row_begin: int, alpha: float, x: wp.array(dtype=float), y: wp.array(dtype=float), chunk: int):
-    begin = (row_begin + wp.tid()) * chunk
-    end = wp.min(begin + chunk, x.shape[0])
-    for i in range(begin, end):
+def axpy_chunks(row_begin: int, alpha: float, x: wp.array(dtype=float), y: wp.array(dtype=float),
+                x4: wp.array(dtype=wp.vec4), y4: wp.array(dtype=wp.vec4), chunk: int):
+    k = row_begin + wp.tid()
+    n4 = x4.shape[0]
+    for i in range(chunk_begin(k, chunk) // 4, vec_range_end(k, chunk, n4)):
+        y4[i] = y4[i] + alpha * x4[i]
+    for i in range(tail_begin(k, chunk, n4), chunk_end(k, chunk, x.shape[0])):
         y[i] = y[i] + alpha * x[i]
 
 
 @wp.kernel
-def scale_chunks(row_begin: int, alpha: float, x: wp.array(dtype=float), chunk: int):
-    begin = (row_begin + wp.tid()) * chunk
-    end = wp.min(begin + chunk, x.shape[0])
-    for i in range(begin, end):
+def scale_chunks(row_begin: int, alpha: float, x: wp.array(dtype=float), x4: wp.array(dtype=wp.vec4), chunk: int):
+    k = row_begin + wp.tid()
+    n4 = x4.shape[0]
+    for i in range(chunk_begin(k, chunk) // 4, vec_range_end(k, chunk, n4)):
+        x4[i] = alpha * x4[i]
+    for i in range(tail_begin(k, chunk, n4), chunk_end(k, chunk, x.shape[0])):
         x[i] = alpha * x[i]
 
 
 @wp.kernel
 def lincomb_chunks(row_begin: int, out: wp.array(dtype=float), a: float, x: wp.array(dtype=float),
-                   b: float, y: wp.array(dtype=float), chunk: int):
-    begin = (row_begin + wp.tid()) * chunk
-    end = wp.min(begin + chunk, x.shape[0])
-    for i in range(begin, end):
+                   b: float, y: wp.array(dtype=float), out4: wp.array(dtype=wp.vec4),
+                   x4: wp.array(dtype=wp.vec4), y4: wp.array(dtype=wp.vec4), chunk: int):
+    k = row_begin + wp.tid()
+    n4 = x4.shape[0]
+    for i in range(chunk_begin(k, chunk) // 4, vec_range_end(k, chunk, n4)):
+        out4[i] = a * x4[i] + b * y4[i]
+    for i in range(tail_begin(k, chunk, n4), chunk_end(k, chunk, x.shape[0])):
         out[i] = a * x[i] + b * y[i]
 
 
 @wp.kernel
-def copy_chunks(row_begin: int, src: wp.array(dtype=float), dst: wp.array(dtype=float), chunk: int):
-    begin = (row_begin + wp.tid()) * chunk
-    end = wp.min(begin + chunk, src.shape[0])
-    for i in range(begin, end):
+def copy_chunks(row_begin: int, src: wp.array(dtype=float), dst: wp.array(dtype=float),
+                src4: wp.array(dtype=wp.vec4), dst4: wp.array(dtype=wp.vec4), chunk: int):
+    k = row_begin + wp.tid()
+    n4 = src4.shape[0]
+    for i in range(chunk_begin(k, chunk) // 4, vec_range_end(k, chunk, n4)):
+        dst4[i] = src4[i]
+    for i in range(tail_begin(k, chunk, n4), chunk_end(k, chunk, src.shape[0])):
         dst[i] = src[i]
 
 
 @wp.kernel
-def fill_chunks(row_begin: int, x: wp.array(dtype=float), value: float, chunk: int):
-    begin = (row_begin + wp.tid()) * chunk
-    end = wp.min(begin + chunk, x.shape[0])
-    for i in range(begin, end):
+def fill_chunks(row_begin: int, x: wp.array(dtype=float), x4: wp.array(dtype=wp.vec4), value: float, chunk: int):
+    k = row_begin + wp.tid()
+    n4 = x4.shape[0]
+    v = wp.vec4(value, value, value, value)
+    for i in range(chunk_begin(k, chunk) // 4, vec_range_end(k, chunk, n4)):
+        x4[i] = v
+    for i in range(tail_begin(k, chunk, n4), chunk_end(k, chunk, x.shape[0])):
         x[i] = value
 
 
@@ -99,6 +165,38 @@ def _chunks(n: int) -> int:
     return (n + CHUNK - 1) // CHUNK
 
 
+_VIEW_CACHE_SIZE = 64
+_view_cache: dict = {}
+_view_lock = threading.Lock()
+
+
+def _vec4(*arrays):
+    """``wp.vec4`` views of the first ``4 * (n // 4)`` elements of each array, or
+    empty vec4 arrays (everything then runs as scalars) unless all are contiguous.
+
+    A view is a pure function of (device, address, length), so views are cached
+    by that key: building one costs more than a small vector's whole operation.
+    """
+    n4 = arrays[0].shape[0] // 4
+    if n4 == 0 or not all(a.is_contiguous for a in arrays):
+        n4 = 0
+    views = []
+    for a in arrays:
+        key = (str(a.device), a.ptr if n4 else 0, n4)
+        view = _view_cache.get(key)
+        if view is None:
+            if n4:
+                view = wp.array(ptr=a.ptr, dtype=wp.vec4, shape=(n4,), device=a.device)
+            else:
+                view = wp.empty(0, dtype=wp.vec4, device=a.device)
+            with _view_lock:
+                if len(_view_cache) >= _VIEW_CACHE_SIZE:
+                    _view_cache.clear()
+                _view_cache[key] = view
+        views.append(view)
+    return views
+
+
 def dot(a, b) -> float:
     """``sum(a * b)`` as a Python float: float64 products and sums per chunk, chunks summed on the host.
 
@@ -107,7 +205,7 @@ def dot(a, b) -> float:
     n = check_vector("a", a)
     check_vector("b", b, n, a.device)
     partial = wp.empty(_chunks(n), dtype=wp.float64, device=a.device)
-    launch_rows(dot_chunks, _chunks(n), [a, b, partial, CHUNK], device=a.device)
+    launch_rows(dot_chunks, _chunks(n), [a, b, *_vec4(a, b), partial, CHUNK], device=a.device)
     return float(partial.numpy().sum())
 
 
@@ -115,7 +213,7 @@ def norm_inf(x) -> float:
     """``max |x|`` as a Python float.  ``x``: 1-D float32 wp.array, n >= 1."""
     n = check_vector("x", x)
     partial = wp.empty(_chunks(n), dtype=wp.float32, device=x.device)
-    launch_rows(max_abs_chunks, _chunks(n), [x, partial, CHUNK], device=x.device)
+    launch_rows(max_abs_chunks, _chunks(n), [x, *_vec4(x), partial, CHUNK], device=x.device)
     return float(partial.numpy().max())
 
 
@@ -123,13 +221,13 @@ def axpy(alpha: float, x, y) -> None:
     """``y += alpha * x`` (float32).  ``x``, ``y``: 1-D float32 wp.arrays of equal length."""
     n = check_vector("x", x)
     check_vector("y", y, n, x.device)
-    launch_rows(axpy_chunks, _chunks(n), [float(alpha), x, y, CHUNK], device=x.device)
+    launch_rows(axpy_chunks, _chunks(n), [float(alpha), x, y, *_vec4(x, y), CHUNK], device=x.device)
 
 
 def scale(alpha: float, x) -> None:
     """``x *= alpha`` (float32).  ``x``: 1-D float32 wp.array."""
     n = check_vector("x", x)
-    launch_rows(scale_chunks, _chunks(n), [float(alpha), x, CHUNK], device=x.device)
+    launch_rows(scale_chunks, _chunks(n), [float(alpha), x, *_vec4(x), CHUNK], device=x.device)
 
 
 def lincomb(out, a: float, x, b: float, y) -> None:
@@ -140,18 +238,19 @@ def lincomb(out, a: float, x, b: float, y) -> None:
     n = check_vector("out", out)
     check_vector("x", x, n, out.device)
     check_vector("y", y, n, out.device)
-    launch_rows(lincomb_chunks, _chunks(n), [out, float(a), x, float(b), y, CHUNK], device=out.device)
+    launch_rows(lincomb_chunks, _chunks(n), [out, float(a), x, float(b), y, *_vec4(out, x, y), CHUNK],
+                device=out.device)
 
 
 def copy(src, dst) -> None:
     """``dst[:] = src``.  1-D float32 wp.arrays of equal length."""
     n = check_vector("src", src)
     check_vector("dst", dst, n, src.device)
-    launch_rows(copy_chunks, _chunks(n), [src, dst, CHUNK], device=src.device)
+    launch_rows(copy_chunks, _chunks(n), [src, dst, *_vec4(src, dst), CHUNK], device=src.device)
 
 
 def fill(x, value: float) -> None:
     """``x[:] = value``.  ``x``: 1-D float32 wp.array."""
     n = check_vector("x", x)
-    launch_rows(fill_chunks, _chunks(n), [x, float(value), CHUNK], device=x.device)
+    launch_rows(fill_chunks, _chunks(n), [x, *_vec4(x), float(value), CHUNK], device=x.device)
 
