@@ -11,6 +11,8 @@ bilinear helpers of :mod:`ivkernels.kernels.warp.sampling` (clamped corners).
 """
 from __future__ import annotations
 
+import threading
+
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
@@ -82,28 +84,55 @@ def occlusion_binary_rows(row_begin: int, lab: wp.array4d(dtype=float), flow: wp
         out[t, y, x] = w
 
 
+@wp.func
+def edge_hit(magnitude: wp.array3d(dtype=float), t: int, y: int, x: int, threshold: float):
+    """1 if ``magnitude[t, y, x] > threshold``, else 0."""
+    hit = int(0)
+    if magnitude[t, y, x] > threshold:
+        hit = 1
+    return hit
+
+
 @wp.kernel
-def boundary_dilate_rows(row_begin: int, magnitude: wp.array3d(dtype=float), out: wp.array3d(dtype=float),
-                         threshold: float, radius: int):
+def boundary_dilate_x_rows(row_begin: int, magnitude: wp.array3d(dtype=float), hits: wp.array3d(dtype=float),
+                           threshold: float, radius: int):
+    """Row pass: ``hits = 1`` where a pixel within ``radius`` along x exceeds the
+    threshold, from a running count of the edge pixels in the sliding window."""
     r = row_begin + wp.tid()
     height = magnitude.shape[1]
     width = magnitude.shape[2]
     t = r // height
     y = r - t * height
+    count = int(0)
+    for xx in range(wp.min(radius + 1, width)):
+        count += edge_hit(magnitude, t, y, xx, threshold)
+    for x in range(width):
+        hit = float(0.0)
+        if count > 0:
+            hit = 1.0
+        hits[t, y, x] = hit
+        if x - radius >= 0:
+            count -= edge_hit(magnitude, t, y, x - radius, threshold)
+        if x + radius + 1 < width:
+            count += edge_hit(magnitude, t, y, x + radius + 1, threshold)
+
+
+@wp.kernel
+def boundary_dilate_y_rows(row_begin: int, hits: wp.array3d(dtype=float), out: wp.array3d(dtype=float),
+                           radius: int):
+    """Column pass: ``out`` = max of ``hits`` over the rows within ``radius``."""
+    r = row_begin + wp.tid()
+    height = hits.shape[1]
+    width = hits.shape[2]
+    t = r // height
+    y = r - t * height
     y_lo = wp.max(y - radius, 0)
     y_hi = wp.min(y + radius, height - 1)
     for x in range(width):
-        x_lo = wp.max(x - radius, 0)
-        x_hi = wp.min(x + radius, width - 1)
-        hit = float(0.0)
-        for yy in range(y_lo, y_hi + 1):
-            for xx in range(x_lo, x_hi + 1):
-                if magnitude[t, yy, xx] > threshold:
-                    hit = 1.0
-                    break
-            if hit > 0.0:
-                break
-        out[t, y, x] = hit
+        out[t, y, x] = hits[t, y_lo, x]
+    for yy in range(y_lo + 1, y_hi + 1):
+        for x in range(width):
+            out[t, y, x] = wp.max(out[t, y, x], hits[t, yy, x])
 
 
 # ----------------------------------------------------------------------------
@@ -158,7 +187,9 @@ def occlusion_binary(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: fl
 
 
 def motion_boundary(sobel_mag, out, threshold: float, radius: int) -> None:
-    """Motion-boundary map ``w_bnd`` (Sec. 3.3, Eq. 9): threshold and dilation in one gather.
+    """Motion-boundary map ``w_bnd`` (Sec. 3.3, Eq. 9): threshold, then a square dilation
+    as a row pass (running count of edge pixels) and a column pass (max) through
+    a float32 (T, H, W) scratch buffer cached per (device, shape, calling thread).
 
     ``out[t, y, x] = 1`` if any pixel of the ``(2 radius + 1)^2`` window around
     ``(y, x)`` (clipped to the image) has ``sobel_mag > threshold``, else 0.
@@ -174,5 +205,23 @@ def motion_boundary(sobel_mag, out, threshold: float, radius: int) -> None:
     check_array("sobel_mag", sobel_mag, (None, None, None), "(T, H, W)")
     check_array("out", out, tuple(sobel_mag.shape), "(T, H, W)", sobel_mag.device)
     radius = check_int("radius", radius, 0)
-    launch_rows(boundary_dilate_rows, sobel_mag.shape[0] * sobel_mag.shape[1],
-                [sobel_mag, out, float(threshold), int(radius)], device=sobel_mag.device)
+    rows = sobel_mag.shape[0] * sobel_mag.shape[1]
+    hits = _scratch(tuple(sobel_mag.shape), sobel_mag.device)
+    launch_rows(boundary_dilate_x_rows, rows, [sobel_mag, hits, float(threshold), int(radius)],
+                device=sobel_mag.device)
+    launch_rows(boundary_dilate_y_rows, rows, [hits, out, int(radius)], device=sobel_mag.device)
+
+
+_scratch_cache: dict = {}
+_scratch_lock = threading.Lock()
+
+
+def _scratch(shape: tuple, device):
+    """A float32 buffer of ``shape`` cached per (device, shape, calling thread)."""
+    key = (str(device), shape, threading.get_ident())
+    with _scratch_lock:
+        buf = _scratch_cache.get(key)
+        if buf is None:
+            buf = wp.empty(shape, dtype=wp.float32, device=device)
+            _scratch_cache[key] = buf
+    return buf
