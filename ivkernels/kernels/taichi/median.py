@@ -16,10 +16,12 @@ from ivkernels.kernels.taichi._checks import check_array, check_int, check_posit
 from ivkernels.kernels.warp.median import KMEANS_ITERATIONS, MIN_SEPARATION, median_network
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
-nd1_i32 = ti.types.ndarray(dtype=ti.i32, ndim=1)
 nd2 = ti.types.ndarray(dtype=ti.f32, ndim=2)
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
+
+#: The 5x5 median's compare-exchange pairs (:func:`median_network`).
+_PAIRS25 = tuple(median_network(25))
 
 
 # ----------------------------------------------------------------------------
@@ -102,7 +104,7 @@ def nearer_second(fx, fy, c0x, c0y, c1x, c1y):
 # ----------------------------------------------------------------------------
 
 @ti.kernel
-def median5x5_rows(src: nd4, out: nd4, network: nd1_i32):
+def median5x5_rows(src: nd4, out: nd4):
     height = src.shape[1]
     width = src.shape[2]
     for r in range(src.shape[0] * height):
@@ -115,14 +117,16 @@ def median5x5_rows(src: nd4, out: nd4, network: nd1_i32):
                     yy = ti.min(ti.max(y + j - 2, 0), height - 1)
                     for i in ti.static(range(5)):
                         v[5 * j + i] = src[t, yy, ti.min(ti.max(x + i - 2, 0), width - 1), c]
-                # the pruned median network of ivkernels.kernels.warp.median.median_network
-                for q in range(network.shape[0] // 2):
-                    a = network[2 * q]
-                    b = network[2 * q + 1]
-                    lo = ti.min(v[a], v[b])
-                    hi = ti.max(v[a], v[b])
-                    v[a] = lo
-                    v[b] = hi
+                # the pruned median network of ivkernels.kernels.warp.median.median_network,
+                # unrolled at compile time (static wire indices keep v in registers), in
+                # blocks of 16 pairs (Taichi warns on static loops over 32 iterations)
+                for q0 in ti.static(range(0, len(_PAIRS25), 16)):
+                    for q in ti.static(range(q0, min(q0 + 16, len(_PAIRS25)))):
+                        a, b = ti.static(_PAIRS25[q])
+                        lo = ti.min(v[a], v[b])
+                        hi = ti.max(v[a], v[b])
+                        v[a] = lo
+                        v[b] = hi
                 out[t, y, x, c] = v[12]
 
 
@@ -279,7 +283,6 @@ def flow_scratch_shape(flow_shape: tuple, radius: int) -> tuple:
 
 _scratch_cache: dict = {}
 _scratch_lock = threading.Lock()
-_NETWORK25 = np.asarray(median_network(25), np.int32).ravel()
 
 
 def _spatial_weights(radius: int, sigma: float) -> np.ndarray:
@@ -308,7 +311,7 @@ def median5x5(src, out) -> None:
     t, h, w, c = src.shape
     check_array("out", out, (t, h, w, c), "(T, H, W, C)", output=True)
     if src.size:
-        median5x5_rows(src, out, _NETWORK25)
+        median5x5_rows(src, out)
 
 
 def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float = 7.0,
