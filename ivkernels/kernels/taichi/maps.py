@@ -5,6 +5,9 @@ NumPy arrays passed as ``ti.types.ndarray()``.
 The next frame's Lab colour at ``x + u`` is sampled with the bilinear helpers
 of :mod:`ivkernels.kernels.taichi.sampling`.  Parallel over the ``T * H`` rows.
 """
+import threading
+
+import numpy as np
 import taichi as ti
 
 from ivkernels.kernels.taichi._checks import check_array, check_int, check_positive
@@ -59,27 +62,66 @@ def occlusion_binary_rows(lab: nd4, flow: nd4, div_neg: nd3, out: nd3, sigma_e: 
             out[t, y, x] = w
 
 
+@ti.func
+def edge_hit(magnitude: ti.template(), t, y, x, threshold):
+    hit = 0
+    if magnitude[t, y, x] > threshold:
+        hit = 1
+    return hit
+
+
 @ti.kernel
-def boundary_dilate_rows(magnitude: nd3, out: nd3, threshold: ti.f32, radius: ti.i32):
+def boundary_dilate_x_rows(magnitude: nd3, hits: nd3, threshold: ti.f32, radius: ti.i32):
+    """Row pass: running count of edge pixels in the sliding x window."""
     height = magnitude.shape[1]
     width = magnitude.shape[2]
     for r in range(magnitude.shape[0] * height):
         t = r // height
         y = r - t * height
+        count = 0
+        for xx in range(ti.min(radius + 1, width)):
+            count += edge_hit(magnitude, t, y, xx, threshold)
+        for x in range(width):
+            hit = 0.0
+            if count > 0:
+                hit = 1.0
+            hits[t, y, x] = hit
+            if x - radius >= 0:
+                count -= edge_hit(magnitude, t, y, x - radius, threshold)
+            if x + radius + 1 < width:
+                count += edge_hit(magnitude, t, y, x + radius + 1, threshold)
+
+
+@ti.kernel
+def boundary_dilate_y_rows(hits: nd3, out: nd3, radius: ti.i32):
+    """Column pass: max of ``hits`` over the rows within ``radius``."""
+    height = hits.shape[1]
+    width = hits.shape[2]
+    for r in range(hits.shape[0] * height):
+        t = r // height
+        y = r - t * height
         y_lo = ti.max(y - radius, 0)
         y_hi = ti.min(y + radius, height - 1)
         for x in range(width):
-            x_lo = ti.max(x - radius, 0)
-            x_hi = ti.min(x + radius, width - 1)
-            hit = 0.0
-            for yy in range(y_lo, y_hi + 1):
-                for xx in range(x_lo, x_hi + 1):
-                    if magnitude[t, yy, xx] > threshold:
-                        hit = 1.0
-                        break
-                if hit > 0.0:
-                    break
-            out[t, y, x] = hit
+            m = hits[t, y_lo, x]
+            for yy in range(y_lo + 1, y_hi + 1):
+                m = ti.max(m, hits[t, yy, x])
+            out[t, y, x] = m
+
+
+_scratch_cache: dict = {}
+_scratch_lock = threading.Lock()
+
+
+def _scratch(shape: tuple) -> np.ndarray:
+    """A float32 buffer of ``shape`` cached per (shape, calling thread)."""
+    key = (shape, threading.get_ident())
+    with _scratch_lock:
+        buf = _scratch_cache.get(key)
+        if buf is None:
+            buf = np.empty(shape, np.float32)
+            _scratch_cache[key] = buf
+    return buf
 
 
 def _check_occlusion_args(lab, flow, div_neg, out, sigma_e, sigma_d):
@@ -117,4 +159,6 @@ def motion_boundary(sobel_mag, out, threshold: float, radius: int) -> None:
     check_array("out", out, sobel_mag.shape, "(T, H, W)", output=True)
     radius = check_int("radius", radius, 0)
     if out.size:
-        boundary_dilate_rows(sobel_mag, out, float(threshold), int(radius))
+        hits = _scratch(tuple(sobel_mag.shape))
+        boundary_dilate_x_rows(sobel_mag, hits, float(threshold), int(radius))
+        boundary_dilate_y_rows(hits, out, int(radius))
