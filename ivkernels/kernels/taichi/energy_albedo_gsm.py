@@ -3,9 +3,12 @@ function, same signature, NumPy arrays passed as ``ti.types.ndarray()``.
 
 See the Warp module for the energy, the table grid and the gradient.  The
 kernel's outermost loop runs over the ``T * H`` image rows in parallel; each
-row loops over ``x`` and the window (a gather: no atomics).
+row loops over ``x`` and the window (a gather: no atomics), on the whitened
+albedo ``B = L A`` (``L^T L = Sigma^-1``) that a first kernel writes into a
+scratch buffer cached per (shape, calling thread).
 """
 import math
+import threading
 
 import numpy as np
 import taichi as ti
@@ -37,38 +40,76 @@ def gsm_lookup(r2, table_g: ti.template(), table_dg: ti.template(), r2_max, cell
     return g, dg
 
 
+@ti.func
+def precision_factor(sigma_inv: ti.template()):
+    """Upper-triangular ``L`` with ``L^T L = Sigma^-1`` (Cholesky of the symmetric part)."""
+    p01 = 0.5 * (sigma_inv[0, 1] + sigma_inv[1, 0])
+    p02 = 0.5 * (sigma_inv[0, 2] + sigma_inv[2, 0])
+    p12 = 0.5 * (sigma_inv[1, 2] + sigma_inv[2, 1])
+    l00 = ti.sqrt(sigma_inv[0, 0])
+    l01 = p01 / l00
+    l02 = p02 / l00
+    l11 = ti.sqrt(sigma_inv[1, 1] - l01 * l01)
+    l12 = (p12 - l01 * l02) / l11
+    l22 = ti.sqrt(sigma_inv[2, 2] - l02 * l02 - l12 * l12)
+    return ti.Matrix([[l00, l01, l02], [0.0, l11, l12], [0.0, 0.0, l22]])
+
+
 @ti.kernel
-def _gsm_smoothness_rows(A: nd4, sigma_inv: nd2, table_g: nd1, table_dg: nd1, r2_max: ti.f32,
+def _whiten_rows(A: nd4, sigma_inv: nd2, B: nd4):
+    """``B(x) = L A(x)``, so that ``r2 = |B(x) - B(y)|^2``."""
+    for t, y in ti.ndrange(A.shape[0], A.shape[1]):
+        L = precision_factor(sigma_inv)
+        for x in range(A.shape[2]):
+            b = L @ ti.Vector([A[t, y, x, 0], A[t, y, x, 1], A[t, y, x, 2]])
+            for c in ti.static(range(3)):
+                B[t, y, x, c] = b[c]
+
+
+@ti.kernel
+def _gsm_smoothness_rows(B: nd4, sigma_inv: nd2, table_g: nd1, table_dg: nd1, r2_max: ti.f32,
                          cells_per_root: ti.f32, lam: ti.f32, radius: ti.i32, gA: nd4,
                          energy_rows: nd1_f64):
-    for t, y in ti.ndrange(A.shape[0], A.shape[1]):
-        height = A.shape[1]
-        width = A.shape[2]
-        P = ti.Matrix([[sigma_inv[0, 0], sigma_inv[0, 1], sigma_inv[0, 2]],
-                       [sigma_inv[1, 0], sigma_inv[1, 1], sigma_inv[1, 2]],
-                       [sigma_inv[2, 0], sigma_inv[2, 1], sigma_inv[2, 2]]])
+    for t, y in ti.ndrange(B.shape[0], B.shape[1]):
+        height = B.shape[1]
+        width = B.shape[2]
+        Lt = precision_factor(sigma_inv).transpose()
         y_lo = ti.max(y - radius, 0)
         y_hi = ti.min(y + radius, height - 1)
         e = ti.cast(0.0, ti.f64)
         for x in range(width):
-            a = ti.Vector([A[t, y, x, 0], A[t, y, x, 1], A[t, y, x, 2]])
+            b = ti.Vector([B[t, y, x, 0], B[t, y, x, 1], B[t, y, x, 2]])
             x_lo = ti.max(x - radius, 0)
             x_hi = ti.min(x + radius, width - 1)
             e_x = 0.0
-            grad = ti.Vector([0.0, 0.0, 0.0])
+            acc = ti.Vector([0.0, 0.0, 0.0])
             for yy in range(y_lo, y_hi + 1):
                 for xx in range(x_lo, x_hi + 1):
                     if yy != y or xx != x:
-                        d = a - ti.Vector([A[t, yy, xx, 0], A[t, yy, xx, 1], A[t, yy, xx, 2]])
-                        q = P @ d
-                        g, dg = gsm_lookup(d.dot(q), table_g, table_dg, r2_max, cells_per_root)
+                        d = b - ti.Vector([B[t, yy, xx, 0], B[t, yy, xx, 1], B[t, yy, xx, 2]])
+                        g, dg = gsm_lookup(d.dot(d), table_g, table_dg, r2_max, cells_per_root)
                         e_x += g
-                        grad += dg * q
-            s = 4.0 * lam
+                        acc += dg * d
+            grad = (4.0 * lam) * (Lt @ acc)
             for c in ti.static(range(3)):
-                gA[t, y, x, c] += s * grad[c]
+                gA[t, y, x, c] += grad[c]
             e += ti.cast(e_x, ti.f64)
         energy_rows[t * height + y] += ti.cast(lam, ti.f64) * e
+
+
+_scratch_cache: dict = {}
+_scratch_lock = threading.Lock()
+
+
+def _scratch(shape: tuple) -> np.ndarray:
+    """A float32 buffer of ``shape`` cached per (shape, calling thread)."""
+    key = (shape, threading.get_ident())
+    with _scratch_lock:
+        buf = _scratch_cache.get(key)
+        if buf is None:
+            buf = np.empty(shape, np.float32)
+            _scratch_cache[key] = buf
+    return buf
 
 
 def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_rows,
@@ -94,5 +135,7 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
     radius = check_int("radius", radius, 1, " (2 for the paper's 5x5 window)")
     if T * H == 0 or W == 0:
         return
-    _gsm_smoothness_rows(A, sigma_inv, table_g, table_dg, float(r2_max),
+    B = _scratch((T, H, W, 3))
+    _whiten_rows(A, sigma_inv, B)
+    _gsm_smoothness_rows(B, sigma_inv, table_g, table_dg, float(r2_max),
                          float((n - 1) / math.sqrt(r2_max)), float(lam), int(radius), gA, energy_rows)
