@@ -129,10 +129,10 @@ def boundary_dilate_y_rows(row_begin: int, hits: wp.array3d(dtype=float), out: w
     y_lo = wp.max(y - radius, 0)
     y_hi = wp.min(y + radius, height - 1)
     for x in range(width):
-        out[t, y, x] = hits[t, y_lo, x]
-    for yy in range(y_lo + 1, y_hi + 1):
-        for x in range(width):
-            out[t, y, x] = wp.max(out[t, y, x], hits[t, yy, x])
+        m = hits[t, y_lo, x]
+        for yy in range(y_lo + 1, y_hi + 1):
+            m = wp.max(m, hits[t, yy, x])
+        out[t, y, x] = m
 
 
 # ----------------------------------------------------------------------------
