@@ -63,7 +63,10 @@ class Params:
         L-BFGS iterations per alternation, and the number of correction pairs.
     init_blur
         Coarsest-level start: S = log luminance blurred with a Gaussian whose
-        sigma is ``init_blur`` times the shorter side; A = I - S.
+        sigma is ``init_blur`` times the shorter side; A = I - S.  Chosen on
+        synthetic sequences with seed 12 at 320x240 (mean LMSE relative to
+        colour Retinex, start only: 0.75 / 0.81 / 0.94 / 1.10 / 1.20 for
+        0.01 / 0.02 / 0.04 / 0.07 / 0.1; after the solve at 0.02: 0.78).
     log_floor
         Floor of the linear input before the log (avoids log 0 on black pixels).
 
@@ -106,7 +109,7 @@ class Params:
     outer_iterations: int = 2
     lbfgs_iterations: int = 40
     lbfgs_memory: int = 6
-    init_blur: float = 0.1
+    init_blur: float = 0.02
     log_floor: float = 1e-4
     # long videos
     window: int = 8

@@ -101,13 +101,22 @@ def main(argv=None) -> int:
     parser.add_argument("--flow", default="classic_nl_fast",
                         help="flow method for every configuration")
     parser.add_argument("--quick", action="store_true", help="small sizes (a smoke run)")
+    parser.add_argument("--sizes", type=int, nargs="+", default=None, metavar="H W",
+                        help="sizes (H W pairs) of section 1; default 240 320 480 640")
+    parser.add_argument("--scaling-size", type=int, nargs=2, default=None, metavar=("H", "W"),
+                        help="size of section 2; default the first of --sizes")
     parser.add_argument("--stream", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.one:
         print(json.dumps(run_one(args)))
         return 0
 
-    sizes = [(120, 160)] if args.quick else [(240, 320), (480, 640)]
+    if args.sizes:
+        if len(args.sizes) % 2:
+            parser.error("--sizes takes H W pairs")
+        sizes = list(zip(args.sizes[::2], args.sizes[1::2]))
+    else:
+        sizes = [(120, 160)] if args.quick else [(240, 320), (480, 640)]
     configs = [("warp", 1), ("warp", 2), ("taichi", 1), ("taichi", 2)]
     print(f"decompose(), 8 frames, flow={args.flow}; seconds per stage (compile excluded)")
     header = f"{'size':>9} {'backend':>8} {'thr':>3} {'flow':>6} {'maps':>6} {'solve':>7} " \
@@ -128,7 +137,7 @@ def main(argv=None) -> int:
         print(f"{w}x{h}: 2 threads vs 1: Warp {speedup:.2f}x, Taichi {tspeed:.2f}x; "
               f"Taichi / Warp time ratio (2 threads) {ratio:.2f}")
 
-    h, w = sizes[0]
+    h, w = args.scaling_size or sizes[0]
     counts = [4, 8, 12] if args.quick else [8, 16, 32]
     print(f"\nscaling in frames at {w}x{h} (Warp, 2 threads, windows of 8 frames)")
     print(f"{'frames':>6} {'total s':>8} {'s/frame':>8} {'peak MiB':>9}")
