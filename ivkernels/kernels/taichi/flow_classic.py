@@ -9,6 +9,8 @@ the Warp kernels.
 import numpy as np
 import taichi as ti
 
+from ivkernels.kernels.taichi._checks import check_array
+
 GREY_WEIGHTS = (0.2989, 0.5870, 0.1140)
 
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
@@ -332,16 +334,8 @@ def _thin_edges(sobel: nd4, cutoff: ti.types.ndarray(dtype=ti.f32, ndim=2), out:
 # ----------------------------------------------------------------------------
 
 def _check(name: str, a, shape: tuple, layout: str) -> None:
-    """Raise unless ``a`` is a C-contiguous float32 ndarray of ``shape`` (None = any size)."""
-    if not isinstance(a, np.ndarray):
-        raise TypeError(f"{name} must be a numpy.ndarray of float32 {layout}, got {type(a).__name__}")
-    if a.dtype != np.float32:
-        raise TypeError(f"{name} must have dtype float32, got {a.dtype}")
-    if a.ndim != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {a.shape}")
-    if not a.flags.c_contiguous:
-        raise ValueError(f"{name} must be C-contiguous")
+    """Inputs and outputs alike must already be C-contiguous float32 (no copies)."""
+    check_array(name, a, shape, layout, copy=False)
 
 
 def srgb_grey(rgb, out) -> None:

@@ -39,6 +39,8 @@ from __future__ import annotations
 
 import warp as wp
 
+from ivkernels.kernels.warp._checks import check_array
+
 from ivkernels.kernels.launch import launch_rows
 
 wp.set_module_options({"enable_backward": False})
@@ -424,19 +426,6 @@ def thin_edges_rows(row_begin: int, sobel: wp.array4d(dtype=float), cutoff: wp.a
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _check(name: str, a, shape: tuple, layout: str, device=None) -> None:
-    """Raise unless ``a`` is a float32 ``wp.array`` of ``shape`` (None = any size) on ``device``."""
-    if not isinstance(a, wp.array):
-        raise TypeError(f"{name} must be a wp.array of float32 {layout}, got {type(a).__name__}")
-    if a.dtype != wp.float32:
-        raise TypeError(f"{name} must have dtype float32, got {wp.types.type_repr(a.dtype)}")
-    if len(a.shape) != len(shape) or any(e is not None and e != s for e, s in zip(shape, a.shape)):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
-    if device is not None and a.device != device:
-        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
-
-
 def _rows(a) -> int:
     return a.shape[0] * a.shape[1]
 
@@ -451,9 +440,9 @@ def srgb_grey(rgb, out) -> None:
     rgb : (T, H, W, 3) float32, linear RGB in [0, 1].
     out : (T, H, W) float32, grey in [0, 255] (gamma-encoded, not linear).
     """
-    _check("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
+    check_array("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
     t, h, w, _ = rgb.shape
-    _check("out", out, (t, h, w), "(T, H, W)", rgb.device)
+    check_array("out", out, (t, h, w), "(T, H, W)", rgb.device)
     launch_rows(srgb_grey_rows, t * h, [rgb, out, *GREY_WEIGHTS], rgb.device)
 
 
@@ -464,11 +453,11 @@ def row_min_max(src, out) -> None:
     out : (T*H, C, 2) float32; ``out[t*H + y, c] = (min, max)`` of ``src[t, y, :, c]``.
     The host finishes the reduction over rows (``out.min(0)``, ``out.max(0)``).
     """
-    _check("src", src, (None, None, None, None), "(T, H, W, C)")
+    check_array("src", src, (None, None, None, None), "(T, H, W, C)")
     t, h, w, c = src.shape
     if w < 1:
         raise ValueError(f"src must have at least one column, got shape {tuple(src.shape)}")
-    _check("out", out, (t * h, c, 2), "(T*H, C, 2)", src.device)
+    check_array("out", out, (t * h, c, 2), "(T*H, C, 2)", src.device)
     launch_rows(min_max_rows, t * h, [src, out], src.device)
 
 
@@ -478,11 +467,11 @@ def scale_shift(src, out, scale, shift) -> None:
     src, out : (T, H, W, C) float32 (may be the same array).
     scale, shift : (C,) float32 arrays on the same device.
     """
-    _check("src", src, (None, None, None, None), "(T, H, W, C)")
+    check_array("src", src, (None, None, None, None), "(T, H, W, C)")
     t, h, w, c = src.shape
-    _check("out", out, (t, h, w, c), "(T, H, W, C)", src.device)
-    _check("scale", scale, (c,), "(C,)", src.device)
-    _check("shift", shift, (c,), "(C,)", src.device)
+    check_array("out", out, (t, h, w, c), "(T, H, W, C)", src.device)
+    check_array("scale", scale, (c,), "(C,)", src.device)
+    check_array("shift", shift, (c,), "(C,)", src.device)
     launch_rows(scale_shift_rows, t * h, [src, out, scale, shift], src.device)
 
 
@@ -498,10 +487,10 @@ def rof_dual_step(img, p_in, p_out, theta: float, delta: float) -> None:
     img : (T, H, W) float32 (the public code scales it to [-1, 1]).
     p_in, p_out : (T, H, W, 2) float32 dual field; must be different arrays.
     """
-    _check("img", img, (None, None, None), "(T, H, W)")
+    check_array("img", img, (None, None, None), "(T, H, W)")
     t, h, w = img.shape
-    _check("p_in", p_in, (t, h, w, 2), "(T, H, W, 2)", img.device)
-    _check("p_out", p_out, (t, h, w, 2), "(T, H, W, 2)", img.device)
+    check_array("p_in", p_in, (t, h, w, 2), "(T, H, W, 2)", img.device)
+    check_array("p_out", p_out, (t, h, w, 2), "(T, H, W, 2)", img.device)
     if p_in.ptr == p_out.ptr:
         raise ValueError("p_in and p_out must be different arrays (the step reads neighbours of p_in)")
     launch_rows(rof_dual_step_rows, t * h, [img, p_in, p_out, float(theta), float(delta)], img.device)
@@ -516,10 +505,10 @@ def rof_texture(img, p, out, theta: float, alpha: float) -> None:
     img : (T, H, W) float32; p : (T, H, W, 2) float32 from :func:`rof_dual_step`;
     out : (T, H, W) float32 (may be ``img``).
     """
-    _check("img", img, (None, None, None), "(T, H, W)")
+    check_array("img", img, (None, None, None), "(T, H, W)")
     t, h, w = img.shape
-    _check("p", p, (t, h, w, 2), "(T, H, W, 2)", img.device)
-    _check("out", out, (t, h, w), "(T, H, W)", img.device)
+    check_array("p", p, (t, h, w, 2), "(T, H, W, 2)", img.device)
+    check_array("out", out, (t, h, w), "(T, H, W)", img.device)
     launch_rows(rof_texture_rows, t * h, [img, p, out, float(theta), float(alpha)], img.device)
 
 
@@ -528,11 +517,11 @@ def pack_image_gradient(img, gx, gy, out) -> None:
 
     img, gx, gy : (T, H, W) float32; out : (T, H, W, 3) float32.
     """
-    _check("img", img, (None, None, None), "(T, H, W)")
+    check_array("img", img, (None, None, None), "(T, H, W)")
     t, h, w = img.shape
-    _check("gx", gx, (t, h, w), "(T, H, W)", img.device)
-    _check("gy", gy, (t, h, w), "(T, H, W)", img.device)
-    _check("out", out, (t, h, w, 3), "(T, H, W, 3)", img.device)
+    check_array("gx", gx, (t, h, w), "(T, H, W)", img.device)
+    check_array("gy", gy, (t, h, w), "(T, H, W)", img.device)
+    check_array("out", out, (t, h, w, 3), "(T, H, W, 3)", img.device)
     launch_rows(pack_image_gradient_rows, t * h, [img, gx, gy, out], img.device)
 
 
@@ -552,15 +541,15 @@ def data_coefficients(i1, i1x, i1y, warped, inside, du, out, blend: float = 0.5,
     du : (T, H, W, 2) float32, current flow increment.
     out : (T, H, W, 5) float32 ``psi * (Ix Ix, Ix Iy, Iy Iy, Ix It, Iy It)``.
     """
-    _check("i1", i1, (None, None, None), "(T, H, W)")
+    check_array("i1", i1, (None, None, None), "(T, H, W)")
     t, h, w = i1.shape
     dev = i1.device
-    _check("i1x", i1x, (t, h, w), "(T, H, W)", dev)
-    _check("i1y", i1y, (t, h, w), "(T, H, W)", dev)
-    _check("warped", warped, (t, h, w, 3), "(T, H, W, 3)", dev)
-    _check("inside", inside, (t, h, w), "(T, H, W)", dev)
-    _check("du", du, (t, h, w, 2), "(T, H, W, 2)", dev)
-    _check("out", out, (t, h, w, 5), "(T, H, W, 5)", dev)
+    check_array("i1x", i1x, (t, h, w), "(T, H, W)", dev)
+    check_array("i1y", i1y, (t, h, w), "(T, H, W)", dev)
+    check_array("warped", warped, (t, h, w, 3), "(T, H, W, 3)", dev)
+    check_array("inside", inside, (t, h, w), "(T, H, W)", dev)
+    check_array("du", du, (t, h, w, 2), "(T, H, W, 2)", dev)
+    check_array("out", out, (t, h, w, 5), "(T, H, W, 5)", dev)
     launch_rows(data_coefficients_rows, t * h,
                 [i1, i1x, i1y, warped, inside, du, out, float(blend), float(a), float(eps),
                  float(quad_frac), float(quad_weight)], dev)
@@ -575,10 +564,10 @@ def smoothness_weights(flow, du, out, a: float = 0.45, eps: float = 1e-3, quad_f
         neighbour and to the neighbour below, for u (channels 0, 1) and
         v (channels 2, 3); 0 where that neighbour does not exist.
     """
-    _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
+    check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
     t, h, w, _ = flow.shape
-    _check("du", du, (t, h, w, 2), "(T, H, W, 2)", flow.device)
-    _check("out", out, (t, h, w, 4), "(T, H, W, 4)", flow.device)
+    check_array("du", du, (t, h, w, 2), "(T, H, W, 2)", flow.device)
+    check_array("out", out, (t, h, w, 4), "(T, H, W, 4)", flow.device)
     launch_rows(smoothness_weights_rows, t * h,
                 [flow, du, out, float(a), float(eps), float(quad_frac), float(quad_weight)], flow.device)
 
@@ -596,12 +585,12 @@ def assemble_system(flow, data, smooth, lam: float, out) -> None:
     smooth : (T, H, W, 4) float32 from :func:`smoothness_weights`.
     out : (T, H, W, 5) float32.
     """
-    _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
+    check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
     t, h, w, _ = flow.shape
     dev = flow.device
-    _check("data", data, (t, h, w, 5), "(T, H, W, 5)", dev)
-    _check("smooth", smooth, (t, h, w, 4), "(T, H, W, 4)", dev)
-    _check("out", out, (t, h, w, 5), "(T, H, W, 5)", dev)
+    check_array("data", data, (t, h, w, 5), "(T, H, W, 5)", dev)
+    check_array("smooth", smooth, (t, h, w, 4), "(T, H, W, 4)", dev)
+    check_array("out", out, (t, h, w, 5), "(T, H, W, 5)", dev)
     launch_rows(assemble_system_rows, t * h, [flow, data, smooth, out, float(lam)], dev)
 
 
@@ -618,11 +607,11 @@ def sor_sweep(du, system, smooth, lam: float, omega: float, parity: int) -> None
     smooth : (T, H, W, 4) float32 from :func:`smoothness_weights` (the same
         ``lam`` as given to :func:`assemble_system`).
     """
-    _check("du", du, (None, None, None, 2), "(T, H, W, 2)")
+    check_array("du", du, (None, None, None, 2), "(T, H, W, 2)")
     t, h, w, _ = du.shape
     dev = du.device
-    _check("system", system, (t, h, w, 5), "(T, H, W, 5)", dev)
-    _check("smooth", smooth, (t, h, w, 4), "(T, H, W, 4)", dev)
+    check_array("system", system, (t, h, w, 5), "(T, H, W, 5)", dev)
+    check_array("smooth", smooth, (t, h, w, 4), "(T, H, W, 4)", dev)
     if parity not in (0, 1):
         raise ValueError(f"parity must be 0 or 1, got {parity!r}")
     launch_rows(sor_sweep_rows, t * h, [du, system, smooth, float(lam), float(omega), int(parity)], dev)
@@ -633,10 +622,10 @@ def apply_update(flow, du, out, limit: float = 1.0) -> None:
 
     flow, du, out : (T, H, W, 2) float32; ``out`` may be ``flow``.
     """
-    _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
+    check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
     t, h, w, _ = flow.shape
-    _check("du", du, (t, h, w, 2), "(T, H, W, 2)", flow.device)
-    _check("out", out, (t, h, w, 2), "(T, H, W, 2)", flow.device)
+    check_array("du", du, (t, h, w, 2), "(T, H, W, 2)", flow.device)
+    check_array("out", out, (t, h, w, 2), "(T, H, W, 2)", flow.device)
     launch_rows(apply_update_rows, t * h, [flow, du, out, float(limit)], flow.device)
 
 
@@ -646,12 +635,12 @@ def select_masked(mask, inside_mask, outside_mask, out) -> None:
     mask : (T, H, W) float32; inside_mask, outside_mask, out : (T, H, W, C) float32
     (``out`` may alias either input).
     """
-    _check("mask", mask, (None, None, None), "(T, H, W)")
+    check_array("mask", mask, (None, None, None), "(T, H, W)")
     t, h, w = mask.shape
-    _check("inside_mask", inside_mask, (t, h, w, None), "(T, H, W, C)", mask.device)
+    check_array("inside_mask", inside_mask, (t, h, w, None), "(T, H, W, C)", mask.device)
     c = inside_mask.shape[3]
-    _check("outside_mask", outside_mask, (t, h, w, c), "(T, H, W, C)", mask.device)
-    _check("out", out, (t, h, w, c), "(T, H, W, C)", mask.device)
+    check_array("outside_mask", outside_mask, (t, h, w, c), "(T, H, W, C)", mask.device)
+    check_array("out", out, (t, h, w, c), "(T, H, W, C)", mask.device)
     launch_rows(select_masked_rows, t * h, [mask, inside_mask, outside_mask, out], mask.device)
 
 
@@ -666,10 +655,10 @@ def flow_sobel_components(flow, out, row_energy) -> None:
     row_energy : (T*H, 2) float32, ``sum_x |grad u|^2`` and ``sum_x |grad v|^2``
         of each row (the host averages them into the edge thresholds).
     """
-    _check("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
+    check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
     t, h, w, _ = flow.shape
-    _check("out", out, (t, h, w, 4), "(T, H, W, 4)", flow.device)
-    _check("row_energy", row_energy, (t * h, 2), "(T*H, 2)", flow.device)
+    check_array("out", out, (t, h, w, 4), "(T, H, W, 4)", flow.device)
+    check_array("row_energy", row_energy, (t * h, 2), "(T*H, 2)", flow.device)
     launch_rows(flow_sobel_components_rows, t * h, [flow, out, row_energy], flow.device)
 
 
@@ -686,8 +675,8 @@ def thin_edges(sobel, cutoff, out) -> None:
     cutoff : (T, 2) float32 squared-magnitude thresholds (pixels^2 / pixel^2).
     out : (T, H, W) float32, 1 on an edge of u or v, else 0.
     """
-    _check("sobel", sobel, (None, None, None, 4), "(T, H, W, 4)")
+    check_array("sobel", sobel, (None, None, None, 4), "(T, H, W, 4)")
     t, h, w, _ = sobel.shape
-    _check("cutoff", cutoff, (t, 2), "(T, 2)", sobel.device)
-    _check("out", out, (t, h, w), "(T, H, W)", sobel.device)
+    check_array("cutoff", cutoff, (t, 2), "(T, 2)", sobel.device)
+    check_array("out", out, (t, h, w), "(T, H, W)", sobel.device)
     launch_rows(thin_edges_rows, t * h, [sobel, cutoff, out], sobel.device)
