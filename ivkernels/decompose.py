@@ -18,6 +18,8 @@ from ivkernels.params import Params
 
 #: Flow method used when ``flow=None``.
 DEFAULT_FLOW_METHOD = "classic_nl_fast"
+#: Frame pairs given to the flow method per call (bounds its working memory).
+FLOW_PAIRS_PER_CALL = 7
 
 
 @dataclass
@@ -164,10 +166,20 @@ class _Decomposer:
             from tqdm.auto import tqdm
 
             t0 = time.perf_counter()
-            for t in tqdm(missing, desc=f"flow ({self.flow_method})", unit="pair",
-                          disable=not self.progress, leave=False):
-                cached[t] = estimate_flow(self.frames[t:t + 2], method=self.flow_method,
-                                          backend=self.be.name, device=self.be.device)[0]
+            # Several pairs per call: the flow kernels then run over longer row
+            # ranges, with fewer launches per pair, while the progress bar still
+            # moves a few times per window.
+            batches = [missing[i:i + FLOW_PAIRS_PER_CALL]
+                       for i in range(0, len(missing), FLOW_PAIRS_PER_CALL)]
+            with tqdm(total=len(missing), desc=f"flow ({self.flow_method})", unit="pair",
+                      disable=not self.progress, leave=False) as bar:
+                for batch in batches:
+                    first, last = batch[0], batch[-1]
+                    flows = estimate_flow(self.frames[first:last + 2], method=self.flow_method,
+                                          backend=self.be.name, device=self.be.device)
+                    for t in batch:
+                        cached[t] = flows[t - first]
+                    bar.update(len(batch))
             self.log.add_time("flow", time.perf_counter() - t0)
         for t in [t for t in cached if t < start]:
             del cached[t]

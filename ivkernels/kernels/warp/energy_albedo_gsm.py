@@ -16,12 +16,17 @@ for ``d = A(x) - A(y)`` (the other ordering has ``-d`` and the same ``r2``), so
 
     dE/dA(x) = 4 lam sum_{y in N(x)} g'(r2(x, y)) Sigma^-1 (A(x) - A(y)),
 
-a gather: one thread per image row, each pixel visiting its window once for
-both the energy and the gradient.
+computed in two gather passes, one thread per image row, so that each
+unordered pair is looked up once (12 table reads per pixel instead of 24):
+the first pass visits the pairs from their first pixel in scan order (the
+forward half of the window), stores ``(g, g')`` per pair and starts each
+pixel's sum; the second lets each pixel gather the pairs it closes (the
+backward half) from the stored values.  Each row's energy is the same as a
+single full-window visit would give.
 
 Whitening.  With ``L`` upper triangular, ``L^T L = Sigma^-1`` (Cholesky), a
-first pass stores ``B(x) = L A(x)`` per pixel in a scratch buffer (cached per
-(device, shape, calling thread)); then ``r2 = |B(x) - B(y)|^2`` and
+whitening pass stores ``B(x) = L A(x)`` per pixel in a scratch buffer (the
+scratch buffers are cached per (device, shape, calling thread)); then ``r2 = |B(x) - B(y)|^2`` and
 
     dE/dA(x) = 4 lam L^T sum_{y in N(x)} g'(r2) (B(x) - B(y)),
 
@@ -98,33 +103,75 @@ def whiten_rows(row_begin: int, A: wp.array4d(dtype=float), sigma_inv: wp.array2
 
 
 @wp.kernel
-def gsm_smoothness_rows(row_begin: int, B: wp.array2d(dtype=wp.vec3), sigma_inv: wp.array2d(dtype=float),
-                        table_g: wp.array(dtype=float), table_dg: wp.array(dtype=float),
-                        r2_max: float, cells_per_root: float, lam: float, radius: int,
-                        gA: wp.array4d(dtype=float), energy_rows: wp.array(dtype=wp.float64)):
+def gsm_forward_pairs_rows(row_begin: int, B: wp.array2d(dtype=wp.vec3), table_g: wp.array(dtype=float),
+                           table_dg: wp.array(dtype=float), r2_max: float, cells_per_root: float,
+                           lam: float, radius: int, height: int,
+                           pairs: wp.array3d(dtype=wp.vec2), acc_out: wp.array2d(dtype=wp.vec3),
+                           energy_rows: wp.array(dtype=wp.float64)):
+    """Pass 1: every unordered pair once, from its first pixel in scan order.
+
+    For the forward offsets ``k`` of pixel ``x`` (``dy > 0``, or ``dy = 0`` and
+    ``dx > 0``) stores ``pairs[r, x, k] = (g, g')`` and starts the gradient
+    sum ``acc_out(x) = sum_k g' (B(x) - B(x + o_k))`` and the row energy.
+    """
     r = row_begin + wp.tid()
-    height = gA.shape[1]
-    width = gA.shape[2]
+    width = B.shape[1]
+    t = r // height
+    y = r - t * height
+    row0 = t * height
+    e = wp.float64(0.0)
+    for x in range(width):
+        b = B[r, x]
+        acc = wp.vec3(0.0, 0.0, 0.0)
+        e_x = float(0.0)
+        k = int(0)
+        for dy in range(radius + 1):
+            yy = y + dy
+            for dx in range(-radius, radius + 1):
+                if dy > 0 or dx > 0:
+                    xx = x + dx
+                    if yy < height and xx >= 0 and xx < width:
+                        d = b - B[row0 + yy, xx]
+                        g, dg = gsm_lookup(wp.dot(d, d), table_g, table_dg, r2_max, cells_per_root)
+                        pairs[r, x, k] = wp.vec2(g, dg)
+                        acc += dg * d
+                        e_x += g
+                    k += 1
+        acc_out[r, x] = acc
+        e += wp.float64(e_x)
+    energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
+
+
+@wp.kernel
+def gsm_backward_pairs_rows(row_begin: int, B: wp.array2d(dtype=wp.vec3), sigma_inv: wp.array2d(dtype=float),
+                            pairs: wp.array3d(dtype=wp.vec2), acc_in: wp.array2d(dtype=wp.vec3),
+                            lam: float, radius: int, height: int,
+                            gA: wp.array4d(dtype=float), energy_rows: wp.array(dtype=wp.float64)):
+    """Pass 2: each pixel gathers the pairs in which it is the second pixel,
+    ``(g, g')`` read from ``pairs`` of the first, and writes its gradient
+    ``4 lam L^T (acc_in(x) + sum g' (B(x) - B(x - o_k)))``."""
+    r = row_begin + wp.tid()
+    width = B.shape[1]
     t = r // height
     y = r - t * height
     row0 = t * height
     Lt = wp.transpose(precision_factor(sigma_inv))
-    y_lo = wp.max(y - radius, 0)
-    y_hi = wp.min(y + radius, height - 1)
     e = wp.float64(0.0)
     for x in range(width):
         b = B[r, x]
-        x_lo = wp.max(x - radius, 0)
-        x_hi = wp.min(x + radius, width - 1)
+        acc = acc_in[r, x]
         e_x = float(0.0)
-        acc = wp.vec3(0.0, 0.0, 0.0)
-        for yy in range(y_lo, y_hi + 1):
-            for xx in range(x_lo, x_hi + 1):
-                if yy != y or xx != x:
-                    d = b - B[row0 + yy, xx]
-                    g, dg = gsm_lookup(wp.dot(d, d), table_g, table_dg, r2_max, cells_per_root)
-                    e_x += g
-                    acc += dg * d
+        k = int(0)
+        for dy in range(radius + 1):
+            yy = y - dy
+            for dx in range(-radius, radius + 1):
+                if dy > 0 or dx > 0:
+                    xx = x - dx
+                    if yy >= 0 and xx >= 0 and xx < width:
+                        p = pairs[row0 + yy, xx, k]
+                        acc += p[1] * (b - B[row0 + yy, xx])
+                        e_x += p[0]
+                    k += 1
         grad = (4.0 * lam) * (Lt * acc)
         gA[t, y, x, 0] = gA[t, y, x, 0] + grad[0]
         gA[t, y, x, 1] = gA[t, y, x, 1] + grad[1]
@@ -137,13 +184,13 @@ _scratch_cache: dict = {}
 _scratch_lock = threading.Lock()
 
 
-def _scratch(rows: int, width: int, device):
-    """A (rows, width) vec3 buffer cached per (device, shape, calling thread)."""
-    key = (str(device), rows, width, threading.get_ident())
+def _scratch(name: str, shape: tuple, dtype, device):
+    """A scratch buffer cached per (name, device, shape, calling thread)."""
+    key = (name, str(device), shape, threading.get_ident())
     with _scratch_lock:
         buf = _scratch_cache.get(key)
         if buf is None:
-            buf = wp.empty((rows, width), dtype=wp.vec3, device=device)
+            buf = wp.empty(shape, dtype=dtype, device=device)
             _scratch_cache[key] = buf
     return buf
 
@@ -183,8 +230,13 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
     lam = check_float("lam", lam)
     radius = check_int("radius", radius, 1, " (2 for the paper's 5x5 window)")
     cells_per_root = (n - 1) / math.sqrt(r2_max)
-    B = _scratch(T * H, W, dev)
+    n_forward = radius + radius * (2 * radius + 1)      # 12 for the 5x5 window
+    B = _scratch("whitened", (T * H, W), wp.vec3, dev)
+    pairs = _scratch("pairs", (T * H, W, n_forward), wp.vec2, dev)
+    acc = _scratch("forward_sum", (T * H, W), wp.vec3, dev)
     launch_rows(whiten_rows, T * H, [A, sigma_inv, B], device=dev)
-    launch_rows(gsm_smoothness_rows, T * H,
-                [B, sigma_inv, table_g, table_dg, float(r2_max), float(cells_per_root), float(lam),
-                 int(radius), gA, energy_rows], device=dev)
+    launch_rows(gsm_forward_pairs_rows, T * H,
+                [B, table_g, table_dg, float(r2_max), float(cells_per_root), float(lam), int(radius), H,
+                 pairs, acc, energy_rows], device=dev)
+    launch_rows(gsm_backward_pairs_rows, T * H,
+                [B, sigma_inv, pairs, acc, float(lam), int(radius), H, gA, energy_rows], device=dev)
