@@ -100,3 +100,33 @@ def test_one_and_two_threads_agree(rng):
             res.append((be.vecops.dot(x, ya), be.vecops.norm_inf(ya), be.numpy(ya).copy()))
     assert res[0][0] == res[1][0] and res[0][1] == res[1][1]
     np.testing.assert_array_equal(res[0][2], res[1][2])
+
+
+@pytest.mark.parametrize("n", [1, 5, 4096, 3 * 4096 + 7])
+def test_basis_dots_and_combine(backend, rng, n):
+    basis = rng.standard_normal((5, n)).astype(np.float32)
+    x = rng.standard_normal(n).astype(np.float32)
+    b_be = backend.asarray(basis)
+    rows = [4, 0, 2]
+    for t in (1, 2):
+        with threads(t):
+            np.testing.assert_allclose(backend.vecops.dots(b_be, backend.asarray(x), rows),
+                                       ref.dots(basis, x, rows), rtol=1e-12, atol=1e-9)
+            np.testing.assert_allclose(backend.vecops.dots(b_be, b_be[3]), ref.dots(basis, basis[3]),
+                                       rtol=1e-12, atol=1e-9)
+            out = backend.asarray(np.full(n, np.nan, np.float32))      # fully overwritten
+            backend.vecops.combine(out, b_be, rows, [0.5, -2.0, 0.0])
+            np.testing.assert_allclose(backend.numpy(out), ref.combine(basis, rows, [0.5, -2.0, 0.0]),
+                                       rtol=1e-5, atol=1e-5)
+
+
+def test_basis_ops_bad_input(backend):
+    basis, x = backend.zeros((3, 10)), backend.zeros((10,))
+    with pytest.raises(ValueError, match=r"rows must lie in \[0, 3\)"):
+        backend.vecops.dots(basis, x, [0, 3])
+    with pytest.raises(ValueError, match="non-empty"):
+        backend.vecops.dots(basis, x, [])
+    with pytest.raises(ValueError, match="coeffs must be 2 finite"):
+        backend.vecops.combine(x, basis, [0, 1], [1.0, np.nan])
+    with pytest.raises(ValueError, match="shape"):
+        backend.vecops.dots(backend.zeros((3, 11)), x)

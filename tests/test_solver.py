@@ -63,6 +63,60 @@ def test_lbfgs_minimises_an_ill_conditioned_quadratic(backend, rng):
     np.testing.assert_allclose(backend.numpy(x), target, atol=1e-2)
 
 
+def _two_loop(g, pairs):
+    """Textbook L-BFGS direction -H g (Nocedal & Wright Alg. 7.4) in float64."""
+    q, alphas = g.copy(), []
+    for s, y in reversed(pairs):
+        a = (s @ q) / (s @ y)
+        q -= a * y
+        alphas.append(a)
+    s, y = pairs[-1]
+    q *= (s @ y) / (y @ y)
+    for (s, y), a in zip(pairs, reversed(alphas)):
+        q += (a - (y @ q) / (s @ y)) * s
+    return -q
+
+
+@pytest.mark.parametrize("memory", [2, 3])
+def test_lbfgs_bookkeeping_matches_the_vectors(backend, rng, memory):
+    """After many steps (slots recycled), the host Gram matrix equals the basis
+    rows' dot products, and the coefficient two-loop gives the textbook direction."""
+    n = 4096 + 37
+    A = rng.standard_normal((n, 6)) / np.sqrt(n)
+
+    def fun(x, g):
+        xn = backend.numpy(x).astype(np.float64)
+        grad = xn * np.linspace(1.0, 50.0, n) + A @ (A.T @ xn) + np.tanh(xn)
+        backend.vecops.copy(backend.asarray(grad.astype(np.float32)), g)
+        return float(0.5 * xn @ (xn * np.linspace(1.0, 50.0, n)) + 0.5 * np.sum((A.T @ xn) ** 2)
+                     + np.sum(np.log(np.cosh(xn))))
+
+    x = backend.asarray(rng.standard_normal(n).astype(np.float32))
+    g = backend.zeros((n,))
+    opt = LBFGS(backend, n, memory=memory)
+    opt.minimize(fun, x, g, 7, rel_tol=0.0)
+    assert len(opt._pairs) == memory - 1        # the last step's pair needs one more gradient
+    basis = backend.numpy(opt._basis).astype(np.float64)
+    m = memory
+    live = [r for slot, _ in opt._pairs for r in (slot, m + slot)]
+    gram = basis[live] @ basis[live].T
+    np.testing.assert_allclose(opt._gram[np.ix_(live, live)], gram, rtol=1e-4, atol=1e-6 * np.abs(gram).max())
+    for slot, rho in opt._pairs:
+        np.testing.assert_allclose(rho, 1.0 / (basis[slot] @ basis[m + slot]), rtol=1e-4)
+    # the direction from the current gradient, both ways
+    cur = opt._g_rows[0]
+    backend.vecops.copy(g, opt._basis[cur])
+    rows = live + [cur]
+    gd = backend.vecops.dots(opt._basis, opt._basis[cur], rows)
+    opt._gram[cur, rows] = gd
+    opt._gram[rows, cur] = gd
+    c = opt._direction(cur)
+    d = c @ backend.numpy(opt._basis).astype(np.float64)
+    pairs = [(basis[slot], basis[m + slot]) for slot, _ in opt._pairs]
+    expected = _two_loop(backend.numpy(g).astype(np.float64), pairs)
+    np.testing.assert_allclose(d, expected, rtol=1e-4, atol=1e-5 * np.abs(expected).max())
+
+
 def _small_problem(backend, rng, T=3, h=11, w=13):
     i = rng.uniform(0.05, 1.0, (T, h, w, 3)).astype(np.float32)
     flow = rng.uniform(-1.5, 1.5, (T - 1, h, w, 2)).astype(np.float32)

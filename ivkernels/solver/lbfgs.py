@@ -13,6 +13,8 @@ from __future__ import annotations
 from collections import deque
 from typing import Callable
 
+import numpy as np
+
 
 class LBFGS:
     """Minimiser of a smooth function of a flat float32 backend vector.
@@ -25,43 +27,69 @@ class LBFGS:
     first_step : largest change (in the unknowns' units) of the very first
         step along ``-g``; later steps start from the quasi-Newton step 1.
 
-    All buffers are allocated once here and reused across calls.
+    The two-loop recursion runs on coefficients rather than on vectors
+    ("vector-free" L-BFGS, Chen, Wang & Zhou, NIPS 2014): the pairs and the
+    last two gradients are the rows of one (2m + 2, n) basis, the solver keeps
+    the Gram matrix of its rows on the host, and each iteration costs one
+    pass that dots the new gradient with every row (``vecops.dots``) and one
+    that forms the direction as a combination of rows (``vecops.combine``),
+    instead of 4m passes.  The new pair's other dot products follow from
+    ``s = step * d`` and ``y = g_new - g_old``.  All buffers are allocated
+    once here and reused across calls.
     """
 
     def __init__(self, be, n: int, memory: int = 6, first_step: float = 0.1):
+        if memory < 1:
+            raise ValueError(f"memory must be >= 1, got {memory}")
         self.be = be
         self.n = n
         self.memory = memory
         self.first_step = first_step
-        self._free = [(be.empty((n,)), be.empty((n,))) for _ in range(memory)]
-        self._pairs: deque = deque()          # (s, y, 1 / (s.y)) oldest first
+        # basis rows: s of slot i at i, y of slot i at m + i, gradients at 2m, 2m + 1
+        self._basis = be.zeros((2 * memory + 2, n))
+        self._gram = np.zeros((2 * memory + 2, 2 * memory + 2))
+        self._pairs: deque = deque()          # (slot, 1 / (s.y)) oldest first
+        self._free = list(range(memory))
+        self._g_rows = [2 * memory, 2 * memory + 1]     # [current, previous] gradient rows
         self._d = be.empty((n,))
         self._x_old = be.empty((n,))
-        self._g_old = be.empty((n,))
 
     def reset(self) -> None:
         """Forget the curvature pairs (call when the objective changes)."""
         while self._pairs:
-            s, y, _ = self._pairs.popleft()
-            self._free.append((s, y))
+            self._free.append(self._pairs.popleft()[0])
 
-    def _direction(self, g) -> None:
-        """``d = -H g`` by the two-loop recursion (Nocedal & Wright Alg. 7.4)."""
-        v = self.be.vecops
-        d = self._d
-        v.copy(g, d)
+    def _direction(self, cur: int) -> np.ndarray:
+        """Coefficients over the basis rows of ``d = -H g`` (Nocedal & Wright
+        Alg. 7.4, on coefficients; ``g`` is row ``cur``)."""
+        m, G = self.memory, self._gram
+        c = np.zeros(G.shape[0])
+        c[cur] = 1.0
         alphas = []
-        for s, y, rho in reversed(self._pairs):
-            a = rho * v.dot(s, d)
-            v.axpy(-a, y, d)
+        for slot, rho in reversed(self._pairs):
+            a = rho * (G[slot] @ c)
+            c[m + slot] -= a
             alphas.append(a)
-        if self._pairs:
-            s, y, rho = self._pairs[-1]
-            v.scale(1.0 / (rho * v.dot(y, y)), d)   # gamma = s.y / y.y
-        for (s, y, rho), a in zip(self._pairs, reversed(alphas)):
-            b = rho * v.dot(y, d)
-            v.axpy(a - b, s, d)
-        v.scale(-1.0, d)
+        slot, rho = self._pairs[-1]
+        c *= 1.0 / (rho * G[m + slot, m + slot])          # gamma = s.y / y.y
+        for (slot, rho), a in zip(self._pairs, reversed(alphas)):
+            b = rho * (G[m + slot] @ c)
+            c[slot] += a - b
+        return -c
+
+    def _finish_pair(self, slot: int, cur: int, prev: int, live: list) -> None:
+        """Gram entries of ``y = g_cur - g_prev`` (row m + slot); keep the pair if s.y > 0."""
+        m, G = self.memory, self._gram
+        y = m + slot
+        for j in live:
+            if j != y:
+                G[y, j] = G[j, y] = G[cur, j] - G[prev, j]
+        G[y, y] = G[y, cur] - G[y, prev]
+        sy = G[slot, y]
+        if sy > 1e-12 * G[y, y] and sy > 0.0:
+            self._pairs.append((slot, 1.0 / sy))
+        else:                                       # curvature condition fails: skip
+            self._free.append(slot)
 
     def minimize(self, fun: Callable, x, g, iterations: int, *, rel_tol: float = 1e-6,
                  on_iteration: Callable | None = None) -> float:
@@ -72,25 +100,39 @@ class LBFGS:
         ``g`` its gradient; the energy there is returned.
         ``on_iteration(k, energy)`` is called after every accepted step.
         """
-        v = self.be.vecops
+        v, m, B, G = self.be.vecops, self.memory, self._basis, self._gram
         f = fun(x, g)
+        pending = None                              # slot whose y is formed next iteration
         for k in range(iterations):
+            cur, prev = self._g_rows
+            v.copy(g, B[cur])
+            live = [r for slot, _ in self._pairs for r in (slot, m + slot)] + [cur]
+            if pending is not None:
+                v.lincomb(B[m + pending], 1.0, B[cur], -1.0, B[prev])
+                live += [pending, m + pending, prev]
+            gd = v.dots(B, B[cur], live)
+            G[cur, live] = gd
+            G[live, cur] = gd
+            if pending is not None:
+                self._finish_pair(pending, cur, prev, live)
+                pending = None
             if self._pairs:
-                self._direction(g)
+                c = self._direction(cur)
                 step = 1.0
             else:
-                v.copy(g, self._d)
-                v.scale(-1.0, self._d)
                 gmax = v.norm_inf(g)
                 if gmax == 0.0:
                     break
+                c = np.zeros(G.shape[0])
+                c[cur] = -1.0
                 step = self.first_step / gmax
-            slope = v.dot(g, self._d)
+            rows = np.flatnonzero(c)
+            slope = float(G[cur, rows] @ c[rows])   # g . d
             if slope >= 0.0:                        # not a descent direction: restart
                 self.reset()
                 continue
+            v.combine(self._d, B, rows, c[rows])
             v.copy(x, self._x_old)
-            v.copy(g, self._g_old)
             f_old = f
             accepted = False
             for _ in range(20):                     # backtracking, Armijo c1 = 1e-4
@@ -102,29 +144,27 @@ class LBFGS:
                 step *= 0.3
             if not accepted:
                 v.copy(self._x_old, x)
-                v.copy(self._g_old, g)
+                v.copy(B[cur], g)
                 f = f_old
                 if self._pairs:                     # retry once from steepest descent
                     self.reset()
                     continue
                 break
-            self._push_pair(x, g)
+            # s = step * d into a free slot (or the oldest pair's); its dot products with
+            # the other rows follow from d's coefficients, before the slot is overwritten.
+            slot = self._free.pop() if self._free else self._pairs.popleft()[0]
+            s_dots = step * (G @ c)
+            ss = step * step * float(c @ G @ c)
+            v.lincomb(B[slot], step, self._d, 0.0, self._d)
+            G[slot, :] = s_dots
+            G[:, slot] = s_dots
+            G[slot, slot] = ss
+            pending = slot
+            self._g_rows.reverse()
             if on_iteration is not None:
                 on_iteration(k, f)
             if abs(f_old - f) <= rel_tol * max(1.0, abs(f)):
                 break
+        if pending is not None:
+            self._free.append(pending)
         return f
-
-    def _push_pair(self, x, g) -> None:
-        v = self.be.vecops
-        if self._free:
-            s, y = self._free.pop()
-        else:
-            s, y, _ = self._pairs.popleft()
-        v.lincomb(s, 1.0, x, -1.0, self._x_old)
-        v.lincomb(y, 1.0, g, -1.0, self._g_old)
-        sy = v.dot(s, y)
-        if sy > 1e-12 * v.dot(y, y) and sy > 0.0:
-            self._pairs.append((s, y, 1.0 / sy))
-        else:                                       # curvature condition fails: skip
-            self._free.append((s, y))

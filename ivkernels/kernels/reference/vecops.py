@@ -31,3 +31,15 @@ def copy(src) -> np.ndarray:
 
 def fill(x, value: float) -> np.ndarray:
     return np.full(np.shape(x), value, dtype=np.asarray(x).dtype)
+
+
+def dots(basis, x, rows=None) -> np.ndarray:
+    """``basis[rows] @ x`` in float64 (all rows by default)."""
+    basis = np.asarray(basis, np.float64)
+    rows = np.arange(basis.shape[0]) if rows is None else np.asarray(rows)
+    return basis[rows] @ np.asarray(x, np.float64)
+
+
+def combine(basis, rows, coeffs) -> np.ndarray:
+    """``sum_r coeffs[r] * basis[rows[r]]`` in float64."""
+    return np.asarray(coeffs, np.float64) @ np.asarray(basis, np.float64)[np.asarray(rows)]

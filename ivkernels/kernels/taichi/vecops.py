@@ -9,10 +9,14 @@ the host finishes, so both backends reduce in the same order.
 import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.taichi._checks import check_vector
+from ivkernels.kernels.checks import check_basis_rows
+from ivkernels.kernels.taichi._checks import check_array, check_vector
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
 nd1_f64 = ti.types.ndarray(dtype=ti.f64, ndim=1)
+nd1_i32 = ti.types.ndarray(dtype=ti.i32, ndim=1)
+nd2 = ti.types.ndarray(dtype=ti.f32, ndim=2)
+nd2_f64 = ti.types.ndarray(dtype=ti.f64, ndim=2)
 
 #: Elements per parallel iteration (the same as the Warp module's).
 CHUNK = 4096
@@ -70,6 +74,34 @@ def fill_flat(x: nd1, value: ti.f32):
         x[i] = value
 
 
+@ti.kernel
+def basis_dots_chunks(basis: nd2, x: nd1, rows: nd1_i32, partial: nd2_f64, chunk: ti.i32):
+    for k in range(partial.shape[1]):
+        begin = k * chunk
+        end = ti.min(begin + chunk, x.shape[0])
+        for r in range(rows.shape[0]):
+            j = rows[r]
+            acc = ti.f64(0.0)
+            for i in range(begin, end):
+                acc += ti.cast(basis[j, i], ti.f64) * ti.cast(x[i], ti.f64)
+            partial[r, k] = acc
+
+
+@ti.kernel
+def basis_combine_chunks(out: nd1, basis: nd2, rows: nd1_i32, coeffs: nd1, chunk: ti.i32):
+    for k in range((out.shape[0] + chunk - 1) // chunk):
+        begin = k * chunk
+        end = ti.min(begin + chunk, out.shape[0])
+        for i in range(begin, end):
+            out[i] = 0.0
+        for r in range(rows.shape[0]):
+            j = rows[r]
+            c = coeffs[r]
+            if c != 0.0:
+                for i in range(begin, end):
+                    out[i] = out[i] + c * basis[j, i]
+
+
 def _chunks(n: int) -> int:
     return (n + CHUNK - 1) // CHUNK
 
@@ -124,3 +156,21 @@ def fill(x, value: float) -> None:
     """``x[:] = value``."""
     check_vector("x", x, output=True)
     fill_flat(x, float(value))
+
+
+def dots(basis, x, rows=None) -> np.ndarray:
+    """``basis[rows] @ x`` as float64 in one pass; see :func:`ivkernels.kernels.warp.vecops.dots`."""
+    x = check_vector("x", x)
+    basis = check_array("basis", basis, (None, x.shape[0]), "(k, n)")
+    rows, _ = check_basis_rows(basis.shape[0], rows)
+    partial = np.empty((len(rows), _chunks(x.shape[0])), np.float64)
+    basis_dots_chunks(basis, x, rows, partial, CHUNK)
+    return partial.sum(axis=1)
+
+
+def combine(out, basis, rows, coeffs) -> None:
+    """``out = sum_r coeffs[r] * basis[rows[r]]``; see :func:`ivkernels.kernels.warp.vecops.combine`."""
+    check_vector("out", out, output=True)
+    basis = check_array("basis", basis, (None, out.shape[0]), "(k, n)")
+    rows, coeffs = check_basis_rows(basis.shape[0], rows, coeffs)
+    basis_combine_chunks(out, basis, rows, coeffs, CHUNK)

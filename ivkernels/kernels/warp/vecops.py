@@ -6,7 +6,12 @@ the optimiser on it.  The vector is cut into chunks of :data:`CHUNK` elements,
 one kernel thread per chunk, launched through :func:`launch_rows` so two CPU
 threads share the work.
 
-Reductions (:func:`dot`, :func:`norm_inf`) write one partial result per chunk
+:func:`dots` and :func:`combine` work on a basis of vectors stored as the
+rows of one (k, n) array: all dot products of a vector with chosen rows, and
+a linear combination of chosen rows, each in one pass over memory (the
+optimiser's L-BFGS direction is such a combination).
+
+Reductions (:func:`dot`, :func:`dots`, :func:`norm_inf`) write one partial result per chunk
 and finish on the host: the result depends on the chunking only, never on the
 number of threads.
 
@@ -18,10 +23,13 @@ from __future__ import annotations
 
 import threading
 
+import numpy as np
+
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_vector
+from ivkernels.kernels.checks import check_basis_rows
+from ivkernels.kernels.warp._checks import check_array, check_vector
 
 wp.set_module_options({"enable_backward": False})
 
@@ -157,6 +165,59 @@ def fill_chunks(row_begin: int, x: wp.array(dtype=float), x4: wp.array(dtype=wp.
         x[i] = value
 
 
+@wp.kernel
+def basis_dots_chunks(row_begin: int, basis: wp.array2d(dtype=float), x: wp.array(dtype=float),
+                      basis4: wp.array2d(dtype=wp.vec4), x4: wp.array(dtype=wp.vec4),
+                      rows: wp.array(dtype=int), partial: wp.array2d(dtype=wp.float64), chunk: int):
+    """``partial[r, k] = sum over chunk k of basis[rows[r]] * x`` (the chunk of ``x``
+    stays in cache while the rows stream past it)."""
+    k = row_begin + wp.tid()
+    n4 = x4.shape[0]
+    for r in range(rows.shape[0]):
+        j = rows[r]
+        acc0 = wp.float64(0.0)
+        acc1 = wp.float64(0.0)
+        acc2 = wp.float64(0.0)
+        acc3 = wp.float64(0.0)
+        for i in range(chunk_begin(k, chunk) // 4, vec_range_end(k, chunk, n4)):
+            u = basis4[j, i]
+            v = x4[i]
+            acc0 += wp.float64(u[0]) * wp.float64(v[0])
+            acc1 += wp.float64(u[1]) * wp.float64(v[1])
+            acc2 += wp.float64(u[2]) * wp.float64(v[2])
+            acc3 += wp.float64(u[3]) * wp.float64(v[3])
+        for i in range(tail_begin(k, chunk, n4), chunk_end(k, chunk, x.shape[0])):
+            acc0 += wp.float64(basis[j, i]) * wp.float64(x[i])
+        partial[r, k] = (acc0 + acc1) + (acc2 + acc3)
+
+
+@wp.kernel
+def basis_combine_chunks(row_begin: int, out: wp.array(dtype=float), basis: wp.array2d(dtype=float),
+                         out4: wp.array(dtype=wp.vec4), basis4: wp.array2d(dtype=wp.vec4),
+                         rows: wp.array(dtype=int), coeffs: wp.array(dtype=float), chunk: int):
+    """``out = sum_r coeffs[r] * basis[rows[r]]`` over chunk k (the chunk of
+    ``out`` stays in cache while the rows stream past it)."""
+    k = row_begin + wp.tid()
+    n4 = out4.shape[0]
+    i_begin = chunk_begin(k, chunk) // 4
+    i_end = vec_range_end(k, chunk, n4)
+    t_begin = tail_begin(k, chunk, n4)
+    t_end = chunk_end(k, chunk, out.shape[0])
+    zero = wp.vec4(0.0, 0.0, 0.0, 0.0)
+    for i in range(i_begin, i_end):
+        out4[i] = zero
+    for i in range(t_begin, t_end):
+        out[i] = 0.0
+    for r in range(rows.shape[0]):
+        j = rows[r]
+        c = coeffs[r]
+        if c != 0.0:
+            for i in range(i_begin, i_end):
+                out4[i] = out4[i] + c * basis4[j, i]
+            for i in range(t_begin, t_end):
+                out[i] = out[i] + c * basis[j, i]
+
+
 # ----------------------------------------------------------------------------
 # Host functions
 # ----------------------------------------------------------------------------
@@ -254,3 +315,68 @@ def fill(x, value: float) -> None:
     n = check_vector("x", x)
     launch_rows(fill_chunks, _chunks(n), [x, *_vec4(x), float(value), CHUNK], device=x.device)
 
+
+
+def _basis_vec4(basis, n4: int):
+    """A (k, n4) ``wp.vec4`` view of the first ``4 * n4`` columns of a contiguous (k, n) basis."""
+    k, n = basis.shape
+    if n4 == 0:
+        return wp.empty((0, 0), dtype=wp.vec4, device=basis.device)
+    key = (str(basis.device), basis.ptr, k, n, n4)
+    view = _view_cache.get(key)
+    if view is None:
+        view = wp.array(ptr=basis.ptr, dtype=wp.vec4, shape=(k, n4), strides=(4 * n, 16),
+                        device=basis.device)
+        with _view_lock:
+            if len(_view_cache) >= _VIEW_CACHE_SIZE:
+                _view_cache.clear()
+            _view_cache[key] = view
+    return view
+
+
+def _basis_rows(basis, rows, coeffs=None):
+    """Check a (k, n) float32 basis, row indices and coefficients; return wp.arrays of them."""
+    check_array("basis", basis, (None, None), "(k, n)")
+    if not basis.is_contiguous:
+        raise ValueError("basis must be contiguous")
+    rows, coeffs = check_basis_rows(basis.shape[0], rows, coeffs)
+    out = [wp.array(rows, dtype=wp.int32, device=basis.device)]
+    if coeffs is not None:
+        out.append(wp.array(coeffs, dtype=wp.float32, device=basis.device))
+    return out
+
+
+def dots(basis, x, rows=None) -> np.ndarray:
+    """Dot products of ``x`` with rows of ``basis`` in one pass over memory.
+
+    basis : (k, n) contiguous float32 wp.array, the vectors as rows.
+    x : 1-D float32 wp.array of length n (may be a row of ``basis``).
+    rows : row indices to use (default all k).
+    Returns (len(rows),) float64 NumPy array, ``basis[rows] @ x``, each with
+    float64 products and sums per chunk (as :func:`dot`).
+    """
+    n = check_vector("x", x)
+    rows_wp, = _basis_rows(basis, rows)
+    if basis.shape[1] != n or basis.device != x.device:
+        raise ValueError(f"basis must have shape (k, {n}) and be on {x.device}, got {tuple(basis.shape)} on {basis.device}")
+    partial = wp.empty((rows_wp.shape[0], _chunks(n)), dtype=wp.float64, device=x.device)
+    x4, = _vec4(x)
+    launch_rows(basis_dots_chunks, _chunks(n), [basis, x, _basis_vec4(basis, x4.shape[0]), x4, rows_wp,
+                                                partial, CHUNK], device=x.device)
+    return partial.numpy().sum(axis=1)
+
+
+def combine(out, basis, rows, coeffs) -> None:
+    """``out = sum_r coeffs[r] * basis[rows[r]]`` (float32) in one pass over memory.
+
+    out : 1-D float32 wp.array of length n, not a row of ``basis``.
+    basis : (k, n) contiguous float32 wp.array.
+    rows, coeffs : row indices and their (finite) coefficients, equal lengths.
+    """
+    n = check_vector("out", out)
+    rows_wp, coeffs_wp = _basis_rows(basis, rows, coeffs)
+    if basis.shape[1] != n or basis.device != out.device:
+        raise ValueError(f"basis must have shape (k, {n}) and be on {out.device}, got {tuple(basis.shape)} on {basis.device}")
+    out4, = _vec4(out)
+    launch_rows(basis_combine_chunks, _chunks(n), [out, basis, out4, _basis_vec4(basis, out4.shape[0]),
+                                                   rows_wp, coeffs_wp, CHUNK], device=out.device)

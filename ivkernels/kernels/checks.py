@@ -1,0 +1,25 @@
+"""Argument checks shared by every backend (they look at host values only)."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def check_basis_rows(k: int, rows, coeffs=None):
+    """Row indices into a ``(k, n)`` basis, and optionally one coefficient per row.
+
+    rows : sequence of ints in ``[0, k)``, non-empty, or ``None`` for all rows.
+    coeffs : ``None``, or a sequence of finite numbers of the same length.
+    Returns ``rows`` as int32 and ``coeffs`` as float32 NumPy arrays (``None``
+    when not given); raises ValueError with what was expected otherwise.
+    """
+    rows = np.arange(k) if rows is None else np.asarray(rows)
+    if rows.ndim != 1 or len(rows) == 0 or not np.issubdtype(rows.dtype, np.integer):
+        raise ValueError(f"rows must be a non-empty 1-D sequence of row indices, got {rows!r}")
+    if rows.min() < 0 or rows.max() >= k:
+        raise ValueError(f"rows must lie in [0, {k}) (the basis rows), got {rows.tolist()}")
+    if coeffs is not None:
+        coeffs = np.asarray(coeffs, np.float64)
+        if coeffs.shape != rows.shape or not np.isfinite(coeffs).all():
+            raise ValueError(f"coeffs must be {len(rows)} finite numbers (one per row), got {coeffs!r}")
+        coeffs = coeffs.astype(np.float32)
+    return rows.astype(np.int32), coeffs
