@@ -130,6 +130,7 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
             _set(be, energy, A_now, S_now)
         t = time.perf_counter()
         lbfgs = LBFGS(be, energy.X.shape[0], memory=int(params.lbfgs_memory))
+        iterations = int(params.lbfgs_iterations if level == 0 else params.lbfgs_iterations_coarse)
         for outer in range(int(params.outer_iterations)):
             tm = time.perf_counter()
             energy.update_coupling()
@@ -139,8 +140,7 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
             def record(k, e, outer=outer):
                 log.energy.append((window_index, level, outer, k, e))
 
-            lbfgs.minimize(energy, energy.X, energy.G, int(params.lbfgs_iterations),
-                           on_iteration=record)
+            lbfgs.minimize(energy, energy.X, energy.G, iterations, on_iteration=record)
         log.terms.append((window_index, level, energy.term_energies()))
         log.add_time("solve", time.perf_counter() - t)
         if progress is not None:
