@@ -1,6 +1,9 @@
 """Argument checks shared by every backend (they look at host values only)."""
 from __future__ import annotations
 
+import math
+import numbers
+
 import numpy as np
 
 
@@ -23,3 +26,32 @@ def check_basis_rows(k: int, rows, coeffs=None):
             raise ValueError(f"coeffs must be {len(rows)} finite numbers (one per row), got {coeffs!r}")
         coeffs = coeffs.astype(np.float32)
     return rows.astype(np.int32), coeffs
+
+
+def check_float(name: str, value, *, positive: bool = False) -> float:
+    """``value`` as a float; raise unless it is a finite real number (``> 0`` if ``positive``).
+
+    Python and NumPy ints and floats are accepted, ``bool`` is not.
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+            or not math.isfinite(value) or (positive and value <= 0):
+        raise ValueError(f"{name} must be a finite float{' > 0' if positive else ''}, got {value!r}")
+    return float(value)
+
+
+def check_positive(name: str, value) -> float:
+    """``float(value)``; raise unless it is ``> 0`` (``inf`` passes, ``nan`` does not)."""
+    value = float(value)
+    if not value > 0.0:
+        raise ValueError(f"{name} must be > 0, got {value!r}")
+    return value
+
+
+def check_int(name: str, value, minimum: int, hint: str = "") -> int:
+    """``value`` as an int; raise unless it is an integer (not ``bool``) ``>= minimum``.
+
+    ``hint`` is appended to the message, e.g. ``" (2 for the paper's 5x5 window)"``.
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
+        raise ValueError(f"{name} must be an int >= {minimum}{hint}, got {value!r}")
+    return int(value)

@@ -10,10 +10,9 @@ in place and are refused unless already contiguous.
 """
 from __future__ import annotations
 
-import math
-import numbers
-
 import numpy as np
+
+from ivkernels.kernels.checks import check_float, check_int, check_positive  # noqa: F401  (re-exported)
 
 
 def check_array(name: str, a, shape: tuple | None, layout: str, *, dtype=np.float32,
@@ -60,32 +59,3 @@ def check_vector(name: str, a, n: int | None = None, output: bool = False) -> np
             raise ValueError(f"{name} is written in place and must be C-contiguous")
         a = np.ascontiguousarray(a)
     return a
-
-
-def check_float(name: str, value, *, positive: bool = False) -> float:
-    """``value`` as a float; raise unless it is a finite real number (``> 0`` if ``positive``).
-
-    Python and NumPy ints and floats are accepted, ``bool`` is not.
-    """
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) \
-            or not math.isfinite(value) or (positive and value <= 0):
-        raise ValueError(f"{name} must be a finite float{' > 0' if positive else ''}, got {value!r}")
-    return float(value)
-
-
-def check_positive(name: str, value) -> float:
-    """``float(value)``; raise unless it is ``> 0`` (``inf`` passes, ``nan`` does not)."""
-    value = float(value)
-    if not value > 0.0:
-        raise ValueError(f"{name} must be > 0, got {value!r}")
-    return value
-
-
-def check_int(name: str, value, minimum: int, hint: str = "") -> int:
-    """``value`` as an int; raise unless it is an integer (not ``bool``) ``>= minimum``.
-
-    ``hint`` is appended to the message, e.g. ``" (2 for the paper's 5x5 window)"``.
-    """
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
-        raise ValueError(f"{name} must be an int >= {minimum}{hint}, got {value!r}")
-    return int(value)

@@ -8,10 +8,9 @@ the same checks for NumPy arrays.
 """
 from __future__ import annotations
 
-import math
-import numbers
-
 import warp as wp
+
+from ivkernels.kernels.checks import check_float, check_int, check_positive  # noqa: F401  (re-exported)
 
 
 def check_array(name: str, a, shape: tuple | None, layout: str, device=None, *, dtype=wp.float32) -> None:
@@ -50,32 +49,3 @@ def check_vector(name: str, a, n: int | None = None, device=None) -> int:
     if device is not None and a.device != device:
         raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
     return a.shape[0]
-
-
-def check_float(name: str, value, *, positive: bool = False) -> float:
-    """``value`` as a float; raise unless it is a finite real number (``> 0`` if ``positive``).
-
-    Python and NumPy ints and floats are accepted, ``bool`` is not.
-    """
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) \
-            or not math.isfinite(value) or (positive and value <= 0):
-        raise ValueError(f"{name} must be a finite float{' > 0' if positive else ''}, got {value!r}")
-    return float(value)
-
-
-def check_positive(name: str, value) -> float:
-    """``float(value)``; raise unless it is ``> 0`` (``inf`` passes, ``nan`` does not)."""
-    value = float(value)
-    if not value > 0.0:
-        raise ValueError(f"{name} must be > 0, got {value!r}")
-    return value
-
-
-def check_int(name: str, value, minimum: int, hint: str = "") -> int:
-    """``value`` as an int; raise unless it is an integer (not ``bool``) ``>= minimum``.
-
-    ``hint`` is appended to the message, e.g. ``" (2 for the paper's 5x5 window)"``.
-    """
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
-        raise ValueError(f"{name} must be an int >= {minimum}{hint}, got {value!r}")
-    return int(value)
