@@ -8,7 +8,10 @@ value at 0).  All 40 components share ``Sigma``, so ``g`` depends on ``r2``
 only and is read from a 1-D table (:mod:`ivkernels.priors`): the grid is
 uniform in ``sqrt(r2)``, ``r2_i = (i sqrt(r2_max) / (n-1))^2``, so the cell is
 found in O(1) and ``g``, ``g'`` are interpolated linearly in ``r2`` inside it;
-beyond ``r2_max`` ``g`` continues linearly with the last slope.
+beyond ``r2_max`` ``g`` continues linearly with the last slope.  Each call
+first turns the table into per-cell coefficients, ``g = a + b r2`` and
+``g' = c + d r2`` (one ``vec4`` per cell, the extrapolation as the last), so a
+look-up is a square root, one ``vec4`` read and two multiply-adds.
 
 Gradient.  The double sum visits every unordered pair ``{x, y}`` twice
 (``y in N(x)`` and ``x in N(y)``), and ``d/dA(x) g(r2) = 2 g'(r2) Sigma^-1 d``
@@ -46,24 +49,37 @@ from ivkernels.kernels.warp._checks import check_array, check_float, check_int
 wp.set_module_options({"enable_backward": False})
 
 
-@wp.func
-def gsm_lookup(r2: float, table_g: wp.array(dtype=float), table_dg: wp.array(dtype=float),
-               r2_max: float, cells_per_root: float):
-    """``(g, g')`` at ``r2`` from the tables; ``cells_per_root = (n - 1) / sqrt(r2_max)``."""
+@wp.kernel
+def cell_coefficients(table_g: wp.array(dtype=float), table_dg: wp.array(dtype=float), r2_max: float,
+                      cells_per_root: float, coef: wp.array(dtype=wp.vec4)):
+    """Per table cell ``i``, ``(a, b, c, d)`` with ``g = a + b r2`` and ``g' = c + d r2``
+    inside it (the linear-in-r2 interpolation of the table); the last entry
+    holds the linear extrapolation beyond ``r2_max``.  Float64 arithmetic."""
+    i = wp.tid()
     n = table_g.shape[0]
-    u = wp.sqrt(r2) * cells_per_root
-    g = float(0.0)
-    dg = float(0.0)
-    if u < float(n - 1):
-        i = int(u)
-        fi = float(i)
-        f = (u - fi) * (u + fi) / (2.0 * fi + 1.0)     # linear in r2 inside the cell
-        g = (1.0 - f) * table_g[i] + f * table_g[i + 1]
-        dg = (1.0 - f) * table_dg[i] + f * table_dg[i + 1]
+    if i < n - 1:
+        root_lo = wp.float64(i) / wp.float64(cells_per_root)
+        root_hi = wp.float64(i + 1) / wp.float64(cells_per_root)
+        r2_lo = root_lo * root_lo
+        inv_width = wp.float64(1.0) / (root_hi * root_hi - r2_lo)
+        slope_g = (wp.float64(table_g[i + 1]) - wp.float64(table_g[i])) * inv_width
+        slope_dg = (wp.float64(table_dg[i + 1]) - wp.float64(table_dg[i])) * inv_width
+        coef[i] = wp.vec4(float(wp.float64(table_g[i]) - slope_g * r2_lo), float(slope_g),
+                          float(wp.float64(table_dg[i]) - slope_dg * r2_lo), float(slope_dg))
     else:
-        dg = table_dg[n - 1]
-        g = table_g[n - 1] + dg * (r2 - r2_max)
-    return g, dg
+        last_dg = wp.float64(table_dg[n - 1])
+        coef[i] = wp.vec4(float(wp.float64(table_g[n - 1]) - last_dg * wp.float64(r2_max)), float(last_dg),
+                          float(last_dg), 0.0)
+
+
+@wp.func
+def gsm_lookup(r2: float, coef: wp.array(dtype=wp.vec4), cells_per_root: float):
+    """``(g, g')`` at ``r2``: the cell ``floor(sqrt(r2) (n-1) / sqrt(r2_max))``,
+    or the extrapolation entry beyond the table, then one multiply-add each."""
+    last = coef.shape[0] - 1
+    i = int(wp.min(wp.sqrt(r2) * cells_per_root, float(last)))
+    c = coef[i]
+    return c[0] + c[1] * r2, c[2] + c[3] * r2
 
 
 @wp.func
@@ -103,9 +119,8 @@ def whiten_rows(row_begin: int, A: wp.array4d(dtype=float), sigma_inv: wp.array2
 
 
 @wp.kernel
-def gsm_forward_pairs_rows(row_begin: int, B: wp.array2d(dtype=wp.vec3), table_g: wp.array(dtype=float),
-                           table_dg: wp.array(dtype=float), r2_max: float, cells_per_root: float,
-                           lam: float, radius: int, height: int,
+def gsm_forward_pairs_rows(row_begin: int, B: wp.array2d(dtype=wp.vec3), coef: wp.array(dtype=wp.vec4),
+                           cells_per_root: float, lam: float, radius: int, height: int,
                            pairs: wp.array3d(dtype=wp.vec2), acc_out: wp.array2d(dtype=wp.vec3),
                            energy_rows: wp.array(dtype=wp.float64)):
     """Pass 1: every unordered pair once, from its first pixel in scan order.
@@ -132,7 +147,7 @@ def gsm_forward_pairs_rows(row_begin: int, B: wp.array2d(dtype=wp.vec3), table_g
                     xx = x + dx
                     if yy < height and xx >= 0 and xx < width:
                         d = b - B[row0 + yy, xx]
-                        g, dg = gsm_lookup(wp.dot(d, d), table_g, table_dg, r2_max, cells_per_root)
+                        g, dg = gsm_lookup(wp.dot(d, d), coef, cells_per_root)
                         pairs[r, x, k] = wp.vec2(g, dg)
                         acc += dg * d
                         e_x += g
@@ -235,8 +250,11 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
     pairs = _scratch("pairs", (T * H, W, n_forward), wp.vec2, dev)
     acc = _scratch("forward_sum", (T * H, W), wp.vec3, dev)
     launch_rows(whiten_rows, T * H, [A, sigma_inv, B], device=dev)
+    coef = _scratch("cell_coefficients", (n,), wp.vec4, dev)
+    wp.launch(cell_coefficients, dim=n, inputs=[table_g, table_dg, float(r2_max), float(cells_per_root), coef],
+              device=dev)
     launch_rows(gsm_forward_pairs_rows, T * H,
-                [B, table_g, table_dg, float(r2_max), float(cells_per_root), float(lam), int(radius), H,
+                [B, coef, float(cells_per_root), float(lam), int(radius), H,
                  pairs, acc, energy_rows], device=dev)
     launch_rows(gsm_backward_pairs_rows, T * H,
                 [B, sigma_inv, pairs, acc, float(lam), int(radius), H, gA, energy_rows], device=dev)
