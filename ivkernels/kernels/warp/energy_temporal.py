@@ -15,11 +15,15 @@ the bilinear sample with corners clamped to the image (the convention of
 
 The gradient in ``X_t`` is a gather; the gradient in ``X_{t+1}`` lands on the
 four corners of ``x + u`` (a bilinear splat with atomic adds).  They are two
-launches: the gather over all rows, then the splat split only at frame
-boundaries, so concurrent CPU launches never write the same gradient frame.
+launches: the gather over all rows, which also stores each pixel's
+``lam occ rho'(d)`` in a scratch buffer, then the splat of the stored values,
+split only at frame boundaries so concurrent CPU launches never write the
+same gradient frame.
 Energies go to the rows of frame ``t`` (conventions in :mod:`ivkernels.kernels`).
 """
 from __future__ import annotations
+
+import threading
 
 import warp as wp
 
@@ -53,8 +57,10 @@ def tukey_derivative(z: float, alpha: float):
 @wp.kernel
 def temporal_gather_rows(row_begin: int, X: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
                          occ: wp.array3d(dtype=float), gX: wp.array4d(dtype=float),
-                         energy_rows: wp.array(dtype=wp.float64), lam: float, alpha: float):
-    """Energy of frame ``t`` rows and the gradient in ``X_t`` (rows of frames 0 .. T-2)."""
+                         weight: wp.array4d(dtype=float), energy_rows: wp.array(dtype=wp.float64),
+                         lam: float, alpha: float):
+    """Energy of frame ``t`` rows and the gradient in ``X_t`` (rows of frames 0 .. T-2);
+    stores ``weight = lam occ rho'(d)`` per pixel and channel for the splat."""
     r = row_begin + wp.tid()
     height = X.shape[1]
     width = X.shape[2]
@@ -70,33 +76,49 @@ def temporal_gather_rows(row_begin: int, X: wp.array4d(dtype=float), flow: wp.ar
         for c in range(X.shape[3]):
             d = bilinear_at(X, t + 1, c, x0, x1, fx, y0, y1, fy) - X[t, y, x, c]
             e += wp.float64(o * tukey(d, alpha))
-            gX[t, y, x, c] = gX[t, y, x, c] - lam * o * tukey_derivative(d, alpha)
+            g = lam * o * tukey_derivative(d, alpha)
+            weight[t, y, x, c] = g
+            gX[t, y, x, c] = gX[t, y, x, c] - g
     energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
 
 
 @wp.kernel
-def temporal_splat_rows(row_begin: int, X: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
-                        occ: wp.array3d(dtype=float), gX: wp.array4d(dtype=float), lam: float, alpha: float):
-    """Gradient in ``X_{t+1}``: splat ``lam occ rho'(d)`` onto the corners of ``x + u_t(x)``."""
+def temporal_splat_rows(row_begin: int, flow: wp.array4d(dtype=float), occ: wp.array3d(dtype=float),
+                        weight: wp.array4d(dtype=float), gX: wp.array4d(dtype=float)):
+    """Gradient in ``X_{t+1}``: splat the stored ``lam occ rho'(d)`` onto the
+    corners of ``x + u_t(x)``."""
     r = row_begin + wp.tid()
-    height = X.shape[1]
-    width = X.shape[2]
+    height = gX.shape[1]
+    width = gX.shape[2]
     t = r // height
     y = r - t * height
     for x in range(width):
-        o = occ[t, y, x]
-        if o == 0.0:
+        if occ[t, y, x] == 0.0:
             continue
         x0, x1, fx = clamped_corners(float(x) + flow[t, y, x, 0], width)
         y0, y1, fy = clamped_corners(float(y) + flow[t, y, x, 1], height)
-        for c in range(X.shape[3]):
-            d = bilinear_at(X, t + 1, c, x0, x1, fx, y0, y1, fy) - X[t, y, x, c]
-            g = lam * o * tukey_derivative(d, alpha)
+        for c in range(gX.shape[3]):
+            g = weight[t, y, x, c]
             if g != 0.0:
                 wp.atomic_add(gX, t + 1, y0, x0, c, (1.0 - fx) * (1.0 - fy) * g)
                 wp.atomic_add(gX, t + 1, y0, x1, c, fx * (1.0 - fy) * g)
                 wp.atomic_add(gX, t + 1, y1, x0, c, (1.0 - fx) * fy * g)
                 wp.atomic_add(gX, t + 1, y1, x1, c, fx * fy * g)
+
+
+_scratch_cache: dict = {}
+_scratch_lock = threading.Lock()
+
+
+def _weight_scratch(shape: tuple, device):
+    """The (T-1, H, W, C) float32 splat-weight buffer, cached per (device, shape, calling thread)."""
+    key = (str(device), shape, threading.get_ident())
+    with _scratch_lock:
+        buf = _scratch_cache.get(key)
+        if buf is None:
+            buf = wp.empty(shape, dtype=float, device=device)
+            _scratch_cache[key] = buf
+    return buf
 
 
 def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0) -> None:
@@ -133,6 +155,7 @@ def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0)
     check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dev, dtype=wp.float64)
     if t < 2:
         return
-    args = [X, flow, occ, gX]
-    launch_rows(temporal_gather_rows, (t - 1) * h, [*args, energy_rows, float(lam), float(alpha)], device=dev)
-    launch_rows(temporal_splat_rows, (t - 1) * h, [*args, float(lam), float(alpha)], device=dev, align=h)
+    weight = _weight_scratch((t - 1, h, w, c), dev)
+    launch_rows(temporal_gather_rows, (t - 1) * h,
+                [X, flow, occ, gX, weight, energy_rows, float(lam), float(alpha)], device=dev)
+    launch_rows(temporal_splat_rows, (t - 1) * h, [flow, occ, weight, gX], device=dev, align=h)
