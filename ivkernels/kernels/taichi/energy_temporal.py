@@ -1,20 +1,13 @@
 """Taichi mirror of :mod:`ivkernels.kernels.warp.energy_temporal` (Eq. 4, 5, 8):
 same host function and signature, NumPy arrays passed as ``ti.types.ndarray()``.
 
-Two kernels, as in Warp: the gather computes the energy of the rows of frame
-``t`` and the gradient in ``X_t``, and stores each pixel's splat weight
-``lam occ rho'(d)`` per channel in a (T-1, H, W, C) float32 scratch buffer
-(cached per shape and calling thread); the splat reads those weights, with
-the flow and ``occ`` for the corners, and adds them bilinearly onto the four
-corners of ``x + u_t(x)`` in ``X_{t+1}``, without re-sampling ``X``.  The
-splat's outermost loop runs over the rows in parallel and ``+=`` on an
-ndarray there is atomic, so unlike the Warp CPU launches nothing needs to be
-split at frame boundaries.  Bilinear sampling uses corners clamped to the
-image and weights from the unclamped fractional position, as
-:mod:`ivkernels.kernels.warp.sampling` does.
+One kernel does both halves of the gradient: the gather into ``X_t`` and the
+bilinear splat into ``X_{t+1}``.  Its outermost loop runs over the rows in
+parallel and ``+=`` on an ndarray there is atomic, so unlike the Warp CPU
+launches nothing needs to be split at frame boundaries.  Bilinear sampling
+uses corners clamped to the image and weights from the unclamped fractional
+position, as :mod:`ivkernels.kernels.warp.sampling` does.
 """
-import threading
-
 import numpy as np
 import taichi as ti
 
@@ -51,21 +44,8 @@ def corner_index(i, n):
     return ti.min(ti.max(i, 0), n - 1)
 
 
-@ti.func
-def clamped_corners(p, n):
-    """Corners ``i0, i1`` (clamped to ``[0, n-1]``) and weight ``f`` of position ``p`` on an axis of ``n``."""
-    # p clamped to [-2, n+1]: same samples, no float-to-int overflow
-    pc = ti.min(ti.max(p, -2.0), n + 1.0)
-    b = ti.floor(pc)
-    i = ti.cast(b, ti.i32)
-    return corner_index(i, n), corner_index(i + 1, n), pc - b
-
-
 @ti.kernel
-def temporal_gather_rows(X: nd4, flow: nd4, occ: nd3, gX: nd4, weight: nd4, energy_rows: nd1_f64,
-                         lam: ti.f32, alpha: ti.f32):
-    """Energy of frame ``t`` rows and the gradient in ``X_t`` (rows of frames 0 .. T-2);
-    stores ``weight = lam occ rho'(d)`` per pixel and channel for the splat."""
+def temporal_rows(X: nd4, flow: nd4, occ: nd3, gX: nd4, energy_rows: nd1_f64, lam: ti.f32, alpha: ti.f32):
     height = X.shape[1]
     width = X.shape[2]
     for r in range(flow.shape[0] * height):
@@ -75,55 +55,30 @@ def temporal_gather_rows(X: nd4, flow: nd4, occ: nd3, gX: nd4, weight: nd4, ener
         for x in range(width):
             o = occ[t, y, x]
             if o != 0.0:
-                x0, x1, fx = clamped_corners(x + flow[t, y, x, 0], width)
-                y0, y1, fy = clamped_corners(y + flow[t, y, x, 1], height)
+                # p clamped to [-2, n+1]: same samples, no float-to-int overflow
+                px = ti.min(ti.max(x + flow[t, y, x, 0], -2.0), width + 1.0)
+                py = ti.min(ti.max(y + flow[t, y, x, 1], -2.0), height + 1.0)
+                bx = ti.floor(px)
+                by = ti.floor(py)
+                fx = px - bx
+                fy = py - by
+                x0 = corner_index(ti.cast(bx, ti.i32), width)
+                x1 = corner_index(ti.cast(bx, ti.i32) + 1, width)
+                y0 = corner_index(ti.cast(by, ti.i32), height)
+                y1 = corner_index(ti.cast(by, ti.i32) + 1, height)
                 for c in range(X.shape[3]):
                     top = (1.0 - fx) * X[t + 1, y0, x0, c] + fx * X[t + 1, y0, x1, c]
                     bottom = (1.0 - fx) * X[t + 1, y1, x0, c] + fx * X[t + 1, y1, x1, c]
                     d = (1.0 - fy) * top + fy * bottom - X[t, y, x, c]
                     e += ti.cast(o * tukey(d, alpha), ti.f64)
                     g = lam * o * tukey_derivative(d, alpha)
-                    weight[t, y, x, c] = g
-                    # this row is the only writer of gX[t, y] here: a plain store, not an atomic
-                    gX[t, y, x, c] = gX[t, y, x, c] - g
-        energy_rows[r] += ti.cast(lam, ti.f64) * e
-
-
-@ti.kernel
-def temporal_splat_rows(flow: nd4, occ: nd3, weight: nd4, gX: nd4):
-    """Gradient in ``X_{t+1}``: splat the stored ``lam occ rho'(d)`` onto the
-    corners of ``x + u_t(x)`` (atomic ``+=``, rows in parallel)."""
-    height = gX.shape[1]
-    width = gX.shape[2]
-    for r in range(flow.shape[0] * height):
-        t = r // height
-        y = r - t * height
-        for x in range(width):
-            if occ[t, y, x] != 0.0:
-                x0, x1, fx = clamped_corners(x + flow[t, y, x, 0], width)
-                y0, y1, fy = clamped_corners(y + flow[t, y, x, 1], height)
-                for c in range(gX.shape[3]):
-                    g = weight[t, y, x, c]
                     if g != 0.0:
+                        gX[t, y, x, c] -= g
                         gX[t + 1, y0, x0, c] += (1.0 - fx) * (1.0 - fy) * g
                         gX[t + 1, y0, x1, c] += fx * (1.0 - fy) * g
                         gX[t + 1, y1, x0, c] += (1.0 - fx) * fy * g
                         gX[t + 1, y1, x1, c] += fx * fy * g
-
-
-_scratch_cache: dict = {}
-_scratch_lock = threading.Lock()
-
-
-def _weight_scratch(shape: tuple) -> np.ndarray:
-    """The (T-1, H, W, C) float32 splat-weight buffer, cached per (shape, calling thread)."""
-    key = (shape, threading.get_ident())
-    with _scratch_lock:
-        buf = _scratch_cache.get(key)
-        if buf is None:
-            buf = np.empty(shape, np.float32)
-            _scratch_cache[key] = buf
-    return buf
+        energy_rows[r] += ti.cast(lam, ti.f64) * e
 
 
 def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0) -> None:
@@ -143,6 +98,4 @@ def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0)
     check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dtype=np.float64, output=True)
     if t < 2 or h * w * c == 0:
         return
-    weight = _weight_scratch((t - 1, h, w, c))
-    temporal_gather_rows(X, flow, occ, gX, weight, energy_rows, float(lam), float(alpha))
-    temporal_splat_rows(flow, occ, weight, gX)
+    temporal_rows(X, flow, occ, gX, energy_rows, float(lam), float(alpha))
