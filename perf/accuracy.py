@@ -85,7 +85,8 @@ def main(argv=None) -> int:
     print_table(f"mean over {len(per_kind)} kinds", mean)
     iv_mean, cret_mean = mean["IV"]["mean"], mean["CRET"]["mean"]
     print(f"\nIV / CRET mean LMSE = {iv_mean / cret_mean:.3f} (required <= 0.85); "
-          f"IV {'<' if iv_mean < mean['IV-noflow']['mean'] else '>='} IV-noflow; "
+          f"IV {'<' if iv_mean < mean['IV-noflow']['mean'] else '>='} IV-noflow "
+          f"(difference {iv_mean - mean['IV-noflow']['mean']:+.2e}); "
           f"IV albedo EPE {mean['IV']['epe']:.3f} vs input {mean['input']['epe']:.3f} "
           f"and CRET {mean['CRET']['epe']:.3f}")
     if args.large:

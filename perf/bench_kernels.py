@@ -652,11 +652,12 @@ def build_cases() -> list[Case]:
         from ivkernels.kernels.reference import energy_albedo_gsm as Rg
         p = prior()
         return lambda: Rg.gsm_smoothness(s.A, p.sigma_inv, p.table_g, p.table_dg, p.r2_max, 1.0, 2)
-    # per neighbour: d (3), Sigma^-1 d (15), r2 (5), sqrt, cell + weight (6 + div), 2 lerps of
-    # 2 tables (8), energy + gradient accumulation (7): ~44 flops + sqrt + div + 4 table loads
+    # per pair (12 per pixel, each looked up once): forward d (3), r2 (5), sqrt, cell (3),
+    # vec4 read, 2 multiply-adds (4), pair store, gradient + energy sums (7); backward: pair
+    # read, d (3), sums (4): ~34 ops per pair = ~17 per pixel-neighbour (24 per pixel)
     add("energy_albedo_gsm", "gsm_smoothness", gsm(2), gsm_ref, "frames", "compute",
-        "5x5: 24 neighbours x (3x3 product, sqrt, div, 2 table lerps), ~50 ops each",
-        count=lambda s: (neighbour_count(s, s.T, 2), "px-neighbours"), ops_per_unit=50)
+        "5x5: 12 pairs per pixel, each looked up once (sqrt, one vec4 cell read) and gathered once, ~17 ops per neighbour",
+        count=lambda s: (neighbour_count(s, s.T, 2), "px-neighbours"), ops_per_unit=17)
 
     def entropy_setup(be, s):
         from ivkernels.priors import entropy_blur_weights
