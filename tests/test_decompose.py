@@ -95,3 +95,18 @@ def test_flow_from_albedo_solves_twice(seq):
     assert video.flow.shape == seq.flow.shape
     with pytest.raises(ValueError, match="flow_from_albedo"):
         iv.decompose(seq.frames, flow=seq.flow, params=FAST, flow_from_albedo=True)
+
+
+def test_iteration_budget_per_level():
+    """lbfgs_iterations bounds the finest level, lbfgs_iterations_coarse the others."""
+    seq = synthetic.render_sequence("objects_camera", n_frames=2, size=(64, 80), seed=3)
+    params = Params(outer_iterations=2, lbfgs_iterations=4, lbfgs_iterations_coarse=2)
+    video = iv.decompose(seq.frames, flow=seq.flow, params=params)
+    rows = video.diagnostics["energy"]               # (window, level, outer, iteration, E)
+    levels = {row[1] for row in rows}
+    assert 0 in levels and len(levels) > 1
+    for level in levels:
+        budget = 4 if level == 0 else 2
+        its = [row[3] for row in rows if row[1] == level]
+        assert max(its) < budget
+        assert {row[2] for row in rows if row[1] == level} <= {0, 1}
