@@ -2,11 +2,14 @@
 
 The unknowns of a window (all ``A_t`` and ``S_t`` stacked, millions of
 values) stay in one flat backend array; every vector operation of the method
-(two-loop recursion, line search) runs through the backend's ``vecops``
-kernels, so no full-size NumPy temporaries sit on the hot path.
+(the direction, the line search) runs through the backend's ``vecops``
+kernels, so no full-size NumPy temporaries sit on the hot path; the
+two-loop recursion itself runs on small coefficient vectors on the host.
 
-Reference: Nocedal & Wright, *Numerical Optimization*, 2nd ed., Alg. 7.4
-(two-loop recursion) and Alg. 3.1 (backtracking with the Armijo condition).
+References: Nocedal & Wright, *Numerical Optimization*, 2nd ed., Alg. 7.4
+(two-loop recursion) and Alg. 3.1 (backtracking with the Armijo condition);
+Chen, Wang & Zhou, "Large-scale L-BFGS using MapReduce", NIPS 2014
+(vector-free L-BFGS).
 """
 from __future__ import annotations
 

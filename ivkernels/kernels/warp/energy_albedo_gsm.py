@@ -29,12 +29,13 @@ single full-window visit would give.
 
 Whitening.  With ``L`` upper triangular, ``L^T L = Sigma^-1`` (Cholesky), a
 whitening pass stores ``B(x) = L A(x)`` per pixel in a scratch buffer (the
-scratch buffers are cached per (device, shape, calling thread)); then ``r2 = |B(x) - B(y)|^2`` and
+scratch buffers are cached per (device, shape, calling thread)); then
+``r2 = |B(x) - B(y)|^2`` and
 
     dE/dA(x) = 4 lam L^T sum_{y in N(x)} g'(r2) (B(x) - B(y)),
 
-so a neighbour costs a 3-vector difference, a dot product, a square root and
-two table reads, and the 3x3 products are once per pixel.
+so a pair costs a 3-vector difference, a dot product, a square root and one
+coefficient read, and the 3x3 products are once per pixel.
 """
 from __future__ import annotations
 
