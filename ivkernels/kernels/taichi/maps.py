@@ -5,11 +5,10 @@ NumPy arrays passed as ``ti.types.ndarray()``.
 The next frame's Lab colour at ``x + u`` is sampled with the bilinear helpers
 of :mod:`ivkernels.kernels.taichi.sampling`.  Parallel over the ``T * H`` rows.
 """
-import threading
-
 import numpy as np
 import taichi as ti
 
+from ivkernels.kernels.cache import scratch
 from ivkernels.kernels.taichi._checks import check_array, check_int, check_positive
 from ivkernels.kernels.taichi.sampling import bilinear_at, clamped_corners, inside_image
 
@@ -109,19 +108,9 @@ def boundary_dilate_y_rows(hits: nd3, out: nd3, radius: ti.i32):
             out[t, y, x] = m
 
 
-_scratch_cache: dict = {}
-_scratch_lock = threading.Lock()
-
-
 def _scratch(shape: tuple) -> np.ndarray:
     """A float32 buffer of ``shape`` cached per (shape, calling thread)."""
-    key = (shape, threading.get_ident())
-    with _scratch_lock:
-        buf = _scratch_cache.get(key)
-        if buf is None:
-            buf = np.empty(shape, np.float32)
-            _scratch_cache[key] = buf
-    return buf
+    return scratch((__name__, shape), lambda: np.empty(shape, np.float32))
 
 
 def _check_occlusion_args(lab, flow, div_neg, out, sigma_e, sigma_d):

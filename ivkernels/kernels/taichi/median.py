@@ -7,11 +7,10 @@ iteration per image row, the window's (value, weight) pairs copied into that
 row's slice of a scratch array, then a weighted quickselect.  The outermost
 loop runs over rows in parallel; each row only touches its own scratch row.
 """
-import threading
-
 import numpy as np
 import taichi as ti
 
+from ivkernels.kernels.cache import scratch
 from ivkernels.kernels.taichi._checks import check_array, check_int, check_positive
 from ivkernels.kernels.warp.median import KMEANS_ITERATIONS, MIN_SEPARATION, median_network
 
@@ -281,27 +280,17 @@ def flow_scratch_shape(flow_shape: tuple, radius: int) -> tuple:
     return (flow_shape[0] * flow_shape[1], 3 * (2 * radius + 1) ** 2)
 
 
-_scratch_cache: dict = {}
-_scratch_lock = threading.Lock()
-
-
 def _spatial_weights(radius: int, sigma: float) -> np.ndarray:
     """``exp(-|d|^2 / (2 sigma^2))`` over the (2r+1)^2 window offsets, row-major, float32."""
     d = np.arange(-radius, radius + 1, dtype=np.float64)
     return np.exp(-(d[:, None] ** 2 + d[None, :] ** 2) / (2.0 * sigma * sigma)).astype(np.float32).ravel()
 
 
-def _scratch(scratch, shape: tuple) -> np.ndarray:
-    """The caller's scratch (checked) or a cached one of ``shape`` for the calling thread."""
-    if scratch is not None:
-        return check_array("scratch", scratch, shape, "(rows, floats per row)", output=True)
-    key = (shape, threading.get_ident())
-    with _scratch_lock:
-        buf = _scratch_cache.get(key)
-        if buf is None:
-            buf = np.empty(shape, np.float32)
-            _scratch_cache[key] = buf
-    return buf
+def _scratch(given, shape: tuple) -> np.ndarray:
+    """The caller's scratch ``given`` (checked) or a cached one of ``shape`` for the calling thread."""
+    if given is not None:
+        return check_array("scratch", given, shape, "(rows, floats per row)", output=True)
+    return scratch((__name__, shape), lambda: np.empty(shape, np.float32))
 
 
 def median5x5(src, out) -> None:

@@ -40,10 +40,9 @@ coefficient read, and the 3x3 products are once per pixel.
 from __future__ import annotations
 
 import math
-import threading
-
 import warp as wp
 
+from ivkernels.kernels.cache import scratch
 from ivkernels.kernels.launch import launch_rows
 from ivkernels.kernels.warp._checks import check_array, check_float, check_int
 
@@ -196,19 +195,10 @@ def gsm_backward_pairs_rows(row_begin: int, B: wp.array2d(dtype=wp.vec3), sigma_
     energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
 
 
-_scratch_cache: dict = {}
-_scratch_lock = threading.Lock()
-
-
 def _scratch(name: str, shape: tuple, dtype, device):
     """A scratch buffer cached per (name, device, shape, calling thread)."""
-    key = (name, str(device), shape, threading.get_ident())
-    with _scratch_lock:
-        buf = _scratch_cache.get(key)
-        if buf is None:
-            buf = wp.empty(shape, dtype=dtype, device=device)
-            _scratch_cache[key] = buf
-    return buf
+    return scratch((__name__, name, str(device), shape),
+                   lambda: wp.empty(shape, dtype=dtype, device=device))
 
 
 def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_rows,

@@ -23,10 +23,9 @@ Energies go to the rows of frame ``t`` (conventions in :mod:`ivkernels.kernels`)
 """
 from __future__ import annotations
 
-import threading
-
 import warp as wp
 
+from ivkernels.kernels.cache import scratch
 from ivkernels.kernels.launch import launch_rows
 from ivkernels.kernels.warp._checks import check_array
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners
@@ -106,19 +105,9 @@ def temporal_splat_rows(row_begin: int, flow: wp.array4d(dtype=float), occ: wp.a
                 wp.atomic_add(gX, t + 1, y1, x1, c, fx * fy * g)
 
 
-_scratch_cache: dict = {}
-_scratch_lock = threading.Lock()
-
-
 def _weight_scratch(shape: tuple, device):
     """The (T-1, H, W, C) float32 splat-weight buffer, cached per (device, shape, calling thread)."""
-    key = (str(device), shape, threading.get_ident())
-    with _scratch_lock:
-        buf = _scratch_cache.get(key)
-        if buf is None:
-            buf = wp.empty(shape, dtype=float, device=device)
-            _scratch_cache[key] = buf
-    return buf
+    return scratch((__name__, str(device), shape), lambda: wp.empty(shape, dtype=float, device=device))
 
 
 def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0) -> None:

@@ -11,10 +11,9 @@ bilinear helpers of :mod:`ivkernels.kernels.warp.sampling` (clamped corners).
 """
 from __future__ import annotations
 
-import threading
-
 import warp as wp
 
+from ivkernels.kernels.cache import scratch
 from ivkernels.kernels.launch import launch_rows
 from ivkernels.kernels.warp._checks import check_array, check_int, check_positive
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners, inside_image
@@ -212,16 +211,6 @@ def motion_boundary(sobel_mag, out, threshold: float, radius: int) -> None:
     launch_rows(boundary_dilate_y_rows, rows, [hits, out, int(radius)], device=sobel_mag.device)
 
 
-_scratch_cache: dict = {}
-_scratch_lock = threading.Lock()
-
-
 def _scratch(shape: tuple, device):
     """A float32 buffer of ``shape`` cached per (device, shape, calling thread)."""
-    key = (str(device), shape, threading.get_ident())
-    with _scratch_lock:
-        buf = _scratch_cache.get(key)
-        if buf is None:
-            buf = wp.empty(shape, dtype=wp.float32, device=device)
-            _scratch_cache[key] = buf
-    return buf
+    return scratch((__name__, str(device), shape), lambda: wp.empty(shape, dtype=wp.float32, device=device))

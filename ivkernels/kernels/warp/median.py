@@ -18,11 +18,10 @@ to own the memory instead.
 """
 from __future__ import annotations
 
-import threading
-
 import numpy as np
 import warp as wp
 
+from ivkernels.kernels.cache import cached, scratch
 from ivkernels.kernels.launch import launch_rows
 from ivkernels.kernels.warp._checks import check_array, check_int, check_positive
 
@@ -460,20 +459,9 @@ def flow_scratch_shape(flow_shape: tuple, radius: int) -> tuple:
     return (flow_shape[0] * flow_shape[1], 3 * (2 * radius + 1) ** 2)
 
 
-_scratch_cache: dict = {}
-_scratch_lock = threading.Lock()
-_table_cache: dict = {}
-
-
 def _cached_table(key: tuple, make, dtype, device):
     """A small read-only table (``make()`` as a NumPy array) cached per key and device."""
-    key = (*key, str(device))
-    with _scratch_lock:
-        table = _table_cache.get(key)
-        if table is None:
-            table = wp.array(make(), dtype=dtype, device=device)
-            _table_cache[key] = table
-    return table
+    return cached((__name__, *key, str(device)), lambda: wp.array(make(), dtype=dtype, device=device))
 
 
 def _spatial_weights(radius: int, sigma: float) -> np.ndarray:
@@ -482,18 +470,12 @@ def _spatial_weights(radius: int, sigma: float) -> np.ndarray:
     return np.exp(-(d[:, None] ** 2 + d[None, :] ** 2) / (2.0 * sigma * sigma)).astype(np.float32).ravel()
 
 
-def _scratch(scratch, shape: tuple, device):
-    """The caller's scratch (checked) or a cached one of ``shape`` for this device and thread."""
-    if scratch is not None:
-        check_array("scratch", scratch, shape, "(rows, floats per row)", device)
-        return scratch
-    key = (str(device), shape, threading.get_ident())
-    with _scratch_lock:
-        buf = _scratch_cache.get(key)
-        if buf is None:
-            buf = wp.empty(shape, dtype=wp.float32, device=device)
-            _scratch_cache[key] = buf
-    return buf
+def _scratch(given, shape: tuple, device):
+    """The caller's scratch ``given`` (checked) or a cached one of ``shape`` for this device and thread."""
+    if given is not None:
+        check_array("scratch", given, shape, "(rows, floats per row)", device)
+        return given
+    return scratch((__name__, str(device), shape), lambda: wp.empty(shape, dtype=wp.float32, device=device))
 
 
 def median5x5(src, out) -> None:
