@@ -241,21 +241,24 @@ def _vec4(*arrays):
     n4 = arrays[0].shape[0] // 4
     if n4 == 0 or not all(a.is_contiguous for a in arrays):
         n4 = 0
-    views = []
-    for a in arrays:
-        key = (str(a.device), a.ptr if n4 else 0, n4)
-        view = _view_cache.get(key)
-        if view is None:
-            if n4:
-                view = wp.array(ptr=a.ptr, dtype=wp.vec4, shape=(n4,), device=a.device)
-            else:
-                view = wp.empty(0, dtype=wp.vec4, device=a.device)
-            with _view_lock:
-                if len(_view_cache) >= _VIEW_CACHE_SIZE:
-                    _view_cache.clear()
-                _view_cache[key] = view
-        views.append(view)
-    return views
+    if n4 == 0:
+        return [_cached_view((str(a.device), 0, 0), lambda a=a: wp.empty(0, dtype=wp.vec4, device=a.device))
+                for a in arrays]
+    return [_cached_view((str(a.device), a.ptr, n4),
+                         lambda a=a: wp.array(ptr=a.ptr, dtype=wp.vec4, shape=(n4,), device=a.device))
+            for a in arrays]
+
+
+def _cached_view(key: tuple, make):
+    """A view (a pure function of ``key``: device, address, shape) from a small bounded cache."""
+    view = _view_cache.get(key)
+    if view is None:
+        view = make()
+        with _view_lock:
+            if len(_view_cache) >= _VIEW_CACHE_SIZE:
+                _view_cache.clear()
+            _view_cache[key] = view
+    return view
 
 
 def dot(a, b) -> float:
@@ -316,22 +319,14 @@ def fill(x, value: float) -> None:
     launch_rows(fill_chunks, _chunks(n), [x, *_vec4(x), float(value), CHUNK], device=x.device)
 
 
-
 def _basis_vec4(basis, n4: int):
     """A (k, n4) ``wp.vec4`` view of the first ``4 * n4`` columns of a contiguous (k, n) basis."""
     k, n = basis.shape
     if n4 == 0:
         return wp.empty((0, 0), dtype=wp.vec4, device=basis.device)
-    key = (str(basis.device), basis.ptr, k, n, n4)
-    view = _view_cache.get(key)
-    if view is None:
-        view = wp.array(ptr=basis.ptr, dtype=wp.vec4, shape=(k, n4), strides=(4 * n, 16),
-                        device=basis.device)
-        with _view_lock:
-            if len(_view_cache) >= _VIEW_CACHE_SIZE:
-                _view_cache.clear()
-            _view_cache[key] = view
-    return view
+    return _cached_view((str(basis.device), basis.ptr, k, n, n4),
+                        lambda: wp.array(ptr=basis.ptr, dtype=wp.vec4, shape=(k, n4), strides=(4 * n, 16),
+                                         device=basis.device))
 
 
 def _basis_rows(basis, rows, coeffs=None):
