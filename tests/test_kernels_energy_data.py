@@ -105,3 +105,54 @@ def test_bad_input_raises(backend, rng):
         f(I, A, backend.zeros((2, 5, 6), np.float64), w_lum, gA, gS, er)
     with pytest.raises(ValueError, match="I must have shape"):
         f(backend.zeros((2, 5, 6, 4)), A, S, w_lum, gA, gS, er)
+
+
+# --------------------------------------------------- Eq. 3 as the constraint A = I - S
+def test_constrained_albedo_matches_reference(backend, rng):
+    I = rng.normal(0.0, 1.0, (2, 13, 7, 3)).astype(np.float32)
+    S = rng.normal(0.0, 1.0, (2, 13, 7)).astype(np.float32)
+    A = backend.asarray(np.full(I.shape, np.nan, np.float32))
+    backend.energy_data.constrained_albedo(backend.asarray(I), backend.asarray(S), A)
+    np.testing.assert_allclose(backend.numpy(A), ref.constrained_albedo(I, S), atol=1e-6)
+
+
+def test_constrained_gradient_is_the_chain_rule(backend, rng):
+    """d/dS of E(I - S, S) by finite differences of a quadratic E(A, S)."""
+    t, h, w = 1, 5, 6
+    I = rng.normal(size=(t, h, w, 3))
+    S = rng.normal(size=(t, h, w))
+    cA, cS = rng.normal(size=(t, h, w, 3)), rng.normal(size=(t, h, w))
+
+    def energy(S_):
+        A_ = ref.constrained_albedo(I, S_)
+        return 0.5 * (cA * A_ * A_).sum() + 0.5 * (cS * S_ * S_).sum()
+
+    A = ref.constrained_albedo(I, S)
+    gA, gS = (cA * A).astype(np.float32), (cS * S).astype(np.float32)
+    out = backend.asarray(np.zeros((t, h, w), np.float32))
+    backend.energy_data.constrained_gradient(backend.asarray(gA), backend.asarray(gS), out)
+    fd = np.zeros_like(S)
+    for idx in np.ndindex(S.shape):
+        sp, sm = S.copy(), S.copy()
+        sp[idx] += 1e-6
+        sm[idx] -= 1e-6
+        fd[idx] = (energy(sp) - energy(sm)) / 2e-6
+    np.testing.assert_allclose(backend.numpy(out), fd, rtol=1e-4, atol=1e-4)
+
+
+def test_constrained_gradient_in_place(backend, rng):
+    gA = rng.normal(size=(2, 9, 4, 3)).astype(np.float32)
+    gS = rng.normal(size=(2, 9, 4)).astype(np.float32)
+    want = ref.constrained_gradient(gA, gS)
+    gS_be = backend.asarray(gS.copy())
+    backend.energy_data.constrained_gradient(backend.asarray(gA), gS_be, gS_be)
+    np.testing.assert_allclose(backend.numpy(gS_be), want, rtol=1e-6, atol=1e-6)
+
+
+def test_constrained_bad_input(backend):
+    I = backend.asarray(np.zeros((1, 4, 4, 3), np.float32))
+    with pytest.raises(ValueError, match="S must have shape"):
+        backend.energy_data.constrained_albedo(I, backend.asarray(np.zeros((1, 4, 5), np.float32)),
+                                               backend.asarray(np.zeros((1, 4, 4, 3), np.float32)))
+    with pytest.raises(ValueError, match="alias"):
+        backend.energy_data.constrained_albedo(I, backend.asarray(np.zeros((1, 4, 4), np.float32)), I)

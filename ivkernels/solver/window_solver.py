@@ -1,10 +1,11 @@
 """Coarse-to-fine minimisation of Eq. 2 over one window of frames (Sec. 4).
 
 At each pyramid level, starting from the up-sampled coarser solution, the
-solver alternates (a) L-BFGS over all ``(A_t, S_t)`` of the window at once
-with the coupling variable ``S~`` fixed and (b) the ``S~`` weighted-median
-update (Eq. 13).  The coarsest level starts from ``S`` = heavily blurred log
-luminance and ``A = I - S``.
+solver alternates (a) L-BFGS over all ``S_t`` of the window at once, with
+``A_t = I_t - S_t`` (Eq. 3 as a constraint, :class:`ConstrainedEnergy`) and the
+coupling variable ``S~`` fixed, and (b) the ``S~`` weighted-median update
+(Eq. 13).  The coarsest level starts from ``S`` = heavily blurred log
+luminance.
 """
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ivkernels.params import Params
-from ivkernels.solver.energy import WindowEnergy
+from ivkernels.solver.energy import ConstrainedEnergy, WindowEnergy
 from ivkernels.solver.lbfgs import LBFGS
 from ivkernels.solver.motion_maps import resample_mask
 from ivkernels.solver.pyramid import (coarse_to_fine, image_pyramid, level_shapes, resize,
@@ -71,7 +72,8 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
     prior : :class:`ivkernels.priors.AlbedoPrior`.
     carried : optional ``(A, S)`` NumPy arrays (k, H, W, 3), (k, H, W) of log
         albedo and shading for the first ``k`` frames, solved by the previous
-        window; they are held fixed and carry albedo forward.
+        window; they are held fixed and carry albedo forward (their albedo is
+        ``I - S`` of the same frames, so ``S`` alone is used).
     log : :class:`SolveLog` collecting energies and timings.
     progress : optional callable ``progress(n_done_levels)``.
 
@@ -88,8 +90,7 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
     pyramid = image_pyramid(be, frames_linear, shapes)
     carried_pyr = None
     if carried is not None:
-        carried_pyr = (image_pyramid(be, be.asarray(carried[0]), shapes),
-                       image_pyramid(be, be.asarray(carried[1][..., None]), shapes))
+        carried_pyr = (None, image_pyramid(be, be.asarray(carried[1][..., None]), shapes))
     log.add_time("pyramid", time.perf_counter() - t0)
 
     def make_energy(level, shape):
@@ -107,29 +108,28 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
 
     def init(shape):
         energy = make_energy(len(shapes) - 1, shape)
-        S0 = _initial_shading(be, energy.I, params)
-        I_np, S_np = be.numpy(energy.I), be.numpy(S0)
-        _set(be, energy, I_np - S_np[..., None], S_np)
+        be.vecops.copy(_initial_shading(be, energy.I, params).reshape((energy.n,)),
+                       energy.S.reshape((energy.n,)))
         return energy
 
     def upsample(energy, shape):
-        # Shading is smooth and survives resampling; albedo carries the texture the
-        # coarser level could not see, so it restarts data-consistent: A = I - S.
-        S_up = be.numpy(resize(be, energy.S.reshape((*energy.shape, 1)), shape))[..., 0]
+        # Shading is smooth and survives resampling; the albedo follows it
+        # through A = I - S, so it keeps the texture the coarser level could not see.
+        S_up = resize(be, energy.S.reshape((*energy.shape, 1)), shape)
         level = shapes.index(shape)
         finer = make_energy(level, shape)
-        _set(be, finer, be.numpy(finer.I) - S_up[..., None], S_up)
+        be.vecops.copy(S_up.reshape((finer.n,)), finer.S.reshape((finer.n,)))
         return finer
 
     def solve_level(level, shape, energy):
         if carried_pyr is not None:
-            A_fixed = be.numpy(carried_pyr[0][level])
-            S_fixed = be.numpy(carried_pyr[1][level])[..., 0]
-            A_now, S_now = be.numpy(energy.A).copy(), be.numpy(energy.S).copy()
-            A_now[:n_fixed], S_now[:n_fixed] = A_fixed, S_fixed
-            _set(be, energy, A_now, S_now)
+            S_now = be.numpy(energy.S).copy()
+            S_now[:n_fixed] = be.numpy(carried_pyr[1][level])[..., 0]
+            be.vecops.copy(be.asarray(S_now.reshape(-1)), energy.S.reshape((energy.n,)))
         t = time.perf_counter()
-        lbfgs = LBFGS(be, energy.X.shape[0], memory=int(params.lbfgs_memory))
+        problem = ConstrainedEnergy(energy)
+        problem.sync_albedo()
+        lbfgs = LBFGS(be, energy.n, memory=int(params.lbfgs_memory))
         iterations = int(params.lbfgs_iterations if level == 0 else params.lbfgs_iterations_coarse)
         for outer in range(int(params.outer_iterations)):
             tm = time.perf_counter()
@@ -140,7 +140,8 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
             def record(k, e, outer=outer):
                 log.energy.append((window_index, level, outer, k, e))
 
-            lbfgs.minimize(energy, energy.X, energy.G, iterations, on_iteration=record)
+            lbfgs.minimize(problem, problem.X, problem.G, iterations, on_iteration=record)
+        problem.sync_albedo()
         log.terms.append((window_index, level, energy.term_energies()))
         log.add_time("solve", time.perf_counter() - t)
         if progress is not None:
@@ -151,10 +152,3 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
     A = np.array(be.numpy(final.A), dtype=np.float32, copy=True)
     S = np.array(be.numpy(final.S), dtype=np.float32, copy=True)
     return A, S
-
-
-def _set(be, energy: WindowEnergy, A: np.ndarray, S: np.ndarray) -> None:
-    """Write NumPy log albedo (T,h,w,3) and shading (T,h,w) into the energy's unknowns."""
-    X = np.concatenate([np.ascontiguousarray(A, np.float32).ravel(),
-                        np.ascontiguousarray(S, np.float32).ravel()])
-    be.vecops.copy(be.asarray(X), energy.X)

@@ -30,3 +30,13 @@ def data_term(I, A, S, w_lum, lam: float = 10.0, eps: float = 0.001):
     gA = -lam * w[..., None] * z / rho
     gS = gA.sum(axis=-1)
     return energy_rows, gA, gS
+
+
+def constrained_albedo(I, S):
+    """``A = I - S`` (T, H, W, 3), float64: Eq. 3 taken as a constraint."""
+    return np.asarray(I, np.float64) - np.asarray(S, np.float64)[..., None]
+
+
+def constrained_gradient(gA, gS):
+    """Chain rule of ``A = I - S``: ``gS - sum_c gA`` (T, H, W), float64."""
+    return np.asarray(gS, np.float64) - np.asarray(gA, np.float64).sum(axis=-1)

@@ -59,3 +59,41 @@ def data_term(I, A, S, w_lum, gA, gS, energy_rows, lam: float = 10.0, eps: float
     if t * h * w == 0:
         return
     data_term_rows(I, A, S, w_lum, gA, gS, energy_rows, float(lam), float(eps))
+
+
+@ti.kernel
+def constrained_albedo_rows(I: nd4, S: nd3, A: nd4):
+    for t, y, x in ti.ndrange(S.shape[0], S.shape[1], S.shape[2]):
+        s = S[t, y, x]
+        for c in ti.static(range(3)):
+            A[t, y, x, c] = I[t, y, x, c] - s
+
+
+@ti.kernel
+def constrained_gradient_rows(gA: nd4, gS: nd3, out: nd3):
+    for t, y, x in ti.ndrange(gS.shape[0], gS.shape[1], gS.shape[2]):
+        out[t, y, x] = gS[t, y, x] - (gA[t, y, x, 0] + gA[t, y, x, 1] + gA[t, y, x, 2])
+
+
+def constrained_albedo(I, S, A) -> None:
+    """``A = I - S``; see :func:`ivkernels.kernels.warp.energy_data.constrained_albedo`."""
+    I = check_array("I", I, (None, None, None, 3), "(T, H, W, 3)")
+    t, h, w, _ = I.shape
+    S = check_array("S", S, (t, h, w), "(T, H, W)")
+    check_array("A", A, (t, h, w, 3), "(T, H, W, 3)", output=True)
+    if t * h * w == 0:
+        return
+    if np.shares_memory(A, I):
+        raise ValueError("constrained_albedo: A must not alias I")
+    constrained_albedo_rows(I, S, A)
+
+
+def constrained_gradient(gA, gS, out) -> None:
+    """``out = gS - sum_c gA``; see :func:`ivkernels.kernels.warp.energy_data.constrained_gradient`."""
+    gA = check_array("gA", gA, (None, None, None, 3), "(T, H, W, 3)")
+    t, h, w, _ = gA.shape
+    gS = check_array("gS", gS, (t, h, w), "(T, H, W)")
+    check_array("out", out, (t, h, w), "(T, H, W)", output=True)
+    if t * h * w == 0:
+        return
+    constrained_gradient_rows(gA, gS, out)

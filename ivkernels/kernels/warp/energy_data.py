@@ -4,6 +4,11 @@
 ``rho_charb(z) = sqrt(z^2 + eps^2)``.  Like every energy host function, it
 *adds* its gradient into the given buffers and its energy per row into
 ``energy_rows`` (see :mod:`ivkernels.kernels`).
+
+The solver enforces Eq. 3 as the constraint ``A = I - S`` (its limit for a
+stiff data term, see :mod:`ivkernels.solver.energy`); :func:`constrained_albedo`
+and :func:`constrained_gradient` are that change of variables and its chain
+rule.
 """
 from __future__ import annotations
 
@@ -74,3 +79,61 @@ def data_term(I, A, S, w_lum, gA, gS, energy_rows, lam: float = 10.0, eps: float
     check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dev, dtype=wp.float64)
     launch_rows(data_term_rows, t * h, [I, A, S, w_lum, gA, gS, energy_rows, float(lam), float(eps)],
                 device=dev)
+
+
+@wp.kernel
+def constrained_albedo_rows(row_begin: int, I: wp.array4d(dtype=float), S: wp.array3d(dtype=float),
+                            A: wp.array4d(dtype=float)):
+    r = row_begin + wp.tid()
+    height = S.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(S.shape[2]):
+        s = S[t, y, x]
+        for c in range(3):
+            A[t, y, x, c] = I[t, y, x, c] - s
+
+
+@wp.kernel
+def constrained_gradient_rows(row_begin: int, gA: wp.array4d(dtype=float), gS: wp.array3d(dtype=float),
+                              out: wp.array3d(dtype=float)):
+    r = row_begin + wp.tid()
+    height = gS.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(gS.shape[2]):
+        out[t, y, x] = gS[t, y, x] - (gA[t, y, x, 0] + gA[t, y, x, 1] + gA[t, y, x, 2])
+
+
+def constrained_albedo(I, S, A) -> None:
+    """Write ``A = I - S`` (log albedo on the data-consistent set of Eq. 3).
+
+    Parameters
+    ----------
+    I : wp.array float32 (T, H, W, 3), log input image.
+    S : wp.array float32 (T, H, W), log shading.
+    A : wp.array float32 (T, H, W, 3), output (may not alias ``I``).
+    """
+    check_array("I", I, (None, None, None, 3), "(T, H, W, 3)")
+    t, h, w, _ = I.shape
+    dev = I.device
+    check_array("S", S, (t, h, w), "(T, H, W)", dev)
+    check_array("A", A, (t, h, w, 3), "(T, H, W, 3)", dev)
+    if A.ptr == I.ptr and t * h * w:
+        raise ValueError("constrained_albedo: A must not alias I")
+    launch_rows(constrained_albedo_rows, t * h, [I, S, A], device=dev)
+
+
+def constrained_gradient(gA, gS, out) -> None:
+    """Chain rule of ``A = I - S``: ``out = gS - sum_c gA[..., c]``.
+
+    ``gA`` (T, H, W, 3) and ``gS`` (T, H, W) are dE/dA and dE/dS of any energy
+    in (A, S); ``out`` (T, H, W) receives dE/dS along the constraint (it may
+    be ``gS`` itself: each pixel reads before it writes).
+    """
+    check_array("gA", gA, (None, None, None, 3), "(T, H, W, 3)")
+    t, h, w, _ = gA.shape
+    dev = gA.device
+    check_array("gS", gS, (t, h, w), "(T, H, W)", dev)
+    check_array("out", out, (t, h, w), "(T, H, W)", dev)
+    launch_rows(constrained_gradient_rows, t * h, [gA, gS, out], device=dev)
