@@ -39,7 +39,9 @@ class IntrinsicVideo:
     boundary : (T-1, H, W) float32, the paper's w_bnd: 1 = near a motion boundary.
     diagnostics : dict with ``energy`` (rows of window, level, outer
         iteration, L-BFGS iteration, energy), ``terms`` (each term's energy
-        after each level), ``seconds`` (per stage), ``windows`` (frame ranges).
+        after each level), ``levels`` (per window and level: why each L-BFGS
+        run stopped and ``converged``, i.e. stopped on its tolerance rather than
+        its iteration budget), ``seconds`` (per stage), ``windows`` (frame ranges).
     """
 
     albedo: np.ndarray
@@ -307,7 +309,7 @@ def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
             occ_out[res.start:res.stop - 1] = res.occlusion
             bnd_out[res.start:res.stop - 1] = res.boundary
         windows.append((res.start, res.stop))
-    diagnostics = {"energy": job.log.energy, "terms": job.log.terms,
+    diagnostics = {"energy": job.log.energy, "terms": job.log.terms, "levels": job.log.levels,
                    "seconds": dict(job.log.seconds), "windows": windows,
                    "flow_method": job.flow_method if job.flow is None else "given",
                    "albedo_scale": job.scale}

@@ -24,10 +24,14 @@ def test_outputs_have_the_documented_shapes_and_reconstruct_the_input(seq):
     assert set(np.unique(video.occlusion)) <= {0.0, 1.0}
     assert np.isfinite(video.albedo).all() and (video.shading > 0).all()
     assert np.percentile(video.albedo, 99) == pytest.approx(1.0, rel=1e-3)
-    # Eq. 3 is a soft constraint (Charbonnier), so the product is close, not exact
-    rel = np.abs(video.reconstruct() - seq.frames).mean() / seq.frames.mean()
-    assert rel < 0.1
+    # Eq. 3 is enforced as the constraint A + S = I: the product is the input
+    # (below the log floor, the floor)
+    floored = np.maximum(seq.frames, FAST.log_floor)
+    np.testing.assert_allclose(video.reconstruct(), floored, rtol=1e-3, atol=1e-6)
     d = video.diagnostics
+    assert [(r["window"], r["level"]) for r in d["levels"]][-1] == (0, 0)
+    assert all(isinstance(r["converged"], bool) and len(r["stop_reasons"]) == FAST.outer_iterations
+               for r in d["levels"])
     assert d["energy"] and d["seconds"]["solve"] > 0
     energies = [row[-1] for row in d["energy"] if row[1] == 0]    # finest level
     assert energies[-1] <= energies[0]

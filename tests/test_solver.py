@@ -169,3 +169,52 @@ def test_term_energies_sum_to_total(backend, rng):
     assert set(terms) >= {"data", "temporal_albedo", "temporal_shading", "coupling",
                           "shading_local", "albedo_smooth"}
     assert sum(terms.values()) == pytest.approx(total, rel=1e-5)
+
+
+# ------------------------------------------- Eq. 2 on the data-consistent set A = I - S
+def test_constrained_gradient_matches_directional_difference(backend, rng):
+    """dE/dS of E(I - S, S) against a central difference of the constrained energy."""
+    from ivkernels.solver.energy import ConstrainedEnergy
+
+    energy, x0 = _small_problem(backend, rng)
+    problem = ConstrainedEnergy(energy)
+    be = backend
+    S0 = x0[3 * energy.n:].copy()
+    be.vecops.copy(be.asarray(S0), problem.X)
+    problem(problem.X, problem.G)
+    g = be.numpy(problem.G).astype(np.float64).copy()
+    A = be.numpy(energy.A).reshape(-1, 3)
+    I = be.numpy(energy.I).reshape(-1, 3)
+    np.testing.assert_allclose(A, I - S0[:, None], atol=1e-6)     # A follows S
+    for _ in range(3):
+        d = rng.standard_normal(S0.shape)
+        d /= np.linalg.norm(d)
+        h = 1e-2
+        vals = []
+        for sgn in (1, -1):
+            be.vecops.copy(be.asarray((S0 + sgn * h * d).astype(np.float32)), problem.X)
+            vals.append(problem(problem.X, problem.G))
+        fd = (vals[0] - vals[1]) / (2 * h)
+        assert fd == pytest.approx(g @ d, rel=2e-2, abs=1e-2 * np.abs(g).max())
+
+
+def test_constrained_energy_has_no_data_term_and_fixed_frames_stay(backend, rng):
+    from ivkernels.solver.energy import ConstrainedEnergy
+
+    energy, _ = _small_problem(backend, rng)
+    energy.n_fixed = 1
+    problem = ConstrainedEnergy(energy)
+    total = problem(problem.X, problem.G)
+    T, h, w = energy.shape
+    g = backend.numpy(problem.G).reshape(T, h, w).copy()
+    assert not g[0].any() and g[1:].any()
+    terms = energy.term_energies()
+    assert total == pytest.approx(sum(v for k, v in terms.items() if k != "data"), rel=1e-5)
+
+
+def test_non_finite_energy_names_the_term(backend, rng):
+    energy, x0 = _small_problem(backend, rng)
+    I = backend.numpy(energy.I)
+    I[0, 1, 2, 0] = np.nan
+    with pytest.raises(FloatingPointError, match="not finite.*(temporal|albedo_smooth|data)"):
+        energy(energy.X, energy.G)

@@ -102,10 +102,16 @@ class LBFGS:
         gradient into ``g``.  On return ``x`` holds the best point found and
         ``g`` its gradient; the energy there is returned.
         ``on_iteration(k, energy)`` is called after every accepted step.
+        Afterwards :attr:`stop_reason` says why it stopped: ``"tolerance"``
+        (relative energy change below ``rel_tol``: converged), ``"stationary"``
+        (zero gradient), ``"line search"`` (no decrease along steepest descent
+        either: converged to float32 precision) or ``"budget"`` (``iterations``
+        used up), and :attr:`iterations_done` how many steps were accepted.
         """
         v, m, B, G = self.be.vecops, self.memory, self._basis, self._gram
         f = fun(x, g)
         pending = None                              # slot whose y is formed next iteration
+        self.stop_reason, self.iterations_done = "budget", 0
         for k in range(iterations):
             cur, prev = self._g_rows
             v.copy(g, B[cur])
@@ -125,6 +131,7 @@ class LBFGS:
             else:
                 gmax = v.norm_inf(g)
                 if gmax == 0.0:
+                    self.stop_reason = "stationary"
                     break
                 c = np.zeros(G.shape[0])
                 c[cur] = -1.0
@@ -152,6 +159,7 @@ class LBFGS:
                 if self._pairs:                     # retry once from steepest descent
                     self.reset()
                     continue
+                self.stop_reason = "line search"
                 break
             # s = step * d into a free slot (or the oldest pair's); its dot products with
             # the other rows follow from d's coefficients, before the slot is overwritten.
@@ -164,9 +172,11 @@ class LBFGS:
             G[slot, slot] = ss
             pending = slot
             self._g_rows.reverse()
+            self.iterations_done += 1
             if on_iteration is not None:
                 on_iteration(k, f)
             if abs(f_old - f) <= rel_tol * max(1.0, abs(f)):
+                self.stop_reason = "tolerance"
                 break
         if pending is not None:
             self._free.append(pending)

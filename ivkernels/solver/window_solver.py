@@ -27,6 +27,7 @@ class SolveLog:
     """Diagnostics of a solve: energy per iteration and level, and seconds per stage."""
 
     energy: list = field(default_factory=list)     # (window, level, outer, iteration, E)
+    levels: list = field(default_factory=list)     # one dict per (window, level): see solve_window
     terms: list = field(default_factory=list)      # (window, level, {term: E}) after each level
     seconds: dict = field(default_factory=dict)    # stage -> seconds
 
@@ -74,7 +75,9 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
         albedo and shading for the first ``k`` frames, solved by the previous
         window; they are held fixed and carry albedo forward (their albedo is
         ``I - S`` of the same frames, so ``S`` alone is used).
-    log : :class:`SolveLog` collecting energies and timings.
+    log : :class:`SolveLog` collecting energies and timings, and per level
+        (``log.levels``) why each L-BFGS run stopped and whether all of them
+        converged (stopped on the tolerance, not on the iteration budget).
     progress : optional callable ``progress(n_done_levels)``.
 
     Returns
@@ -131,6 +134,7 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
         problem.sync_albedo()
         lbfgs = LBFGS(be, energy.n, memory=int(params.lbfgs_memory))
         iterations = int(params.lbfgs_iterations if level == 0 else params.lbfgs_iterations_coarse)
+        reasons = []
         for outer in range(int(params.outer_iterations)):
             tm = time.perf_counter()
             energy.update_coupling()
@@ -141,7 +145,11 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
                 log.energy.append((window_index, level, outer, k, e))
 
             lbfgs.minimize(problem, problem.X, problem.G, iterations, on_iteration=record)
+            reasons.append(lbfgs.stop_reason)
         problem.sync_albedo()
+        log.levels.append({"window": window_index, "level": level, "shape": tuple(shape),
+                           "stop_reasons": reasons,
+                           "converged": all(r != "budget" for r in reasons)})
         log.terms.append((window_index, level, energy.term_energies()))
         log.add_time("solve", time.perf_counter() - t)
         if progress is not None:
