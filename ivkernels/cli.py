@@ -11,16 +11,18 @@ Writes into ``OUT``::
     preview.mp4           input | albedo | shading | flow, side by side
     contact_sheet.png     a few frames of each, labelled
 
-Everything is written into ``OUT.partial`` and renamed to ``OUT`` only when
-complete, so a failed run never leaves output that looks finished.
+Everything is written into ``OUT.<pid>.partial`` and renamed to ``OUT`` only
+when complete, so a failed run never leaves output that looks finished; the
+partial folder is removed on failure, SIGINT, SIGTERM and SIGHUP, and one left
+by a killed run is removed by the next.  OUT must not be, or hold, the input,
+a flow folder or the current folder; an existing OUT is replaced only with
+``--force``, and only if ivkernels wrote it (see :class:`ivkernels.io.OutputFolder`).
+Every foreseeable failure prints one line and exits with status 2.
 """
 from __future__ import annotations
 
 import argparse
-import os
-import shutil
 import sys
-import tempfile
 import zipfile
 from pathlib import Path
 
@@ -57,8 +59,6 @@ def _read_flo_folder(folder: Path, n_pairs: int, start: int, step: int) -> np.nd
     from ivkernels.flowio import read_flo
 
     files = sorted(folder.glob("*.flo"))
-    if step != 1:
-        raise ValueError("--flow with a folder of .flo files needs --step 1")
     files = files[start:start + n_pairs]
     if len(files) != n_pairs:
         raise ValueError(f"{folder} holds {len(files)} .flo files from frame {start}; "
@@ -87,29 +87,85 @@ class _NpzWriter:
             npy.unlink()
 
 
-def run_decompose(args) -> Path:
-    import imageio.v2 as imageio
+#: Everything :func:`run_decompose` writes into OUT (besides the marker file).
+OUTPUT_CONTENTS = ("albedo", "shading", "flow", "occlusion", "boundary", "intrinsics.npz",
+                   "preview.mp4", "contact_sheet.png")
 
-    from ivkernels import Params, iter_decompose
-    from ivkernels.io import read_frames, write_png_sequence
-    from ivkernels.viz import albedo_to_srgb8, contact_sheet, flow_to_color, gray_to_rgb8, \
-        shading_to_srgb8
+
+def _check_arguments(args):
+    """Everything that can be checked from the command line alone, before any work.
+
+    Returns ``(params, flow_folder)``.
+    """
+    import math
+
+    from ivkernels import Params
+    from ivkernels.flow import FLOW_METHODS
+    from ivkernels.validation import check_backend_device
 
     src = Path(args.input)
     if not src.exists():
         raise ValueError(f"input {src} does not exist; expected a video file or a folder of images")
-    out = Path(args.out)
-    if out.exists() and not args.force:
-        raise ValueError(f"output {out} already exists; choose another folder or pass --force")
+    if not math.isfinite(args.fps) or not 0 < args.fps <= 1000:
+        raise ValueError(f"--fps must be a frame rate in (0, 1000], got {args.fps}")
+    if not math.isfinite(args.scale) or not 0 < args.scale <= 16:
+        raise ValueError(f"--scale must be a factor in (0, 16], got {args.scale}")
+    if args.start < 0:
+        raise ValueError(f"--start must be >= 0, got {args.start}")
+    if args.step < 1:
+        raise ValueError(f"--step must be >= 1, got {args.step}")
+    if args.stop is not None and args.stop <= args.start:
+        raise ValueError(f"--stop ({args.stop}) must be greater than --start ({args.start})")
+    params = Params()
+    if args.window is not None:
+        if args.window < 2:
+            raise ValueError(f"--window must be at least 2 frames, got {args.window}")
+        params = params.replace(window=args.window, overlap=min(params.overlap, args.window - 1))
+    check_backend_device(args.backend, args.device)
+    flow_folder = None
+    if args.flow is not None and args.flow not in FLOW_METHODS:
+        if not Path(args.flow).is_dir():
+            raise ValueError(f"unknown flow method {args.flow!r} (and no such folder); --flow must be "
+                             f"one of {', '.join(FLOW_METHODS)} or a folder of .flo files")
+        flow_folder = Path(args.flow)
+        if args.step != 1:
+            raise ValueError("--flow with a folder of .flo files needs --step 1")
+    return params, flow_folder
+
+
+def run_decompose(args, notes: list | None = None) -> Path:
+    """``ivkernels decompose``: check everything, then write OUT through an
+    :class:`ivkernels.io.OutputFolder`.  ``notes`` collects messages for the user."""
+    import imageio.v2 as imageio
+
+    from ivkernels import iter_decompose
+    from ivkernels.io import OutputFolder, probe_frames, read_frames, write_png_sequence
+    from ivkernels.validation import check_memory, decompose_nbytes
+    from ivkernels.viz import albedo_to_srgb8, contact_sheet, flow_to_color, gray_to_rgb8, \
+        shading_to_srgb8
+
+    params, flow_folder = _check_arguments(args)
+    src = Path(args.input)
+    target = OutputFolder(args.out, force=args.force, protect={"input": src, "flow folder": flow_folder},
+                          contents=OUTPUT_CONTENTS)
+    target.check()
+    if notes is not None:
+        notes.extend(target.notes)
+    T, H, W = probe_frames(src, start=args.start, stop=args.stop, step=args.step, scale=args.scale)
+    check_memory(T * H * W * 3 * 4 + decompose_nbytes(T, H, W, params.window, keep_outputs=False),
+                 f"decomposing {T} frames of {W}x{H}",
+                 hint="select fewer frames (--start/--stop/--step), shrink them (--scale) or "
+                      "solve shorter windows (--window)")
     frames = read_frames(src, start=args.start, stop=args.stop, step=args.step, scale=args.scale)
     T, H, W, _ = frames.shape
     flow = args.flow
-    if flow is not None and Path(flow).is_dir():
-        flow = _read_flo_folder(Path(flow), T - 1, args.start, args.step)
-    params = Params() if args.window is None else Params(window=args.window)
+    if flow_folder is not None:
+        flow = _read_flo_folder(flow_folder, T - 1, args.start, args.step)
+    # validates frames, flow, params, backend and device now, before the output is opened
+    windows = iter_decompose(frames, flow=flow, temporal=not args.no_temporal, backend=args.backend,
+                             device=args.device, params=params, progress=not args.quiet)
 
-    tmp = Path(tempfile.mkdtemp(prefix=out.name + ".", suffix=".partial", dir=out.parent.resolve()))
-    try:
+    with target as tmp:
         shapes = {"albedo": (T, H, W, 3), "shading": (T, H, W)}
         if T > 1 and not (args.no_temporal and flow is None):
             shapes.update(flow=(T - 1, H, W, 2), occlusion=(T - 1, H, W), boundary=(T - 1, H, W))
@@ -119,9 +175,7 @@ def run_decompose(args) -> Path:
         sheet_rows = {"input": [], "albedo": [], "shading": [], "flow": []}
         sheet_frames = set(np.linspace(0, T - 1, min(T, 4)).round().astype(int).tolist())
         flow_max = None
-        for res in iter_decompose(frames, flow=flow, temporal=not args.no_temporal,
-                                  backend=args.backend, device=args.device, params=params,
-                                  progress=not args.quiet):
+        for res in windows:
             new = slice(res.n_carried, res.stop - res.start)       # frames not written yet
             first = res.start + res.n_carried
             albedo8 = albedo_to_srgb8(res.albedo[new])
@@ -164,23 +218,41 @@ def run_decompose(args) -> Path:
         npz.close(tmp / "intrinsics.npz")
         rows = [(name, np.stack(images)) for name, images in sheet_rows.items() if images]
         imageio.imwrite(tmp / "contact_sheet.png", contact_sheet(rows))
-        if out.exists():
-            shutil.rmtree(out)
-        os.replace(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    return out
+        return target.commit()
+
+
+def _one_line(err: BaseException) -> str:
+    return " ".join(str(err).split()) or type(err).__name__
 
 
 def main(argv=None) -> int:
+    """Run the command line; returns the exit status.
+
+    0 on success; 2 with a one-line message for every foreseeable failure (bad
+    arguments or input, an output that must not be replaced, no CUDA device,
+    not enough memory, a file that cannot be read or written); 130 on SIGINT
+    and 128 + N on signal N (SIGTERM, SIGHUP), with the partial output removed.
+    """
+    from ivkernels.io import Interrupted
+
     args = _parser().parse_args(argv)
+    notes: list = []
     try:
         if args.command == "decompose":
-            out = run_decompose(args)
+            out = run_decompose(args, notes)
+            for note in notes:
+                print(f"ivkernels: {note}", file=sys.stderr)
             print(f"wrote {out}")
-    except (ValueError, TypeError, FileNotFoundError, OSError) as err:
-        print(f"ivkernels: error: {err}", file=sys.stderr)
+    except Interrupted as err:
+        print(f"ivkernels: {err}; partial output removed", file=sys.stderr)
+        return 128 + err.signum
+    except KeyboardInterrupt:
+        print("ivkernels: interrupted; partial output removed", file=sys.stderr)
+        return 130
+    except (ValueError, TypeError, OSError, MemoryError) as err:
+        for note in notes:
+            print(f"ivkernels: {note}", file=sys.stderr)
+        print(f"ivkernels: error: {_one_line(err)}", file=sys.stderr)
         return 2
     return 0
 

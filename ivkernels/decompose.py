@@ -91,15 +91,10 @@ def window_ranges(n_frames: int, window: int, overlap: int) -> list[tuple[int, i
 
 
 def _as_flow(flow, n_frames: int, height: int, width: int) -> np.ndarray:
-    flow = np.asarray(flow)
-    expected = (n_frames - 1, height, width, 2)
-    if flow.shape != expected:
-        raise ValueError(f"flow must have shape (T-1, H, W, 2) = {expected}, got {flow.shape}")
-    if not np.issubdtype(flow.dtype, np.floating):
-        raise TypeError(f"flow must be a float array, got dtype {flow.dtype}")
-    if not np.isfinite(flow).all():
-        raise ValueError("flow contains NaN or infinite values")
-    return np.ascontiguousarray(flow, dtype=np.float32)
+    """A user flow (T-1, H, W, 2) as float32, checked by :func:`ivkernels.validation.check_flow`."""
+    from ivkernels.validation import check_flow
+
+    return check_flow(flow, n_frames, height, width)
 
 
 def iter_decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
@@ -110,50 +105,66 @@ def iter_decompose(frames, flow=None, temporal: bool = True, backend: str = "war
     Yields :class:`WindowResult` objects in order; memory stays bounded by one
     window whatever the length of the video (the command line writes each
     window to disk as it arrives).  Use :func:`decompose` for diagnostics.
+    Every argument is checked when this function is called, before it
+    returns the iterator: bad input raises here, not at the first ``next()``.
     """
-    yield from _Decomposer(frames, flow, temporal, backend, device, params, progress).windows()
+    return _Decomposer(frames, flow, temporal, backend, device, params, progress,
+                       keep_outputs=False).windows()
 
 
 class _Decomposer:
     """Host-side schedule of a decomposition: flow, maps, then the window solves."""
 
-    def __init__(self, frames, flow, temporal, backend, device, params, progress):
-        from ivkernels.backends import get_backend
-        from ivkernels.io import to_linear_float
-        from ivkernels.priors import load_albedo_prior
-        from ivkernels.solver.window_solver import SolveLog
+    def __init__(self, frames, flow, temporal, backend, device, params, progress, *,
+                 keep_outputs: bool = True):
+        from ivkernels import validation as v
 
-        self.frames = to_linear_float(frames)
-        T, H, W, _ = self.frames.shape
-        if T < 1:
-            raise ValueError("frames must hold at least one frame")
-        if min(H, W) < 8:
-            raise ValueError(f"frames must be at least 8x8 pixels, got {H}x{W}")
+        # cheap checks first, then shapes, then memory, and only then values and allocations
         if params is None:
             params = Params()
         if not isinstance(params, Params):
             raise TypeError(f"params must be an ivkernels.Params, got {type(params).__name__}")
-        if not isinstance(temporal, bool):
+        if not isinstance(temporal, (bool, np.bool_)):
             raise TypeError(f"temporal must be True or False, got {temporal!r}")
+        v.check_backend_device(backend, device)
+        if isinstance(flow, str):
+            from ivkernels.flow import FLOW_METHODS
+
+            if flow not in FLOW_METHODS:
+                raise ValueError(f"unknown flow method {flow!r}; expected one of {FLOW_METHODS}")
+        checked = v.check_frames(frames, min_size=v.MIN_FRAME_SIZE, what="decompose")
+        T, H, W = checked.shape
+        levels = v.pyramid_levels(H, W, params.pyramid_scale, params.pyramid_min_size)
+        if levels > v.MAX_PYRAMID_LEVELS:
+            raise ValueError(f"Params.pyramid_scale={params.pyramid_scale} and pyramid_min_size="
+                             f"{params.pyramid_min_size} give more than {v.MAX_PYRAMID_LEVELS} pyramid "
+                             f"levels on {W}x{H} frames; use a smaller pyramid_scale or a larger "
+                             "pyramid_min_size")
+        v.check_memory(v.decompose_nbytes(T, H, W, int(params.window), keep_outputs=keep_outputs),
+                       f"decomposing {T} frames of {W}x{H}",
+                       hint="use fewer or smaller frames, or iter_decompose and a smaller "
+                            "Params.window")
+        given_flow = None
+        if flow is not None and not isinstance(flow, str):
+            given_flow = _as_flow(flow, T, H, W)
+
+        from ivkernels.backends import get_backend
+        from ivkernels.priors import load_albedo_prior
+        from ivkernels.solver.window_solver import SolveLog
+
+        self.frames = v.linear_frames(checked)
         self.params = params
-        self.temporal = temporal
+        self.temporal = bool(temporal)
         self.be = get_backend(backend, device)
         self.prior = load_albedo_prior()
         self.progress = progress
         self.log = SolveLog()
         self.flow_method = None
-        self.flow = None
+        self.flow = given_flow
         if isinstance(flow, str):
             self.flow_method = flow
         elif flow is None:
-            self.flow_method = DEFAULT_FLOW_METHOD if temporal else None
-        else:
-            self.flow = _as_flow(flow, T, H, W)
-        if self.flow_method is not None:
-            from ivkernels.flow import FLOW_METHODS
-
-            if self.flow_method not in FLOW_METHODS:
-                raise ValueError(f"unknown flow method {self.flow_method!r}; expected one of {FLOW_METHODS}")
+            self.flow_method = DEFAULT_FLOW_METHOD if self.temporal else None
         self.scale = None
 
     def _flow_for(self, start: int, stop: int, cached: dict) -> np.ndarray | None:

@@ -16,8 +16,12 @@ stacked as ``(T, H, W, 3)``.  This module is the border: it decodes sRGB
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import re
+import shutil
+import signal
+import socket
 import tempfile
 from functools import lru_cache
 from pathlib import Path
@@ -40,6 +44,11 @@ __all__ = [
     "write_npz",
     "write_video",
     "atomic_output",
+    "probe_frames",
+    "srgb_decode_table",
+    "current_umask",
+    "OutputFolder",
+    "OUTPUT_MARKER",
 ]
 
 
@@ -88,7 +97,7 @@ def linear_to_srgb(x) -> np.ndarray:
 
 
 @lru_cache(maxsize=2)
-def _decode_table(levels: int) -> np.ndarray:
+def srgb_decode_table(levels: int) -> np.ndarray:
     """float32 look-up table: integer sRGB code ``0 .. levels-1`` -> linear."""
     codes = np.arange(levels, dtype=np.float64) / (levels - 1)
     table = srgb_to_linear(codes).astype(np.float32)
@@ -98,18 +107,21 @@ def _decode_table(levels: int) -> np.ndarray:
 
 def _srgb_int_to_linear(img: np.ndarray) -> np.ndarray:
     if img.dtype == np.uint8:
-        return _decode_table(256)[img]
+        return srgb_decode_table(256)[img]
     if img.dtype == np.uint16:
-        return _decode_table(65536)[img]
+        return srgb_decode_table(65536)[img]
     raise TypeError(f"expected uint8 or uint16 sRGB values, got dtype {img.dtype}")
 
 
 def to_linear_float(frames, name: str = "frames") -> np.ndarray:
     """Validate a user frame stack and return float32 linear RGB.
 
+    The rules are those of :mod:`ivkernels.validation`, shared with
+    :func:`ivkernels.decompose` and :func:`ivkernels.estimate_flow`.
+
     Parameters
     ----------
-    frames : array ``(T, H, W, 3)``
+    frames : array ``(T, H, W, 3)``, or a list of ``(H, W, 3)`` frames
         * ``uint8``  : sRGB-encoded, 0..255;
         * ``uint16`` : sRGB-encoded, 0..65535;
         * ``float32`` / ``float64`` : already *linear* RGB in ``[0, 1]``
@@ -125,38 +137,12 @@ def to_linear_float(frames, name: str = "frames") -> np.ndarray:
     ------
     TypeError  for other dtypes (bool, signed ints, float16, object, ...).
     ValueError for a wrong number of dimensions or channels, empty stacks,
-               non-finite or out-of-range floats.
+               frames of different sizes in a list, non-finite or
+               out-of-range floats.
     """
-    if isinstance(frames, (list, tuple)):
-        frames = np.stack([np.asarray(f) for f in frames]) if len(frames) else np.empty((0,))
-    frames = np.asarray(frames)
-    if frames.dtype not in (np.uint8, np.uint16, np.float32, np.float64):
-        raise TypeError(
-            f"{name}: unsupported dtype {frames.dtype}; expected uint8 or uint16 sRGB, "
-            "or float32/float64 linear RGB in [0, 1]"
-        )
-    if frames.ndim != 4:
-        hint = " (for a single image pass image[None])" if frames.ndim == 3 else ""
-        raise ValueError(f"{name}: expected shape (T, H, W, 3), got {frames.shape}{hint}")
-    if frames.shape[-1] != 3:
-        raise ValueError(
-            f"{name}: expected 3 colour channels (RGB) in the last axis, got shape {frames.shape}"
-        )
-    if min(frames.shape[:3]) == 0:
-        raise ValueError(f"{name}: empty frame stack, shape {frames.shape}")
-    if frames.dtype in (np.uint8, np.uint16):
-        return np.ascontiguousarray(_srgb_int_to_linear(frames))
-    if not np.all(np.isfinite(frames)):
-        raise ValueError(f"{name}: contains NaN or infinite values")
-    lo, hi = float(frames.min()), float(frames.max())
-    tol = 1e-6
-    if lo < -tol or hi > 1.0 + tol:
-        raise ValueError(
-            f"{name}: float input must be linear RGB in [0, 1], got values in [{lo:.6g}, {hi:.6g}]"
-            " (pass uint8/uint16 for sRGB-encoded images)"
-        )
-    out = np.clip(frames, 0.0, 1.0).astype(np.float32)
-    return np.ascontiguousarray(out)
+    from ivkernels.validation import check_frames, linear_frames
+
+    return linear_frames(check_frames(frames, name, single_frame=False))
 
 
 # ----------------------------------------------------------------------------
@@ -239,17 +225,104 @@ def _resize(frame: np.ndarray, scale: float) -> np.ndarray:
     return cv2.resize(frame, size, interpolation=interp)
 
 
-def _iter_video(path: Path):
-    import imageio.v3 as iio
+def _video_error(path: Path, err: BaseException) -> ValueError:
+    lines = [ln.strip() for ln in str(err).splitlines() if ln.strip() and not ln.startswith("=")]
+    detail = lines[0] if lines else type(err).__name__
+    if len(lines) > 1:
+        detail += f" ({lines[-1]})"
+    return ValueError(f"could not read video file {path}: {detail}")
 
+
+def _open_video(path: Path):
+    """``(meta, generator of (H, W, 3) uint8 frames)`` of a video, through imageio-ffmpeg."""
+    import imageio_ffmpeg
+
+    gen = imageio_ffmpeg.read_frames(str(path), pix_fmt="rgb24")
     try:
-        yield from iio.imiter(str(path), plugin="FFMPEG")
-    except (OSError, RuntimeError, ValueError) as err:
-        lines = [ln.strip() for ln in str(err).splitlines() if ln.strip()]
-        detail = lines[0] if lines else type(err).__name__
-        if len(lines) > 1:
-            detail += f" ({lines[-1]})"
-        raise ValueError(f"could not read video file {path}: {detail}") from err
+        meta = next(gen)
+    except (OSError, RuntimeError, ValueError, StopIteration) as err:
+        gen.close()
+        raise _video_error(path, err) from err
+    w, h = meta["size"]
+
+    def frames():
+        try:
+            for buf in gen:
+                yield np.frombuffer(buf, np.uint8).reshape(h, w, 3)
+        except (OSError, RuntimeError, ValueError) as err:
+            raise _video_error(path, err) from err
+        finally:
+            gen.close()
+
+    return meta, frames()
+
+
+def _announced_frames(meta: dict) -> int | None:
+    """Frame count a video's header announces (duration x frame rate), or None if unknown."""
+    duration, fps = meta.get("duration"), meta.get("fps")
+    try:
+        n = float(duration) * float(fps)
+    except (TypeError, ValueError):
+        return None
+    return int(round(n)) if np.isfinite(n) and n > 0 else None
+
+
+def _truncation_tolerance(announced: int) -> int:
+    """Frames a complete video may fall short of its header's count (rounding of the
+    duration, a variable frame rate)."""
+    return max(2, int(np.ceil(0.05 * announced)))
+
+
+def _scaled_size(h: int, w: int, scale: float) -> tuple[int, int]:
+    if scale == 1.0:
+        return h, w
+    return max(1, int(round(h * scale))), max(1, int(round(w * scale)))
+
+
+def _check_scale(scale) -> float:
+    if isinstance(scale, bool) or not isinstance(scale, (int, float, np.integer, np.floating)):
+        raise TypeError(f"scale must be a positive number, got {scale!r}")
+    scale = float(scale)
+    if not np.isfinite(scale) or scale <= 0:
+        raise ValueError(f"scale must be a positive number, got {scale}")
+    return scale
+
+
+def probe_frames(path, start: int = 0, stop: int | None = None, step: int = 1,
+                 scale: float = 1.0) -> tuple[int, int, int]:
+    """``(T, H, W)`` that :func:`read_frames` with these arguments would return,
+    read from a video's header or a folder's file list and first image, without
+    decoding the frames.  For a video, ``T`` is the header's estimate.
+    """
+    _check_range(start, stop, step)
+    scale = _check_scale(scale)
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"no such file or folder: {path}")
+    if path.is_dir():
+        files = list_image_files(path)
+        if not files:
+            raise ValueError(f"folder {path} holds no images ({', '.join(IMAGE_EXTENSIONS)})")
+        chosen = files[start:stop:step]
+        if not chosen:
+            raise ValueError(f"no frames selected from {path} with start={start}, stop={stop}, "
+                             f"step={step} ({len(files)} images)")
+        h, w = _image_size(chosen[0])
+        return (len(chosen), *_scaled_size(h, w, scale))
+    if path.suffix.lower() in IMAGE_EXTENSIONS:
+        h, w = _image_size(path)
+        return (1 if start == 0 else 0, *_scaled_size(h, w, scale))
+    meta, frames = _open_video(path)
+    frames.close()
+    w, h = meta["size"]
+    announced = _announced_frames(meta)
+    n = len(range(start, announced if stop is None else min(stop, announced), step)) \
+        if announced is not None else 1
+    return (n, *_scaled_size(h, w, scale))
+
+
+def _image_size(path: Path) -> tuple[int, int]:
+    return read_image(path).shape[:2]
 
 
 def read_frames(path, start: int = 0, stop: int | None = None, step: int = 1,
@@ -275,45 +348,76 @@ def read_frames(path, start: int = 0, stop: int | None = None, step: int = 1,
     Raises
     ------
     FileNotFoundError if ``path`` does not exist; ValueError if no frame is
-    selected, a folder holds no images, or images differ in size.
+    selected, a folder holds no images, images differ in size, a video ends
+    well before the frame count its header announces (a truncated or damaged
+    file), or the frames would not fit in the memory available (checked from
+    the file list or the video header before decoding; the message gives the
+    size).
     """
+    from ivkernels.validation import check_memory
+
     _check_range(start, stop, step)
-    scale = float(scale)
-    if not np.isfinite(scale) or scale <= 0:
-        raise ValueError(f"scale must be a positive number, got {scale}")
+    scale = _check_scale(scale)
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"no such file or folder: {path}")
 
-    frames = []
-    if path.is_dir():
-        files = list_image_files(path)
-        if not files:
-            raise ValueError(f"folder {path} holds no images ({', '.join(IMAGE_EXTENSIONS)})")
-        chosen = files[start:stop:step]
-        first_shape = None
-        for f in chosen:
+    if path.is_dir() or path.suffix.lower() in IMAGE_EXTENSIONS:
+        if path.is_dir():
+            files = list_image_files(path)
+            if not files:
+                raise ValueError(f"folder {path} holds no images ({', '.join(IMAGE_EXTENSIONS)})")
+            chosen = files[start:stop:step]
+        else:
+            chosen = [path] if start == 0 else []
+        if not chosen:
+            raise ValueError(f"no frames selected from {path} with start={start}, stop={stop}, step={step}")
+        out = None
+        first = None
+        for t, f in enumerate(chosen):
             img = read_image(f)
-            if first_shape is None:
-                first_shape = (img.shape, f)
-            elif img.shape != first_shape[0]:
+            if first is None:
+                first = (img.shape, f)
+                h, w = _scaled_size(*img.shape[:2], scale)
+                check_memory(len(chosen) * h * w * 3 * 4,
+                             f"reading {len(chosen)} frames of {w}x{h} from {path}")
+                out = np.empty((len(chosen), h, w, 3), np.float32)
+            elif img.shape != first[0]:
                 raise ValueError(
-                    f"all images must share one size: {first_shape[1].name} is "
-                    f"{first_shape[0][1]}x{first_shape[0][0]} but {f.name} is {img.shape[1]}x{img.shape[0]}"
+                    f"all images must share one size: {first[1].name} is "
+                    f"{first[0][1]}x{first[0][0]} but {f.name} is {img.shape[1]}x{img.shape[0]}"
                 )
-            frames.append(_resize(img, scale))
-    elif path.suffix.lower() in IMAGE_EXTENSIONS:
-        if start == 0:
-            frames.append(_resize(read_image(path), scale))
-    else:
-        for i, rgb in enumerate(_iter_video(path)):
+            out[t] = _resize(img, scale)
+        return out
+
+    meta, decoded = _open_video(path)
+    announced = _announced_frames(meta)
+    w, h = meta["size"]
+    hs, ws = _scaled_size(h, w, scale)
+    if announced is not None:
+        wanted = len(range(start, announced if stop is None else min(stop, announced), step))
+        # the frames are collected, then stacked: twice their size at the peak
+        check_memory(2 * wanted * hs * ws * 3 * 4,
+                     f"reading about {wanted} frames of {ws}x{hs} from {path}")
+    frames = []
+    n_decoded = 0
+    ended = True
+    try:
+        for i, rgb in enumerate(decoded):
+            n_decoded = i + 1
             if stop is not None and i >= stop:
+                ended = False
                 break
             if i >= start and (i - start) % step == 0:
-                rgb = np.asarray(rgb)
-                if rgb.ndim == 2:
-                    rgb = np.repeat(rgb[:, :, None], 3, axis=2)
-                frames.append(_resize(_srgb_int_to_linear(rgb[:, :, :3]), scale))
+                frames.append(_resize(_srgb_int_to_linear(rgb), scale))
+    finally:
+        decoded.close()
+    if ended and announced is not None and n_decoded < announced - _truncation_tolerance(announced) \
+            and (stop is None or n_decoded < stop):
+        raise ValueError(
+            f"video file {path} ends after {n_decoded} frames but its header announces about "
+            f"{announced} ({meta.get('duration')} s at {meta.get('fps')} fps); the file looks "
+            "truncated or damaged (pass --stop / stop= to read only the frames before the damage)")
     if not frames:
         raise ValueError(f"no frames selected from {path} with start={start}, stop={stop}, step={step}")
     return np.ascontiguousarray(np.stack(frames).astype(np.float32, copy=False))
@@ -338,6 +442,7 @@ def atomic_output(path):
     tmp = Path(tmp)
     try:
         yield tmp
+        os.chmod(tmp, 0o666 & ~current_umask())     # mkstemp makes 0600; give the usual mode
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(OSError):
@@ -483,3 +588,248 @@ def write_video(path, frames_srgb_uint8, fps: float = 10) -> Path:
         finally:
             writer.close()
     return path
+
+
+def current_umask() -> int:
+    """The process's file-mode creation mask (read without changing it where Linux allows)."""
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+# ----------------------------------------------------------------------------
+# Output folders: written under a temporary name, never replacing what the user owns
+# ----------------------------------------------------------------------------
+
+#: File that marks a folder as written by ivkernels (``--force`` replaces only these).
+OUTPUT_MARKER = ".ivkernels-output"
+_PARTIAL = re.compile(r"^(?P<name>.+)\.(?P<pid>\d+)(?:\.old)?\.partial$")
+
+
+class Interrupted(BaseException):
+    """Raised in the main thread when the process receives SIGTERM or SIGHUP while an
+    :class:`OutputFolder` is open (SIGINT raises :class:`KeyboardInterrupt`)."""
+
+    def __init__(self, signum: int):
+        super().__init__(f"interrupted by {signal.Signals(signum).name}")
+        self.signum = signum
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:         # it exists, under another user
+        return True
+    except (OverflowError, OSError):
+        return False
+    return True
+
+
+def _is_within(path: Path, folder: Path) -> bool:
+    """``path`` is ``folder`` or lies inside it (both resolved)."""
+    return path == folder or folder in path.parents
+
+
+class OutputFolder:
+    """The one writer of a command-line output folder.
+
+    >>> target = OutputFolder("out", force=False, protect={"input": "frames/"})   # doctest: +SKIP
+    >>> target.check()                 # before any work: refuses what must not be replaced
+    >>> with target as tmp:            # ``out.<pid>.partial``, marked, removed on failure
+    ...     write_everything(tmp)
+    ...     target.commit()            # renamed to ``out``
+
+    Rules:
+
+    * ``out`` must not be, or hold, any path in ``protect`` (the input, a flow
+      folder) nor the current folder, resolved through symbolic links;
+    * ``out`` must not be a file or a symbolic link;
+    * an existing ``out`` is replaced only with ``force``, and only if it is
+      empty, or holds the :data:`OUTPUT_MARKER` ivkernels writes and nothing
+      but the names in ``contents``;
+    * the partial folder ``<out>.<pid>.partial`` (the pid of the writing
+      process) carries the marker from the start; it is removed on any
+      exception, on SIGINT and, while the folder is open, on SIGTERM and
+      SIGHUP (raised as :class:`Interrupted`); one left by a process that no
+      longer runs (killed with SIGKILL, power lost) is removed by the next
+      :meth:`check` and named in :attr:`notes`;
+    * folders and files get the modes the umask gives (0755 / 0644 under the
+      usual 0022), not the 0700 / 0600 of temporary files.
+    """
+
+    def __init__(self, out, *, force: bool = False, protect: dict | None = None,
+                 contents: tuple = ()):
+        self.out = Path(out)
+        self.force = bool(force)
+        self.protect = {k: Path(v) for k, v in (protect or {}).items() if v is not None}
+        self.contents = frozenset(contents) | {OUTPUT_MARKER}
+        self.notes: list[str] = []
+        self.partial: Path | None = None
+        self._old_handlers: dict = {}
+        self._committed = False
+
+    # -- checks ----------------------------------------------------------------
+    def check(self) -> None:
+        """Refuse an output that must not be written (ValueError), and remove
+        stale partial folders of this output left by processes that are gone."""
+        out = self.out
+        if str(out) in ("", "."):
+            raise ValueError("output folder must be named (not '.')")
+        if out.is_symlink():
+            raise ValueError(f"output {out} is a symbolic link; give the folder itself")
+        target = out.resolve()
+        guarded = dict(self.protect)
+        guarded["current folder"] = Path.cwd()
+        for what, path in guarded.items():
+            if _is_within(path.resolve(), target):
+                same = path.resolve() == target
+                raise ValueError(f"output {out} {'is' if same else 'holds'} the {what} {path}; "
+                                 "choose another output folder")
+        if not target.parent.is_dir():
+            raise ValueError(f"the folder that would hold output {out}, {out.parent}, does not exist")
+        if out.exists():
+            if not out.is_dir():
+                raise ValueError(f"output {out} exists and is not a folder; choose another name")
+            if not self.force:
+                raise ValueError(f"output {out} already exists; choose another folder or pass --force "
+                                 "(which replaces only a folder written by ivkernels)")
+            self._check_replaceable(out)
+        self._clean_stale()
+
+    def _check_replaceable(self, folder: Path) -> None:
+        names = sorted(p.name for p in folder.iterdir())
+        if not names:
+            return
+        if OUTPUT_MARKER not in names:
+            raise ValueError(f"output {folder} exists and was not written by ivkernels (it has no "
+                             f"{OUTPUT_MARKER} file); --force replaces only ivkernels output, so "
+                             "choose another folder or remove it yourself")
+        foreign = [n for n in names if n not in self.contents]
+        if foreign:
+            raise ValueError(f"output {folder} holds {foreign[0]!r}"
+                             f"{f' and {len(foreign) - 1} more' if len(foreign) > 1 else ''}, which "
+                             "ivkernels did not write; --force will not delete it, so move it or "
+                             "choose another folder")
+
+    def _clean_stale(self) -> None:
+        for p in sorted(self.out.resolve().parent.glob(f"{glob_escape(self.out.name)}.*.partial")):
+            m = _PARTIAL.match(p.name)
+            if not m or m.group("name") != self.out.name or not p.is_dir() or p.is_symlink():
+                continue
+            if not (p / OUTPUT_MARKER).is_file():
+                self.notes.append(f"{p} was not written by this version of ivkernels; "
+                                  "left in place, remove it by hand")
+                continue
+            pid = int(m.group("pid"))
+            info = _read_marker(p)
+            if info.get("host", socket.gethostname()) == socket.gethostname() and _pid_alive(pid):
+                if pid == os.getpid():
+                    continue
+                raise ValueError(f"another ivkernels run (pid {pid}) is writing {self.out} "
+                                 f"(into {p}); wait for it or stop it first")
+            shutil.rmtree(p, ignore_errors=True)
+            self.notes.append(f"removed {p}, the partial output of an earlier run "
+                              f"(pid {pid}) that did not finish")
+
+    # -- writing ---------------------------------------------------------------
+    def __enter__(self) -> Path:
+        if self.partial is not None:
+            raise RuntimeError("OutputFolder is already open")
+        self._install_handlers()
+        try:
+            self.partial = self.out.resolve().parent / f"{self.out.name}.{os.getpid()}.partial"
+            if self.partial.exists():
+                shutil.rmtree(self.partial)
+            os.mkdir(self.partial)        # mode 0777 & ~umask
+            _write_marker(self.partial)
+        except BaseException:
+            self._cleanup()
+            raise
+        return self.partial
+
+    def commit(self) -> Path:
+        """Move the partial folder to the output name (replacing a checked old output)."""
+        out = self.out
+        old = None
+        if out.exists() or out.is_symlink():
+            # checked again: the folder may have changed since check()
+            if out.is_symlink() or not out.is_dir():
+                raise ValueError(f"output {out} changed while writing and is no longer a folder")
+            self._check_replaceable(out)
+            old = out.resolve().parent / f"{out.name}.{os.getpid()}.old.partial"
+            os.replace(out, old)
+        try:
+            os.replace(self.partial, out)
+        except BaseException:
+            if old is not None:
+                os.replace(old, out)
+            raise
+        self._committed = True
+        self.partial = None
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+        return out
+
+    def __exit__(self, exc_type, exc, tb) -> bool:
+        self._cleanup()
+        return False
+
+    def _cleanup(self) -> None:
+        # a second signal must not interrupt the removal
+        for signum in self._old_handlers:
+            with contextlib.suppress(ValueError, OSError):
+                signal.signal(signum, signal.SIG_IGN)
+        try:
+            if self.partial is not None:
+                shutil.rmtree(self.partial, ignore_errors=True)
+                self.partial = None
+        finally:
+            self._restore_handlers()
+
+    def _install_handlers(self) -> None:
+        def handler(signum, frame):
+            raise Interrupted(signum)
+
+        for signum in (signal.SIGTERM, getattr(signal, "SIGHUP", None)):
+            if signum is None:
+                continue
+            try:
+                self._old_handlers[signum] = signal.signal(signum, handler)
+            except ValueError:          # not the main thread: signals stay as they were
+                break
+
+    def _restore_handlers(self) -> None:
+        for signum, old in self._old_handlers.items():
+            with contextlib.suppress(ValueError, OSError, TypeError):
+                signal.signal(signum, old if old is not None else signal.SIG_DFL)
+        self._old_handlers.clear()
+
+
+def glob_escape(name: str) -> str:
+    """``name`` with the glob metacharacters ``* ? [`` escaped."""
+    return re.sub(r"([*?\[])", r"[\1]", name)
+
+
+def _write_marker(folder: Path) -> None:
+    from ivkernels import __version__
+
+    info = {"written_by": "ivkernels", "version": __version__, "pid": os.getpid(),
+            "host": socket.gethostname()}
+    (folder / OUTPUT_MARKER).write_text(json.dumps(info) + "\n")
+
+
+def _read_marker(folder: Path) -> dict:
+    try:
+        info = json.loads((folder / OUTPUT_MARKER).read_text())
+        return info if isinstance(info, dict) else {}
+    except (OSError, ValueError):
+        return {}

@@ -8,6 +8,8 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
+from ivkernels.validation import MIN_FRAME_SIZE, Range
+
 
 @dataclass(frozen=True)
 class Params:
@@ -132,23 +134,14 @@ class Params:
     overlap: int = 2
 
     def __post_init__(self):
-        for f in dataclasses.fields(self):
-            v = getattr(self, f.name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise TypeError(f"Params.{f.name} must be a number, got {v!r}")
-            if v < 0:
-                raise ValueError(f"Params.{f.name} must be >= 0, got {v!r}")
-        if not 0.0 < self.pyramid_scale < 1.0:
-            raise ValueError(f"Params.pyramid_scale must lie in (0, 1), got {self.pyramid_scale}")
-        if self.window < 2:
-            raise ValueError(f"Params.window must be >= 2 frames, got {self.window}")
-        if not 0 <= self.overlap < self.window:
+        # Every field against its rule in _RULES (a new int / float field without a
+        # rule must be finite and >= 0), then the rules that tie fields together.
+        from ivkernels.validation import check_fields
+
+        check_fields(self, _RULES, "Params")
+        if not self.overlap < self.window:
             raise ValueError(
                 f"Params.overlap must satisfy 0 <= overlap < window ({self.window}), got {self.overlap}")
-        if self.tukey_alpha <= 0 or self.sigma_e <= 0 or self.sigma_d <= 0 or self.sigma_s <= 0:
-            raise ValueError("tukey_alpha, sigma_e, sigma_d and sigma_s must be > 0")
-        if self.lbfgs_memory < 1:
-            raise ValueError(f"Params.lbfgs_memory must be >= 1, got {self.lbfgs_memory}")
 
     def replace(self, **changes) -> "Params":
         """A copy with some fields changed (``dataclasses.replace``), validated."""
@@ -156,3 +149,32 @@ class Params:
         if unknown:
             raise TypeError(f"unknown parameter(s) {sorted(unknown)}; see help(ivkernels.Params)")
         return dataclasses.replace(self, **changes)
+
+
+#: Valid values of the fields of :class:`Params`, checked by ``Params.__post_init__``
+#: (fields not named here: finite and >= 0, integers for ``int`` fields).
+_RULES = {
+    "eps_data": Range(float, 0.0, low_open=True, why="the Charbonnier of Eq. 3 needs eps > 0"),
+    "eps_shading": Range(float, 0.0, low_open=True, why="the Charbonnier of Eq. 9 needs eps > 0"),
+    "tukey_alpha": Range(float, 0.0, low_open=True),
+    "sigma_e": Range(float, 0.0, low_open=True),
+    "sigma_d": Range(float, 0.0, low_open=True),
+    "sigma_s": Range(float, 0.0, low_open=True),
+    "occlusion_threshold": Range(float, 0.0, 1.0, why="w_occ lies in [0, 1]"),
+    "boundary_radius": Range(int, 0, 32, why="the dilation costs radius^2 per pixel"),
+    "nonlocal_radius": Range(int, 1, 32, why="the weighted median costs radius^2 per pixel"),
+    "pyramid_scale": Range(float, 0.0, 0.9, low_open=True,
+                           why="each level is this times the finer one; closer to 1 gives "
+                               "hundreds of levels"),
+    "pyramid_min_size": Range(int, MIN_FRAME_SIZE, why="the coarsest level's shorter side"),
+    "outer_iterations": Range(int, 1),
+    "lbfgs_iterations": Range(int, 1),
+    "lbfgs_iterations_coarse": Range(int, 0),
+    "lbfgs_memory": Range(int, 1),
+    "log_floor": Range(float, 0.0, 1.0, low_open=True, high_open=True,
+                       why="the floor of the linear input before the log"),
+    "window": Range(int, 2, why="frames per solved window"),
+    "overlap": Range(int, 0),
+    "boundary_threshold": Range(float, 0.0),
+    "init_blur": Range(float, 0.0),
+}

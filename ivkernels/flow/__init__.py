@@ -30,39 +30,22 @@ MIN_SIZE = 4
 
 
 def as_linear_rgb(frames, backend: str = "warp", device: str = "cpu") -> np.ndarray:
-    """Validate video frames and return them as float32 linear RGB, (T, H, W, 3).
+    """Validate video frames for the flow and return them as float32 linear RGB, (T, H, W, 3).
 
-    frames : (T, H, W, 3) uint8 sRGB (converted with the sRGB curve), or float
-        linear RGB in [0, 1] (values outside are clipped by the methods).
-    Raises TypeError for other dtypes, ValueError for a wrong shape, fewer than
-    2 frames, frames smaller than 4x4 or non-finite values.
+    The rules are those of :mod:`ivkernels.validation`, the same as
+    :func:`ivkernels.decompose`'s: uint8 / uint16 sRGB, or float32 / float64
+    linear RGB in [0, 1] (float frames in 0..255, negative or non-finite
+    values are refused, never clipped); a list of (H, W, 3) frames is
+    stacked.  At least 2 frames of at least 4x4 pixels.  ``backend`` and
+    ``device`` are checked too.
     """
-    if not isinstance(frames, np.ndarray):
-        if isinstance(frames, (list, tuple)) or hasattr(frames, "__array__"):
-            frames = np.asarray(frames)
-        else:
-            raise TypeError(f"frames must be a numpy array (T, H, W, 3), got {type(frames).__name__}")
-    if frames.ndim != 4 or frames.shape[-1] != 3:
-        raise ValueError(f"frames must have shape (T, H, W, 3), got {frames.shape}")
-    t, h, w, _ = frames.shape
-    if t < 2:
-        raise ValueError(f"flow needs at least 2 frames, got T = {t}")
-    if h < MIN_SIZE or w < MIN_SIZE:
-        raise ValueError(f"frames must be at least {MIN_SIZE}x{MIN_SIZE} pixels, got {h}x{w}")
-    if frames.dtype == np.uint8:
-        from ivkernels.backends import get_backend
+    from ivkernels import validation as v
 
-        be = get_backend(backend, device)
-        enc = be.asarray(np.ascontiguousarray(frames, np.float32) / np.float32(255.0))
-        lin = be.empty(frames.shape)
-        be.colour.srgb_to_linear(enc, lin)
-        return np.array(be.numpy(lin), np.float32, copy=True)
-    if not np.issubdtype(frames.dtype, np.floating):
-        raise TypeError(f"frames must be uint8 sRGB or float linear RGB in [0, 1], got dtype {frames.dtype}")
-    frames = np.ascontiguousarray(frames, np.float32)
-    if not np.isfinite(frames).all():
-        raise ValueError("frames contain NaN or infinite values")
-    return frames
+    v.check_backend_device(backend, device)
+    checked = v.check_frames(frames, min_frames=2, min_size=MIN_SIZE, what="flow")
+    T, H, W = checked.shape
+    v.check_memory(v.flow_nbytes(T, H, W), f"optical flow on {T} frames of {W}x{H}")
+    return v.linear_frames(checked)
 
 
 def estimate_flow(frames, method: str = "classic_nl_fast", backend: str = "warp", device: str = "cpu",
@@ -71,7 +54,9 @@ def estimate_flow(frames, method: str = "classic_nl_fast", backend: str = "warp"
 
     Parameters
     ----------
-    frames : (T, H, W, 3), T >= 2: float linear RGB in [0, 1] or uint8 sRGB.
+    frames : (T, H, W, 3), T >= 2: float linear RGB in [0, 1], or uint8 /
+        uint16 sRGB (the rules of :func:`ivkernels.decompose`, see
+        :mod:`ivkernels.validation`).
     method : one of :data:`FLOW_METHODS`.
     backend, device : kernels the Classic+NL methods run on ("warp" on "cpu" or
         "cuda[:N]", or "taichi" on "cpu"); the OpenCV methods ignore them
@@ -86,7 +71,7 @@ def estimate_flow(frames, method: str = "classic_nl_fast", backend: str = "warp"
     (T-1, H, W, 2) float32 flow in pixels; channel 0 = dx (columns),
     channel 1 = dy (rows); pixel ``x`` of frame ``t`` moves to ``x + u_t(x)``.
     """
-    if method not in FLOW_METHODS:
+    if not isinstance(method, str) or method not in FLOW_METHODS:
         raise ValueError(f"unknown flow method {method!r}; expected one of {FLOW_METHODS}")
     frames = as_linear_rgb(frames, backend, device)
     if method == "dis":
@@ -101,11 +86,8 @@ def estimate_flow(frames, method: str = "classic_nl_fast", backend: str = "warp"
 
     init = options.pop("init", None)
     if init is not None:
-        init = np.asarray(init)
-        want = (frames.shape[0] - 1, *frames.shape[1:3], 2)
-        if init.shape != want:
-            raise ValueError(f"init must have shape (T-1, H, W, 2) = {want}, got {init.shape}")
-        if not np.issubdtype(init.dtype, np.floating) or not np.isfinite(init).all():
-            raise ValueError("init must be a finite float array")
+        from ivkernels.validation import check_flow
+
+        init = check_flow(init, *frames.shape[:3], name="init")
     settings = settings_for(method, **options)
     return ClassicNL(get_backend(backend, device), settings)(frames, init)
