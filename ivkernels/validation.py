@@ -190,6 +190,7 @@ def linear_frames(frames: Frames) -> np.ndarray:
     from ivkernels.io import srgb_decode_table
 
     T, H, W = frames.shape
+    check_memory(frames.linear_nbytes, f"{frames.name}: {T} frames of {W}x{H} in float32")
     out = np.empty((T, H, W, 3), np.float32)
     integer = frames.dtype.kind == "u"
     table = srgb_decode_table(256 if frames.dtype == np.uint8 else 65536) if integer else None
