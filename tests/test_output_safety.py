@@ -1,0 +1,296 @@
+"""The output contract: the command line never replaces what it did not write, leaves
+no partial output behind (failure, SIGINT, SIGTERM, a killed earlier run), and
+writes files and folders with the modes the umask gives."""
+import os
+import signal
+import stat
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ivkernels import cli
+from ivkernels.io import (OUTPUT_MARKER, Interrupted, OutputFolder, write_npz, write_png_sequence,
+                          write_video)
+
+DEAD_PID = 2**31 - 2      # beyond any pid_max: no such process
+
+
+@pytest.fixture
+def frames8():
+    return np.random.default_rng(0).integers(0, 256, (3, 16, 16, 3), dtype=np.uint8)
+
+
+@pytest.fixture
+def image_folder(tmp_path, frames8):
+    folder = tmp_path / "frames"
+    write_png_sequence(folder, frames8)
+    return folder
+
+
+@pytest.fixture
+def umask022():
+    old = os.umask(0o022)
+    yield
+    os.umask(old)
+
+
+def _mode(path: Path) -> int:
+    return stat.S_IMODE(path.stat().st_mode)
+
+
+def _snapshot(folder: Path) -> dict:
+    return {p.relative_to(folder): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _fake_output(folder: Path, *extra: str) -> Path:
+    """A folder as ivkernels writes it (marker and some outputs), plus ``extra`` files."""
+    (folder / "albedo").mkdir(parents=True)
+    (folder / "albedo" / "frame_00000.png").write_bytes(b"png")
+    (folder / "intrinsics.npz").write_bytes(b"npz")
+    (folder / OUTPUT_MARKER).write_text("{}\n")
+    for name in extra:
+        (folder / name).write_text("mine")
+    return folder
+
+
+def _error_line(rc, err) -> str:
+    lines = err.strip().splitlines()
+    assert rc == 2 and len(lines) == 1 and lines[0].startswith("ivkernels: error: "), (rc, err)
+    return lines[0]
+
+
+# ----------------------------------------------------------------------------- never replace what it did not write
+def test_output_onto_the_input_is_refused_even_with_force(image_folder, capsys):
+    before = _snapshot(image_folder)
+    rc = cli.main(["decompose", str(image_folder), "-o", str(image_folder), "--force", "--quiet"])
+    assert "is the input" in _error_line(rc, capsys.readouterr().err)
+    assert _snapshot(image_folder) == before
+
+
+def test_output_holding_the_input_is_refused(tmp_path, frames8, capsys):
+    src = tmp_path / "project" / "frames"
+    write_png_sequence(src, frames8)
+    (tmp_path / "project" / OUTPUT_MARKER).write_text("{}\n")       # even a marked folder
+    before = _snapshot(tmp_path / "project")
+    rc = cli.main(["decompose", str(src), "-o", str(tmp_path / "project"), "--force", "--quiet"])
+    assert "holds the input" in _error_line(rc, capsys.readouterr().err)
+    assert _snapshot(tmp_path / "project") == before
+
+
+def test_output_through_a_symlink_to_the_input_is_refused(image_folder, tmp_path, capsys):
+    link = tmp_path / "link"
+    link.symlink_to(image_folder)
+    before = _snapshot(image_folder)
+    rc = cli.main(["decompose", str(image_folder), "-o", str(link), "--force", "--quiet"])
+    _error_line(rc, capsys.readouterr().err)
+    assert _snapshot(image_folder) == before and link.is_symlink()
+
+
+@pytest.mark.parametrize("out", [".", "..", "{cwd}"])
+def test_current_folder_and_its_ancestors_are_refused(image_folder, tmp_path, monkeypatch, capsys, out):
+    work = tmp_path / "work"
+    work.mkdir()
+    (work / "notes.txt").write_text("precious")
+    monkeypatch.chdir(work)
+    rc = cli.main(["decompose", str(image_folder), "-o", out.format(cwd=work), "--force", "--quiet"])
+    _error_line(rc, capsys.readouterr().err)
+    assert (work / "notes.txt").read_text() == "precious"
+
+
+def test_force_does_not_delete_a_folder_ivkernels_did_not_write(image_folder, tmp_path, capsys):
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "thesis.tex").write_text("years of work")
+    rc = cli.main(["decompose", str(image_folder), "-o", str(other), "--force", "--quiet"])
+    assert "not written by ivkernels" in _error_line(rc, capsys.readouterr().err)
+    assert (other / "thesis.tex").read_text() == "years of work"
+
+
+def test_force_does_not_delete_files_added_to_an_output(image_folder, tmp_path, capsys):
+    out = _fake_output(tmp_path / "out", "my_notes.txt")
+    before = _snapshot(out)
+    rc = cli.main(["decompose", str(image_folder), "-o", str(out), "--force", "--quiet"])
+    assert "'my_notes.txt'" in _error_line(rc, capsys.readouterr().err)
+    assert _snapshot(out) == before
+
+
+def test_output_that_is_a_file_is_refused(image_folder, tmp_path, capsys):
+    f = tmp_path / "out"
+    f.write_text("data")
+    rc = cli.main(["decompose", str(image_folder), "-o", str(f), "--force", "--quiet"])
+    assert "not a folder" in _error_line(rc, capsys.readouterr().err)
+    assert f.read_text() == "data"
+
+
+def test_output_without_an_existing_parent_is_refused(image_folder, tmp_path, capsys):
+    rc = cli.main(["decompose", str(image_folder), "-o", str(tmp_path / "a" / "b"), "--quiet"])
+    assert "does not exist" in _error_line(rc, capsys.readouterr().err)
+
+
+def test_force_replaces_an_ivkernels_output(tmp_path):
+    out = _fake_output(tmp_path / "out")
+    target = OutputFolder(out, force=True, contents=("albedo", "intrinsics.npz"))
+    target.check()
+    with target as tmp:
+        (tmp / "intrinsics.npz").write_bytes(b"new")
+        target.commit()
+    assert (out / "intrinsics.npz").read_bytes() == b"new"
+    assert (out / OUTPUT_MARKER).is_file() and not (out / "albedo").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+def test_an_empty_folder_may_be_replaced_with_force(tmp_path):
+    (tmp_path / "out").mkdir()
+    with pytest.raises(ValueError, match="already exists"):
+        OutputFolder(tmp_path / "out").check()
+    OutputFolder(tmp_path / "out", force=True).check()
+
+
+def test_a_failure_removes_the_partial_folder_and_keeps_the_old_output(tmp_path):
+    out = _fake_output(tmp_path / "out")
+    before = _snapshot(out)
+    target = OutputFolder(out, force=True, contents=("albedo", "intrinsics.npz"))
+    target.check()
+    with pytest.raises(RuntimeError, match="boom"):
+        with target as tmp:
+            (tmp / "intrinsics.npz").write_bytes(b"half")
+            raise RuntimeError("boom")
+    assert _snapshot(out) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+# ----------------------------------------------------------------------------- modes
+def test_outputs_get_umask_modes(tmp_path, umask022, frames8):
+    target = OutputFolder(tmp_path / "out", contents=("albedo", "x.npz", "v.mp4"))
+    target.check()
+    with target as tmp:
+        assert _mode(tmp) == 0o755
+        write_png_sequence(tmp / "albedo", frames8)
+        write_npz(tmp / "x.npz", a=np.zeros(3))
+        write_video(tmp / "v.mp4", frames8)
+        target.commit()
+    out = tmp_path / "out"
+    assert _mode(out) == 0o755 and _mode(out / "albedo") == 0o755
+    for f in [*out.glob("albedo/*.png"), out / "x.npz", out / "v.mp4", out / OUTPUT_MARKER]:
+        assert _mode(f) == 0o644, f
+
+
+def test_atomic_writes_follow_a_stricter_umask(tmp_path, frames8):
+    old = os.umask(0o077)
+    try:
+        paths = write_png_sequence(tmp_path / "seq", frames8)
+    finally:
+        os.umask(old)
+    assert {_mode(p) for p in paths} == {0o600}
+
+
+# ----------------------------------------------------------------------------- partial folders and signals
+def test_sigterm_inside_an_output_folder_removes_it(tmp_path):
+    target = OutputFolder(tmp_path / "out")
+    target.check()
+    before = signal.getsignal(signal.SIGTERM)
+    with pytest.raises(Interrupted) as info:
+        with target as tmp:
+            (tmp / "x").write_text("partial")
+            os.kill(os.getpid(), signal.SIGTERM)
+            for _ in range(1000):           # the handler runs between bytecodes
+                time.sleep(0.01)
+    assert info.value.signum == signal.SIGTERM
+    assert list(tmp_path.iterdir()) == []
+    assert signal.getsignal(signal.SIGTERM) == before
+
+
+def test_stale_partial_of_a_dead_run_is_named_and_removed(image_folder, tmp_path, capsys, monkeypatch):
+    stale = tmp_path / f"out.{DEAD_PID}.partial"
+    _fake_output(stale)
+    target = OutputFolder(tmp_path / "out")
+    target.check()
+    assert not stale.exists()
+    assert len(target.notes) == 1 and str(stale) in target.notes[0] and "earlier run" in target.notes[0]
+
+    # the command line prints the note, whatever happens next
+    _fake_output(stale)
+
+    def stop(*args, **kwargs):
+        raise ValueError("stop here")
+
+    from ivkernels import io as ivio
+
+    monkeypatch.setattr(ivio, "read_frames", stop)
+    rc = cli.main(["decompose", str(image_folder), "-o", str(tmp_path / "out"), "--quiet"])
+    err = capsys.readouterr().err
+    assert rc == 2 and f"removed {stale}" in err and not stale.exists()
+
+
+def test_partial_of_a_live_run_is_left_alone(tmp_path):
+    sleeper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        live = _fake_output(tmp_path / f"out.{sleeper.pid}.partial")
+        with pytest.raises(ValueError, match=f"another ivkernels run \\(pid {sleeper.pid}\\)"):
+            OutputFolder(tmp_path / "out").check()
+        assert live.exists()
+    finally:
+        sleeper.kill()
+        sleeper.wait()
+
+
+def test_unmarked_partial_folders_are_named_not_removed(tmp_path):
+    foreign = tmp_path / f"out.{DEAD_PID}.partial"
+    foreign.mkdir()
+    (foreign / "mine.txt").write_text("x")
+    target = OutputFolder(tmp_path / "out")
+    target.check()
+    assert foreign.exists() and "remove it by hand" in target.notes[0]
+
+
+def _cli_env():
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(Path(__file__).parents[1]) + os.pathsep + env.get("PYTHONPATH", "")
+    return env
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("signum, code", [(signal.SIGTERM, 128 + signal.SIGTERM), (signal.SIGINT, 130)])
+def test_signal_mid_run_leaves_nothing(tmp_path, signum, code):
+    """Kill the command line while it writes; nothing of the output may remain."""
+    frames = np.random.default_rng(0).integers(0, 256, (12, 32, 32, 3), dtype=np.uint8)
+    src = tmp_path / "frames"
+    write_png_sequence(src, frames)
+    out = tmp_path / "out"
+    proc = subprocess.Popen([sys.executable, "-m", "ivkernels.cli", "decompose", str(src), "-o", str(out),
+                             "--flow", "dis", "--window", "3", "--quiet"],
+                            env=_cli_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            # a child of a shell's background job starts with SIGINT ignored
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        # wait until the first window's albedo is on disk: the run is mid-way
+        while not list(tmp_path.glob("out.*.partial/albedo/*.png")):
+            assert proc.poll() is None, proc.communicate()
+            time.sleep(0.05)
+        assert proc.poll() is None, "the run finished before it could be interrupted"
+        proc.send_signal(signum)
+        _, err = proc.communicate(timeout=600)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == code, err.decode()
+    assert "partial output removed" in err.decode()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["frames"]
+
+
+@pytest.mark.slow
+def test_cli_writes_readable_output_and_replaces_only_its_own(image_folder, tmp_path, umask022, capsys):
+    out = tmp_path / "result"
+    args = ["decompose", str(image_folder), "-o", str(out), "--flow", "dis", "--quiet"]
+    assert cli.main(args) == 0
+    assert (out / OUTPUT_MARKER).is_file()
+    assert _mode(out) == 0o755
+    assert all(_mode(p) == (0o755 if p.is_dir() else 0o644) for p in out.rglob("*"))
+    assert cli.main(args) == 2 and "already exists" in capsys.readouterr().err
+    assert cli.main([*args, "--force"]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["frames", "result"]
