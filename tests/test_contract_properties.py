@@ -77,12 +77,13 @@ def test_params_accept_every_value_in_range(data, name):
 
 
 @SETTINGS
-@given(window=st.integers(-3, 50), overlap=st.integers(-3, 50))
+@given(window=st.integers(-3, 50) | st.floats(-3, 50), overlap=st.integers(-3, 50) | st.floats(-3, 50))
 def test_params_window_and_overlap(window, overlap):
-    ok = window >= 2 and 0 <= overlap < window
+    integers = isinstance(window, int) and isinstance(overlap, int)
+    ok = integers and window >= 2 and 0 <= overlap < window
     try:
         Params(window=window, overlap=overlap)
-    except ValueError:
+    except (TypeError, ValueError):
         assert not ok
     else:
         assert ok
@@ -158,38 +159,42 @@ def test_decompose_flow_and_io_take_the_same_frames(x):
 
 
 @SETTINGS
-@given(x=frame_arrays())
+@given(x=stacks() | frame_arrays())
 def test_accepted_frames_are_linear_rgb_in_range(x):
-    status, out = _outcome(to_linear_float, x)
-    if status != "ok":
-        return
-    assert out.dtype == np.float32 and out.shape == x.shape and out.flags.c_contiguous
-    assert np.isfinite(out).all() and out.min() >= 0 and out.max() <= 1
-    if x.dtype.kind == "u":
-        expected = srgb_to_linear(x / float(np.iinfo(x.dtype).max))
-        np.testing.assert_allclose(out, expected, atol=1e-6)
-    else:
-        assert x.dtype in (np.float32, np.float64)
-        assert np.isfinite(x).all() and x.min() >= -1e-6 and x.max() <= 1 + 1e-6
-        np.testing.assert_allclose(out, np.clip(x, 0, 1), atol=1e-7)
+    """Whatever decompose's and estimate_flow's checkers accept is linear RGB in [0, 1]."""
+    for call in (to_linear_float, as_linear_rgb):
+        status, out = _outcome(call, x)
+        if status != "ok":
+            continue
+        assert out.dtype == np.float32 and out.shape == x.shape and out.flags.c_contiguous
+        assert np.isfinite(out).all() and out.min() >= 0 and out.max() <= 1
+        if x.dtype.kind == "u":
+            expected = srgb_to_linear(x / float(np.iinfo(x.dtype).max))
+            np.testing.assert_allclose(out, expected, atol=1e-6)
+        else:
+            assert x.dtype in (np.float32, np.float64)
+            assert np.isfinite(x).all() and x.min() >= -1e-6 and x.max() <= 1 + 1e-6
+            np.testing.assert_allclose(out, np.clip(x, 0, 1), atol=1e-7)
 
 
 def _float_frames(dtype):
     width = np.dtype(dtype).itemsize * 8
     elements = st.one_of(st.floats(0, 1, width=width), st.floats(-2, 300, width=width),
                          st.sampled_from([np.nan, np.inf, -np.inf, 1 + 1e-7, -1e-7, 1 + 1e-5]))
-    return hnp.arrays(dtype, st.tuples(st.integers(1, 3), st.integers(1, 6), st.integers(1, 6),
+    return hnp.arrays(dtype, st.tuples(st.integers(2, 3), st.integers(4, 6), st.integers(4, 6),
                                        st.just(3)), elements=elements)
 
 
 @SETTINGS
 @given(x=st.sampled_from([np.float32, np.float64]).flatmap(_float_frames))
 def test_refused_float_frames_are_out_of_range(x):
-    """Float32/64 frames of a valid shape are refused exactly when some value is
-    non-finite or outside [0, 1] by more than the tolerance."""
+    """Float32/64 frames of a valid shape are refused, by decompose's and the flow's
+    checkers alike, exactly when some value is non-finite or outside [0, 1] by more
+    than the tolerance."""
     bad = not np.isfinite(x).all() or x.min() < -1e-6 or x.max() > 1 + 1e-6
-    status, _ = _outcome(to_linear_float, x)
-    assert (status == "ValueError") == bad
+    for call in (to_linear_float, as_linear_rgb):
+        status, _ = _outcome(call, x)
+        assert (status == "ValueError") == bad, call
 
 
 # ----------------------------------------------------------------------------- flow
@@ -213,10 +218,11 @@ def test_accepted_flow_is_finite_float32(flow):
     np.testing.assert_allclose(out, flow.astype(np.float32))
 
 
-@pytest.mark.parametrize("name", FIELDS)
-def test_every_field_has_a_finite_range(name):
-    """A field added to Params is validated too (by its rule, or finite and >= 0)."""
-    value = getattr(DEFAULTS, name)
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        with pytest.raises((TypeError, ValueError), match=f"Params.{name}"):
-            Params(**{name: math.nan})
+def test_every_field_has_a_finite_range():
+    """Every numeric field, including one added later, refuses NaN and infinity."""
+    for name in FIELDS:
+        value = getattr(DEFAULTS, name)
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            for bad in (math.nan, math.inf):
+                with pytest.raises((TypeError, ValueError), match=f"Params.{name} must be"):
+                    Params(**{name: bad})

@@ -82,20 +82,16 @@ def test_params_numpy_numbers_are_stored_as_python_numbers():
     ({"pyramid_min_size": 0}, "pyramid_min_size must be >= 8"),
     ({"pyramid_min_size": 3}, "pyramid_min_size must be >= 8"),
     ({"pyramid_scale": 0.999}, r"pyramid_scale must be in \(0, 0.9\]"),
-    ({"pyramid_scale": 1.0}, "pyramid_scale"),
-    ({"pyramid_scale": 0.0}, "pyramid_scale"),
     ({"occlusion_threshold": 1.5}, r"occlusion_threshold must be in \[0, 1\]"),
-    ({"occlusion_threshold": -0.1}, "occlusion_threshold"),
+    ({"occlusion_threshold": -0.1}, r"occlusion_threshold must be in \[0, 1\]"),
+    ({"pyramid_scale": 1.0}, r"pyramid_scale must be in \(0, 0.9\]"),
+    ({"pyramid_scale": 0.0}, r"pyramid_scale must be in \(0, 0.9\]"),
     ({"log_floor": 0.0}, "log_floor"),
     ({"outer_iterations": 0}, "outer_iterations must be >= 1"),
     ({"lbfgs_iterations": 0}, "lbfgs_iterations must be >= 1"),
-    ({"lbfgs_memory": 0}, "lbfgs_memory"),
     ({"nonlocal_radius": 0}, "nonlocal_radius"),
     ({"nonlocal_radius": 10_000}, "nonlocal_radius"),
     ({"boundary_radius": 10_000}, "boundary_radius"),
-    ({"window": 1}, "window must be >= 2"),
-    ({"window": 4, "overlap": 4}, "overlap"),
-    ({"lam_data": -1.0}, "lam_data must be >= 0"),
     ({"tukey_alpha": 0.0}, "tukey_alpha must be > 0"),
 ])
 def test_params_refuse_values_out_of_range(changes, match):
@@ -138,11 +134,11 @@ BAD_FRAMES = [
 ]
 
 
-@pytest.mark.parametrize("entry", ["iter_decompose", "estimate_flow", "to_linear_float"])
 @pytest.mark.parametrize("label, bad, exc, match", BAD_FRAMES, ids=[c[0] for c in BAD_FRAMES])
-def test_every_entry_point_refuses_the_same_frames(entry, label, bad, exc, match):
-    with pytest.raises(exc, match=match):
-        _validators()[entry](bad)
+def test_every_entry_point_refuses_the_same_frames(label, bad, exc, match):
+    for entry, call in _validators().items():
+        with pytest.raises(exc, match=match):
+            call(bad)
 
 
 def test_estimate_flow_refuses_float_frames_in_0_255(frames8):
@@ -166,12 +162,9 @@ def test_uint16_frames_are_accepted_everywhere(frames8):
     u16 = frames8.astype(np.uint16) * 257        # the same sRGB codes at 16 bits
     np.testing.assert_allclose(as_linear_rgb(u16), to_linear_float(frames8), atol=1e-6)
     assert estimate_flow(u16, method="dis").shape == (2, 16, 16, 2)
-
-
-def test_estimate_flow_uint8_matches_the_float_input(frames8):
-    a = estimate_flow(frames8, method="dis")
-    b = estimate_flow(to_linear_float(frames8), method="dis")
-    np.testing.assert_array_equal(a, b)
+    # uint8 is decoded the same way by the flow and by decompose
+    np.testing.assert_array_equal(estimate_flow(frames8, method="dis"),
+                                  estimate_flow(to_linear_float(frames8), method="dis"))
 
 
 def test_iter_decompose_validates_at_the_call():
@@ -192,9 +185,7 @@ def test_frames_of_different_sizes_name_the_bad_frame(frames8):
     mixed = [frames8[0], to_linear_float(frames8)[1]]
     with pytest.raises(ValueError, match=r"frames\[1\] has dtype float32"):
         iv.iter_decompose(mixed)
-
-
-def test_a_list_of_frames_is_stacked(frames8):
+    # frames of one size are stacked
     np.testing.assert_array_equal(to_linear_float(list(frames8)), to_linear_float(frames8))
     assert estimate_flow(list(frames8), method="dis").shape == (2, 16, 16, 2)
 
