@@ -281,6 +281,21 @@ def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
     -------
     IntrinsicVideo
 
+    Raises
+    ------
+    TypeError, ValueError
+        for bad arguments, checked before any work by
+        :mod:`ivkernels.validation` (the rules :func:`iter_decompose`,
+        :func:`ivkernels.estimate_flow` and the command line share): frames of
+        an unsupported dtype or shape, float frames outside [0, 1] or not
+        finite, frames of different sizes in a list (the frame is named), a
+        flow of the wrong shape, not finite or beyond
+        :data:`ivkernels.validation.MAX_FLOW` pixels, an unknown backend, a
+        malformed device or a CUDA device that is not present.
+    ivkernels.validation.NotEnoughMemoryError
+        (a MemoryError and a ValueError) when the estimated memory of the
+        call exceeds the memory available, before anything is allocated.
+
     Examples
     --------
     >>> import ivkernels as iv

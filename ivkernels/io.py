@@ -684,8 +684,6 @@ class OutputFolder:
         out = self.out
         if str(out) in ("", "."):
             raise ValueError("output folder must be named (not '.')")
-        if out.is_symlink():
-            raise ValueError(f"output {out} is a symbolic link; give the folder itself")
         target = out.resolve()
         guarded = dict(self.protect)
         guarded["current folder"] = Path.cwd()
@@ -694,6 +692,8 @@ class OutputFolder:
                 same = path.resolve() == target
                 raise ValueError(f"output {out} {'is' if same else 'holds'} the {what} {path}; "
                                  "choose another output folder")
+        if out.is_symlink():
+            raise ValueError(f"output {out} is a symbolic link; give the folder itself")
         if not target.parent.is_dir():
             raise ValueError(f"the folder that would hold output {out}, {out.parent}, does not exist")
         if out.exists():
