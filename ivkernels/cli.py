@@ -133,9 +133,9 @@ def _check_arguments(args):
     return params, flow_folder
 
 
-def run_decompose(args, notes: list | None = None) -> Path:
+def run_decompose(args) -> Path:
     """``ivkernels decompose``: check everything, then write OUT through an
-    :class:`ivkernels.io.OutputFolder`.  ``notes`` collects messages for the user."""
+    :class:`ivkernels.io.OutputFolder`."""
     import imageio.v2 as imageio
 
     from ivkernels import iter_decompose
@@ -149,8 +149,8 @@ def run_decompose(args, notes: list | None = None) -> Path:
     target = OutputFolder(args.out, force=args.force, protect={"input": src, "flow folder": flow_folder},
                           contents=OUTPUT_CONTENTS)
     target.check()
-    if notes is not None:
-        notes.extend(target.notes)
+    for note in target.notes:          # e.g. a stale partial folder removed
+        print(f"ivkernels: {note}", file=sys.stderr)
     T, H, W = probe_frames(src, start=args.start, stop=args.stop, step=args.step, scale=args.scale)
     check_memory(T * H * W * 3 * 4 + decompose_nbytes(T, H, W, params.window, keep_outputs=False),
                  f"decomposing {T} frames of {W}x{H}",
@@ -236,12 +236,9 @@ def main(argv=None) -> int:
     from ivkernels.io import Interrupted
 
     args = _parser().parse_args(argv)
-    notes: list = []
     try:
         if args.command == "decompose":
-            out = run_decompose(args, notes)
-            for note in notes:
-                print(f"ivkernels: {note}", file=sys.stderr)
+            out = run_decompose(args)
             print(f"wrote {out}")
     except Interrupted as err:
         print(f"ivkernels: {err}; partial output removed", file=sys.stderr)
@@ -250,8 +247,6 @@ def main(argv=None) -> int:
         print("ivkernels: interrupted; partial output removed", file=sys.stderr)
         return 130
     except (ValueError, TypeError, OSError, MemoryError) as err:
-        for note in notes:
-            print(f"ivkernels: {note}", file=sys.stderr)
         print(f"ivkernels: error: {_one_line(err)}", file=sys.stderr)
         return 2
     return 0
