@@ -730,8 +730,12 @@ class OutputFolder:
                                   "left in place, remove it by hand")
                 continue
             pid = int(m.group("pid"))
-            info = _read_marker(p)
-            if info.get("host", socket.gethostname()) == socket.gethostname() and _pid_alive(pid):
+            host = _read_marker(p).get("host", socket.gethostname())
+            if host != socket.gethostname():
+                self.notes.append(f"{p} is being or was written on host {host}; left in place, "
+                                  "remove it by hand if no run is active there")
+                continue
+            if _pid_alive(pid):
                 if pid == os.getpid():
                     continue
                 raise ValueError(f"another ivkernels run (pid {pid}) is writing {self.out} "

@@ -233,6 +233,14 @@ def test_partial_of_a_live_run_is_left_alone(tmp_path):
         sleeper.wait()
 
 
+def test_partial_written_on_another_host_is_left_alone(tmp_path):
+    other = _fake_output(tmp_path / f"out.{DEAD_PID}.partial")
+    (other / OUTPUT_MARKER).write_text('{"host": "elsewhere.invalid", "pid": 1}\n')
+    target = OutputFolder(tmp_path / "out")
+    target.check()
+    assert other.exists() and "elsewhere.invalid" in target.notes[0]
+
+
 def test_unmarked_partial_folders_are_named_not_removed(tmp_path):
     foreign = tmp_path / f"out.{DEAD_PID}.partial"
     foreign.mkdir()
