@@ -29,14 +29,22 @@ from pathlib import Path
 import numpy as np
 
 
+class _Parser(argparse.ArgumentParser):
+    """Usage errors in one line (the usage itself is under ``--help``), exit status 2."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {' '.join(message.split())} (see {self.prog} --help)\n")
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="ivkernels", description="Intrinsic video: albedo, shading, flow, occlusion and "
         "motion boundaries of a video (Kong, Gehler & Black, ECCV 2014).")
     sub = parser.add_subparsers(dest="command", required=True)
     d = sub.add_parser("decompose", help="decompose a video file or a folder of images")
     d.add_argument("input", help="video file (mp4, avi, ...) or folder of images (png, jpg, tif)")
-    d.add_argument("-o", "--out", required=True, help="output folder (must not exist, or use --force)")
+    d.add_argument("-o", "--out", required=True,
+                   help="output folder (must not exist; --force replaces one ivkernels wrote)")
     d.add_argument("--backend", default="warp", choices=["warp", "taichi"])
     d.add_argument("--device", default="cpu", help="'cpu' or 'cuda' (warp only)")
     d.add_argument("--flow", default=None,
@@ -50,7 +58,9 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--scale", type=float, default=1.0, help="resize frames by this factor first")
     d.add_argument("--window", type=int, default=None, help="frames per solved window")
     d.add_argument("--fps", type=float, default=10.0, help="frame rate of preview.mp4")
-    d.add_argument("--force", action="store_true", help="replace OUT if it exists")
+    d.add_argument("--force", action="store_true",
+                   help="replace OUT if it exists and ivkernels wrote it (never the input or the "
+                        "current folder, nor a folder holding other files)")
     d.add_argument("--quiet", action="store_true", help="no progress bars")
     return parser
 

@@ -138,7 +138,8 @@ def check_frames(frames, name: str = "frames", *, min_frames: int = 1, min_size:
         if frames.ndim == 3 and frames.shape[-1] == 3 and single_frame:
             frames = frames[None]
         if frames.ndim != 4:
-            hint = " (for a single image pass image[None])" if frames.ndim == 3 else ""
+            hint = (" (for a single image pass image[None])"
+                    if frames.ndim == 3 and frames.shape[-1] == 3 else "")
             raise ValueError(f"{name}: expected shape (T, H, W, 3), got {frames.shape}{hint}")
         if frames.shape[-1] != 3:
             raise ValueError(f"{name}: expected 3 colour channels (RGB) in the last axis, shape "

@@ -353,6 +353,20 @@ def test_cli_checks_arguments_before_any_work(image_folder, tmp_path, capsys, no
     assert not out.exists() and not list(tmp_path.glob("*.partial"))
 
 
+@pytest.mark.parametrize("argv", [
+    ["decompose", "in", "-o", "out", "--fps", "ten"],
+    ["decompose", "in"],
+    ["decompose", "in", "-o", "out", "--backend", "torch"],
+    ["compose"],
+])
+def test_cli_usage_errors_are_one_line_and_exit_2(argv, capsys):
+    with pytest.raises(SystemExit) as info:
+        cli.main(argv)
+    err = capsys.readouterr().err
+    assert info.value.code == 2
+    assert len(err.strip().splitlines()) == 1 and "error:" in err and "--help" in err, err
+
+
 @pytest.mark.skipif("_cuda_present()")
 def test_cli_cuda_without_a_gpu_is_one_line_and_exit_2(image_folder, tmp_path, capsys, no_work):
     rc = cli.main(["decompose", str(image_folder), "-o", str(tmp_path / "out"), "--device", "cuda"])
