@@ -122,3 +122,51 @@ def test_one_and_two_threads_agree(rng):
                         occlusion(be, "occlusion_binary", lab, flow, div_neg), boundary(be, mag, 0.7, 2)])
     for a, b in zip(*res):
         np.testing.assert_array_equal(a, b)
+
+
+# ------------------------------------------------ warp reliability (temporal terms' weight)
+def reliability(be, log_image, flow, occ, max_spread):
+    out = be.asarray(occ.copy())
+    be.maps.warp_reliability(be.asarray(log_image), be.asarray(flow), out, max_spread)
+    return be.numpy(out).copy()
+
+
+@pytest.mark.parametrize("max_spread", [0.05, 0.3])
+def test_warp_reliability_matches_reference(backend, rng, max_spread):
+    log_image = rng.normal(0.0, 0.5, (T + 1, H, W, 3)).astype(np.float32)
+    log_image[:, 10:20, 10:30] = -1.0                     # a flat patch
+    flow = rng.normal(scale=2.0, size=(T, H, W, 2)).astype(np.float32)
+    flow[:, :, :3, 0] = -4.0                              # leaves through the left border
+    occ = (rng.uniform(size=(T, H, W)) > 0.2).astype(np.float32)
+    got = reliability(backend, log_image, flow, occ, max_spread)
+    spread = ref.corner_spread(log_image, flow)
+    clear = np.abs(spread - max_spread) > 1e-4            # away from float ties
+    np.testing.assert_array_equal(got[clear], ref.warp_reliability(log_image, flow, occ, max_spread)[clear])
+    assert 0 < (got < occ).mean() < 1
+
+
+def test_warp_reliability_hand_cases(backend):
+    """Whole-pixel flow and flat images keep w_occ; a half-pixel sample across a step clears it."""
+    t, h, w = 2, 9, 11
+    step = np.zeros((t, h, w, 3), np.float32)
+    step[:, :, 5:] = 1.0
+    occ = np.ones((t - 1, h, w), np.float32)
+    whole = np.zeros((t - 1, h, w, 2), np.float32)
+    whole[..., 0] = 2.0
+    assert reliability(backend, step, whole, occ, 0.01).all()
+    half = np.zeros((t - 1, h, w, 2), np.float32)
+    half[..., 0] = 0.5
+    flat = np.full((t, h, w, 3), 0.3, np.float32)
+    assert reliability(backend, flat, half, occ, 0.01).all()
+    got = reliability(backend, step, half, occ, 0.01)
+    assert not got[:, :, 4].any()                         # sample at x = 4.5 straddles the step
+    assert got[:, :, :4].all() and got[:, :, 5:].all()
+
+
+def test_warp_reliability_bad_input(backend):
+    img = backend.asarray(np.zeros((2, 4, 4, 3), np.float32))
+    flow = backend.asarray(np.zeros((1, 4, 4, 2), np.float32))
+    with pytest.raises(ValueError, match="occ must have shape"):
+        backend.maps.warp_reliability(img, flow, backend.asarray(np.zeros((2, 4, 4), np.float32)), 0.1)
+    with pytest.raises(ValueError, match="max_spread"):
+        backend.maps.warp_reliability(img, flow, backend.asarray(np.zeros((1, 4, 4), np.float32)), 0.0)

@@ -22,7 +22,9 @@ def motion_maps(be, frames_linear, flow, params: Params):
     Returns
     -------
     occlusion : (T-1, H, W) backend array, Eq. 6: 1 where ``x + u`` stays in
-        the image and ``o(x) >= params.occlusion_threshold`` (Eq. 7), else 0.
+        the image, ``o(x) >= params.occlusion_threshold`` (Eq. 7) and the
+        bilinear warp there is reliable (``maps.warp_reliability`` with
+        ``params.warp_spread_max``), else 0.
     boundary : (T-1, H, W) backend array, 1 within ``params.boundary_radius``
         pixels of a flow Sobel magnitude above ``params.boundary_threshold``.
     """
@@ -35,6 +37,9 @@ def motion_maps(be, frames_linear, flow, params: Params):
     occlusion = be.empty((n, H, W))
     be.maps.occlusion_binary(lab, flow, div_neg, occlusion, sigma_e=params.sigma_e,
                              sigma_d=params.sigma_d, threshold=params.occlusion_threshold)
+    log_image = be.empty((T, H, W, 3))
+    be.colour.log_floor(frames_linear, log_image, params.log_floor)
+    be.maps.warp_reliability(log_image, flow, occlusion, params.warp_spread_max)
     sobel = be.empty((n, H, W))
     be.derivatives.flow_sobel_magnitude(flow, sobel)
     boundary = be.empty((n, H, W))

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.kernels.reference.sampling import warp_bilinear
+from ivkernels.kernels.reference.sampling import _corners, _sample_points, warp_bilinear
 
 
 def occlusion_soft(lab, flow, div_neg, sigma_e: float = 20.0, sigma_d: float = 0.3) -> np.ndarray:
@@ -21,6 +21,26 @@ def occlusion_binary(lab, flow, div_neg, sigma_e: float = 20.0, sigma_d: float =
     _, inside = warp_bilinear(np.asarray(lab, np.float64)[1:, ..., :1], flow)
     o = occlusion_soft(lab, flow, div_neg, sigma_e, sigma_d)
     return ((o >= threshold) & (inside > 0)).astype(np.float64)
+
+
+def corner_spread(img, flow) -> np.ndarray:
+    """(T-1, H, W): mean over channels of ``sum_k w_k |img_{t+1}(corner_k) - img_{t+1}(x + u)|``."""
+    img = np.asarray(img, np.float64)
+    _, h, w, _ = img.shape
+    px, py = _sample_points(np.asarray(flow, np.float64))
+    x0, x1, fx = _corners(np.clip(px, -2, w + 1), w)
+    y0, y1, fy = _corners(np.clip(py, -2, h + 1), h)
+    nxt = img[1:]
+    tt = np.arange(nxt.shape[0])[:, None, None]
+    corners = [(nxt[tt, y0, x0], (1 - fx) * (1 - fy)), (nxt[tt, y0, x1], fx * (1 - fy)),
+               (nxt[tt, y1, x0], (1 - fx) * fy), (nxt[tt, y1, x1], fx * fy)]
+    v = sum(c * wk[..., None] for c, wk in corners)
+    return sum(wk[..., None] * np.abs(c - v) for c, wk in corners).mean(-1)
+
+
+def warp_reliability(log_image, flow, occ, max_spread: float) -> np.ndarray:
+    """``occ`` with 0 where :func:`corner_spread` of the log image reaches ``max_spread``."""
+    return np.where(corner_spread(log_image, flow) >= max_spread, 0.0, np.asarray(occ, np.float64))
 
 
 def motion_boundary(sobel_mag, threshold: float, radius: int) -> np.ndarray:

@@ -62,6 +62,33 @@ def occlusion_binary_rows(lab: nd4, flow: nd4, div_neg: nd3, out: nd3, sigma_e: 
 
 
 @ti.func
+def corner_spread(img: ti.template(), t, x0, x1, fx, y0, y1, fy):
+    """Mean over channels of ``sum_k w_k |img(corner_k) - img(sample)|`` (see the Warp module)."""
+    spread = 0.0
+    for c in ti.static(range(3)):
+        v = bilinear_at(img, t, c, x0, x1, fx, y0, y1, fy)
+        spread += ((1.0 - fx) * (1.0 - fy) * ti.abs(img[t, y0, x0, c] - v)
+                   + fx * (1.0 - fy) * ti.abs(img[t, y0, x1, c] - v)
+                   + (1.0 - fx) * fy * ti.abs(img[t, y1, x0, c] - v)
+                   + fx * fy * ti.abs(img[t, y1, x1, c] - v))
+    return spread / 3.0
+
+
+@ti.kernel
+def warp_reliability_rows(img: nd4, flow: nd4, occ: nd3, max_spread: ti.f32):
+    height = flow.shape[1]
+    width = flow.shape[2]
+    for r in range(flow.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for x in range(width):
+            x0, x1, fx = clamped_corners(ti.cast(x, ti.f32) + flow[t, y, x, 0], width)
+            y0, y1, fy = clamped_corners(ti.cast(y, ti.f32) + flow[t, y, x, 1], height)
+            if corner_spread(img, t + 1, x0, x1, fx, y0, y1, fy) >= max_spread:
+                occ[t, y, x] = 0.0
+
+
+@ti.func
 def edge_hit(magnitude: ti.template(), t, y, x, threshold):
     hit = 0
     if magnitude[t, y, x] > threshold:
@@ -139,6 +166,18 @@ def occlusion_binary(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: fl
     lab, flow, div_neg, sigma_e, sigma_d = _check_occlusion_args(lab, flow, div_neg, out, sigma_e, sigma_d)
     if out.size:
         occlusion_binary_rows(lab, flow, div_neg, out, sigma_e, sigma_d, float(threshold))
+
+
+def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
+    """Clear ``occ`` where the bilinear sample at ``x + u`` straddles an edge; see
+    :func:`ivkernels.kernels.warp.maps.warp_reliability`."""
+    log_image = check_array("log_image", log_image, (None, None, None, 3), "(T, H, W, 3)")
+    t, h, w, _ = log_image.shape
+    flow = check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)")
+    check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", output=True)
+    max_spread = check_positive("max_spread", max_spread)
+    if occ.size:
+        warp_reliability_rows(log_image, flow, occ, max_spread)
 
 
 def motion_boundary(sobel_mag, out, threshold: float, radius: int) -> None:
