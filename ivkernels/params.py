@@ -95,14 +95,19 @@ class Params:
         LMSE (0.0277 at 160x120, 0.0193 at 320x240) and 3 a little worse
         (0.0279 at 160x120); each pair costs two more rows in the direction's
         passes over memory.
-    lbfgs_iterations_coarse
-        L-BFGS iterations per alternation at every coarser level.  Chosen on
-        synthetic sequences with seed 12, 8 frames at 160x120, ground-truth
-        flow: mean LMSE over the kinds 0.0277 / 0.0276 / 0.0276 for 40 / 20 /
-        10 (40 at the finest level), while the whole decomposition takes 56 /
-        48 / 44 s: the coarse levels only have to bring the shading close
-        enough for the finest level to take over.  The finest level's count
-        matters: 20 or 10 there gave 0.0284 / 0.0289.
+    lbfgs_iterations_coarse, lbfgs_level_growth
+        L-BFGS iterations per alternation at pyramid level ``l >= 1``:
+        ``min(lbfgs_iterations_coarse, round(lbfgs_iterations *
+        lbfgs_level_growth ** l))``.  A level costs a quarter of the finer
+        one per iteration, and the coarse levels are where the solver moves
+        whole albedo regions and the shading's low frequencies, which the
+        finest level does slowly.  Measured (training seed 12, 8 frames at
+        320x240, static_moving_light and free_camera, 40 at the finest
+        level; perf/RESULTS.md, "Solver"): mean LMSE 0.0067 / 0.0042 /
+        0.0040 with 10 / 100 / 200 iterations at every coarse level.  The
+        growth keeps the half-resolution level, the most expensive coarse
+        one, at twice the finest budget while the small levels run to
+        convergence (the L-BFGS tolerance usually stops them first).
     init_blur
         Coarsest-level start: S = log luminance blurred with a Gaussian whose
         sigma is ``init_blur`` times the shorter side; A = I - S.  Chosen on
@@ -151,7 +156,8 @@ class Params:
     pyramid_min_size: int = 24
     outer_iterations: int = 2
     lbfgs_iterations: int = 40
-    lbfgs_iterations_coarse: int = 10
+    lbfgs_iterations_coarse: int = 200
+    lbfgs_level_growth: float = 2.0
     lbfgs_memory: int = 4
     init_blur: float = 0.02
     log_floor: float = 1e-4
@@ -197,6 +203,7 @@ _RULES = {
     "outer_iterations": Range(int, 1),
     "lbfgs_iterations": Range(int, 1),
     "lbfgs_iterations_coarse": Range(int, 0),
+    "lbfgs_level_growth": Range(float, 1.0, 16.0, why="each coarser level's budget is this times the finer one's"),
     "lbfgs_memory": Range(int, 1),
     "log_floor": Range(float, 0.0, 1.0, low_open=True, high_open=True,
                        why="the floor of the linear input before the log"),

@@ -218,3 +218,14 @@ def test_non_finite_energy_names_the_term(backend, rng):
     I[0, 1, 2, 0] = np.nan
     with pytest.raises(FloatingPointError, match="not finite.*(temporal|albedo_smooth|data)"):
         energy(energy.X, energy.G)
+
+
+def test_level_iterations_grow_coarser_up_to_the_cap():
+    from ivkernels.solver.window_solver import level_iterations
+
+    p = Params(lbfgs_iterations=40, lbfgs_iterations_coarse=200, lbfgs_level_growth=2.0)
+    assert [level_iterations(p, level) for level in range(5)] == [40, 80, 160, 200, 200]
+    flat = p.replace(lbfgs_level_growth=1.0, lbfgs_iterations_coarse=10)
+    assert [level_iterations(flat, level) for level in range(3)] == [40, 10, 10]
+    with pytest.raises(ValueError, match="lbfgs_level_growth"):
+        Params(lbfgs_level_growth=0.5)

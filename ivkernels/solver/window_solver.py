@@ -35,6 +35,15 @@ class SolveLog:
         self.seconds[stage] = self.seconds.get(stage, 0.0) + seconds
 
 
+def level_iterations(params: Params, level: int) -> int:
+    """L-BFGS iterations per alternation at pyramid ``level`` (0 = finest); see
+    ``Params.lbfgs_iterations_coarse``."""
+    if level == 0:
+        return int(params.lbfgs_iterations)
+    grown = int(round(params.lbfgs_iterations * params.lbfgs_level_growth ** level))
+    return min(int(params.lbfgs_iterations_coarse), grown)
+
+
 def _log_and_weight(be, frames_linear, params: Params):
     """``I = log max(i, floor)`` (T, h, w, 3) and ``w_lum = lum(i) + eps`` (T, h, w) (Eq. 3)."""
     T, h, w, _ = frames_linear.shape
@@ -133,7 +142,7 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
         problem = ConstrainedEnergy(energy)
         problem.sync_albedo()
         lbfgs = LBFGS(be, energy.n, memory=int(params.lbfgs_memory))
-        iterations = int(params.lbfgs_iterations if level == 0 else params.lbfgs_iterations_coarse)
+        iterations = level_iterations(params, level)
         reasons = []
         for outer in range(int(params.outer_iterations)):
             tm = time.perf_counter()
