@@ -221,17 +221,20 @@ def _median_log_reflectance(logs: np.ndarray, valid: np.ndarray | None, colour: 
     return np.moveaxis(_poisson_neumann(np.moveaxis(gx, -1, 0), np.moveaxis(gy, -1, 0)), 0, -1)
 
 
-def _grey_offsets(log_r: np.ndarray, log_i: np.ndarray, eps: float) -> np.ndarray:
+def _grey_offsets(log_r: np.ndarray, log_i: np.ndarray, eps: float, valid: np.ndarray | None = None) -> np.ndarray:
     """Per-channel constants ``(3,)`` (mean 0) making the shading grey.
 
     Integrating each channel separately leaves each with its own free
     constant.  Under a white illuminant ``log i_c - log r_c`` is the same for
     every channel, so the constants are the per-channel medians of that
-    difference over the pixels not at the ``eps`` floor (all pixels if none).
+    difference over the (aligned) frames ``log_i`` ``(S, H, W, 3)``, at the
+    pixels that are ``valid`` and not at the ``eps`` floor (all valid pixels
+    if none is above it).
     """
-    d = log_i - log_r[None]                                                # (T,H,W,3)
-    lit = np.all(log_i > np.log(eps) + 1e-9, axis=-1)
-    off = np.median(d[lit], axis=0) if np.any(lit) else np.median(d.reshape(-1, 3), axis=0)
+    d = log_i - log_r[None]                                                # (S,H,W,3)
+    ok = np.ones(d.shape[:3], bool) if valid is None else valid
+    lit = ok & np.all(log_i > np.log(eps) + 1e-9, axis=-1)
+    off = np.median(d[lit] if np.any(lit) else d[ok], axis=0)
     return off - off.mean()
 
 
@@ -506,7 +509,7 @@ def weiss_flow(frames, flow, visibility=None, eps: float = 1e-3, colour: str = "
                 valid[s - lo] = ok
         log_r[t] = _median_log_reflectance(logs, valid, colour)
         if colour == "channels":
-            log_r[t] += _grey_offsets(log_r[t], log_i[t:t + 1], eps)
+            log_r[t] += _grey_offsets(log_r[t], logs, eps, valid)
 
     # one constant per frame, chained along the flow
     for t in range(t_n - 1):
