@@ -266,7 +266,7 @@ def _dis_flow(frames) -> np.ndarray:
     normalised per sequence (see :func:`_albedo_to_uint8_luminance`).
     """
     a = _check_albedo_stack(frames, "frames")
-    grey = _albedo_to_uint8_luminance(a)
+    grey = np.ascontiguousarray(_albedo_to_uint8_luminance(a))   # DIS needs contiguous images
     dis = cv2.DISOpticalFlow_create(cv2.DISOPTICAL_FLOW_PRESET_MEDIUM)
     t, h, w = grey.shape
     out = np.empty((t - 1, h, w, 2), np.float32)

@@ -204,6 +204,9 @@ def test_temporal_incoherence_dis_tracks_translation(rng):
     ramp = np.linspace(0.3, 1.0, albedo.shape[2], dtype=np.float32)
     flicker = albedo * np.stack([ramp, ramp[::-1], ramp])[:, None, :, None]
     assert temporal_incoherence(flicker, flow, vis)["epe_visible"] > coherent["epe_visible"]
+    # a broadcast (static) albedo, which is not contiguous, is accepted
+    static = np.broadcast_to(albedo[0], albedo.shape)
+    assert temporal_incoherence(static, np.zeros_like(flow))["epe"] < 0.1
     # the global scale of the albedo does not matter (normalised per sequence)
     scaled = temporal_incoherence(0.5 * albedo, flow, vis)
     assert scaled["epe"] == pytest.approx(coherent["epe"], abs=1e-6)
