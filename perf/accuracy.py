@@ -177,7 +177,10 @@ def print_summary(mean: dict, per_kind: dict, mit_mean: dict | None) -> None:
         d = mean["IV"]["epe"] - mean["GT"]["epe"]
         print(f"  {'albedo EPE: IV - GT (px)':<52} {mean['IV']['epe']:8.3f} - {mean['GT']['epe']:8.3f} = "
               f"{d:+6.3f}  (required <= 0.30: {'met' if d <= 0.3 else f'missed by {d - 0.3:+.3f}'})")
-    print("context (no target)")
+    context = [(n, b) for b in ("CRET", "CRET-tuned", "Weiss-gtflow", "Weiss") for n in ("IV", "IV-noflow")
+               if have(n, b)]
+    if context:
+        print("context (no target)")
     for base in ("CRET", "CRET-tuned", "Weiss-gtflow", "Weiss"):
         for name in ("IV", "IV-noflow"):
             if have(name, base):
@@ -228,7 +231,10 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     methods = [m for m in METHODS if m in args.methods]
     iv_params = _key_values(args.iv_param, "--iv-param")
-    args.iv_params = iv.Params().replace(**iv_params) if iv_params else None
+    try:
+        args.iv_params = iv.Params().replace(**iv_params) if iv_params else None
+    except (TypeError, ValueError) as exc:
+        parser.error(f"--iv-param: {exc}")
     args.iv_options = _key_values(args.iv_option, "--iv-option")
     if args.seed != EVAL_SEED:
         print(f"note: seed {args.seed} is a training seed, not the evaluation seed {EVAL_SEED}")
