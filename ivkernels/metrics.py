@@ -9,7 +9,10 @@
   right): estimate flow on the recovered albedo sequence with a fixed flow
   method and report its EPE against ground truth.
 * :func:`albedo_consistency` — a direct check: log-albedo change along the
-  ground-truth flow.
+  ground-truth flow, each frame's scale left free.
+* :func:`albedo_flicker` — the same change with one scale per sequence, so
+  that a frame that brightens or darkens as a whole counts; ``flow=None``
+  for static scenes, and an optional mask (e.g. an object).
 
 All inputs are NumPy arrays; computations run in float64.
 """
@@ -30,6 +33,7 @@ __all__ = [
     "flow_errors",
     "temporal_incoherence",
     "albedo_consistency",
+    "albedo_flicker",
 ]
 
 _REC709 = np.array([0.2126, 0.7152, 0.0722])
@@ -262,7 +266,7 @@ def _dis_flow(frames) -> np.ndarray:
     normalised per sequence (see :func:`_albedo_to_uint8_luminance`).
     """
     a = _check_albedo_stack(frames, "frames")
-    grey = _albedo_to_uint8_luminance(a)
+    grey = np.ascontiguousarray(_albedo_to_uint8_luminance(a))   # DIS needs contiguous images
     dis = cv2.DISOpticalFlow_create(cv2.DISOPTICAL_FLOW_PRESET_MEDIUM)
     t, h, w = grey.shape
     out = np.empty((t - 1, h, w, 2), np.float32)
@@ -372,4 +376,89 @@ def albedo_consistency(albedo, flow_gt, visibility=None, eps: float = 1e-3) -> f
         count += diff.size
     if count == 0:
         raise ValueError("albedo_consistency: no visible pixel with known flow lands inside the next frame")
+    return total / count
+
+
+def albedo_flicker(albedo, flow=None, visibility=None, mask=None, eps: float = 1e-3) -> float:
+    """Albedo flicker: mean change of log albedo from frame to frame along the flow.
+
+    ::
+
+        flicker = mean_{t, x, c} | L_{t+1, c}(x + u_t(x)) - L_{t, c}(x) |,
+        L = log max(A / p99(A), eps)
+
+    over the frame pairs ``t, t+1``, the RGB channels, and the pixels ``x``
+    of frame ``t`` that are visible in frame ``t+1`` (``visibility >= 0.5``),
+    have known flow, land inside frame ``t+1``, and lie in ``mask``.
+    ``L_{t+1}(x + u)`` is bilinear (``cv2.remap``); with ``flow=None``
+    (a static scene) ``u = 0`` and no interpolation is involved.
+
+    Scale: the whole sequence is divided by one number, its 99th percentile
+    over pixels, channels and frames.  A global scale cancels in the
+    differences anyway; dividing by it makes the ``eps`` floor mean the same
+    for estimates of any scale.  Unlike :func:`albedo_consistency`, a frame
+    whose albedo changes by a factor as a whole (e.g. a per-frame
+    normalisation) counts as flicker: the viewer sees it.
+
+    Parameters
+    ----------
+    albedo : ``(T, H, W, 3)`` linear RGB, ``T >= 2``.
+    flow : ``(T-1, H, W, 2)`` forward flow (ground truth; unknown values
+        > 1e9 are ignored), or ``None`` for a static scene.
+    visibility : ``(T-1, H, W)`` or ``None`` (all visible).
+    mask : bool ``(H, W)`` or ``(T, H, W)`` (pixels of frame ``t`` to
+        count), or ``None`` (all).
+    eps : floor on the normalised albedo before the log.
+
+    Returns
+    -------
+    float, log units: 0 for an albedo constant along the flow;
+    ``log(1.1) = 0.095`` if every other frame is 10% brighter.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> a = np.ones((3, 4, 5, 3)); a[1] *= 1.1          # the middle frame 10% brighter
+    >>> round(albedo_flicker(a), 4)                        # |log 1.1| on both pairs
+    0.0953
+    """
+    a = _check_albedo_stack(albedo)
+    t, h, w, _ = a.shape
+    if not (np.isfinite(eps) and eps > 0):
+        raise ValueError(f"eps must be a positive number, got {eps}")
+    sel_mask = None if mask is None else _as_bool_mask(mask, (t, h, w))
+    p = float(np.percentile(a, 99))
+    if p <= 0:
+        raise ValueError("albedo_flicker: albedo is zero almost everywhere (99th percentile is 0)")
+    log_a = np.log(np.maximum(a / p, eps))
+    if flow is None:
+        if visibility is not None:
+            raise ValueError("albedo_flicker: visibility needs a flow (flow=None means a static scene)")
+        sel = np.ones((t - 1, h, w), bool) if sel_mask is None else sel_mask[:-1]
+        if not np.any(sel):
+            raise ValueError("albedo_flicker: the mask is empty")
+        return float(np.mean(np.abs(log_a[1:] - log_a[:-1])[sel]))
+    flow, vis = _check_flow_visibility(flow, visibility, t, h, w)
+    log_a = log_a.astype(np.float32)
+    known = valid_flow_mask(flow)
+    fl = np.where(known[..., None], flow, 0.0).astype(np.float64)
+    gx, gy = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+    total, count = 0.0, 0
+    for k in range(t - 1):
+        mx = gx + fl[k, ..., 0]
+        my = gy + fl[k, ..., 1]
+        sel = known[k] & (mx >= 0) & (mx <= w - 1) & (my >= 0) & (my <= h - 1)
+        if vis is not None:
+            sel &= vis[k]
+        if sel_mask is not None:
+            sel &= sel_mask[k]
+        if not np.any(sel):
+            continue
+        warped = cv2.remap(log_a[k + 1], mx.astype(np.float32), my.astype(np.float32),
+                           interpolation=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        diff = np.abs(warped[sel].astype(np.float64) - log_a[k][sel].astype(np.float64))
+        total += float(diff.sum())
+        count += diff.size
+    if count == 0:
+        raise ValueError("albedo_flicker: no visible pixel with known flow lands inside the next frame")
     return total / count

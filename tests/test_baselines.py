@@ -1,9 +1,11 @@
-"""Colour Retinex baseline (Grosse et al. 2009) and its Poisson integration."""
+"""Baselines: colour Retinex (Grosse et al. 2009), its Poisson integration, and the
+Weiss (2001) temporal median, plain and along the flow."""
 import numpy as np
 import pytest
 
-from ivkernels.baselines import _poisson_neumann, color_retinex
-from ivkernels.metrics import lmse
+from ivkernels.baselines import (GROSSE_THRESHOLDS, TUNED_THRESHOLDS, _invert_flow, _poisson_neumann,
+                                 color_retinex, weiss, weiss_flow)
+from ivkernels.metrics import albedo_flicker, lmse
 
 
 def _blocks_times_smooth(rng, h=60, w=80, block=10):
@@ -105,3 +107,161 @@ def test_color_retinex_beats_image_on_synthetic_sequences():
         ours.append(lmse(a, seq.albedo))
         base.append(lmse(seq.frames, seq.albedo))
     assert np.mean(ours) < np.mean(base)
+
+
+def test_color_retinex_threshold_presets(rng):
+    image = _blocks_times_smooth(rng, 30, 40)[2]
+    a, s = color_retinex(image, thresholds="grosse")
+    a0, s0 = color_retinex(image, *GROSSE_THRESHOLDS)
+    np.testing.assert_array_equal(a, a0)
+    a, s = color_retinex(image)
+    a1, s1 = color_retinex(image, *TUNED_THRESHOLDS)
+    np.testing.assert_array_equal(a, a1)
+    # an explicit value overrides the preset's
+    a, _ = color_retinex(image, threshold_gray=0.3, thresholds="grosse")
+    a2, _ = color_retinex(image, 0.3, GROSSE_THRESHOLDS[1])
+    np.testing.assert_array_equal(a, a2)
+    with pytest.raises(ValueError, match="thresholds must be one of"):
+        color_retinex(image, thresholds="mit")
+
+
+# ----------------------------------------------------------------------------- Weiss
+def _moving_shadow_scene(rng, t=5, h=24, w=30, block=6, shift=(0, 0)):
+    """Blocks of colour albedo; a static camera (or a camera panning by integer ``shift``
+    px per frame) and a hard shadow band moving across: every pixel is shadowed in at
+    most 2 of the 5 frames.  Each frame also has its own light intensity."""
+    cells = rng.uniform(0.2, 1.0, (h // block + 2, w // block + 2, 3))
+    big = np.repeat(np.repeat(cells, block, 0), block, 1)
+    albedo = np.stack([np.roll(big, (k * shift[1], k * shift[0]), axis=(0, 1))[:h, :w] for k in range(t)])
+    shading = np.empty((t, h, w))
+    xs = np.arange(w)
+    for k in range(t):
+        band = (xs >= 3 + 5 * k) & (xs < 3 + 5 * k + 7)          # 7 px wide, moves 5 px per frame
+        shading[k] = np.where(band[None, :], 0.3, 1.0) * (0.6 + 0.1 * k)
+    return albedo, shading, albedo * shading[..., None]
+
+
+def _log_ratio_spread(estimate, truth):
+    """ptp over pixels and channels of log(estimate / truth), per frame (0: equal up to a scale)."""
+    r = np.log(estimate.astype(np.float64)) - np.log(truth)
+    return np.ptp(r.reshape(r.shape[0], -1), axis=1)
+
+
+@pytest.mark.parametrize("colour", ["chromaticity", "channels"])
+def test_weiss_removes_a_moving_shadow(rng, colour):
+    albedo, shading, frames = _moving_shadow_scene(rng)
+    a, s = weiss(frames.astype(np.float32), colour=colour)
+    assert a.shape == frames.shape and s.shape == frames.shape[:3]
+    assert a.dtype == np.float32 and s.dtype == np.float32
+    # the same albedo in every frame, equal to the truth up to one scale: the shadow is gone
+    np.testing.assert_array_equal(a, np.broadcast_to(a[0], a.shape))
+    assert np.all(_log_ratio_spread(a, albedo) < 1e-5)
+    assert np.percentile(a, 99) == pytest.approx(1.0, rel=1e-5)
+    # the shadow went to the shading, which reproduces the image (grey shading, exact here)
+    assert lmse(s, shading) < 1e-10
+    np.testing.assert_allclose(a * s[..., None], frames, rtol=1e-5)
+    # every frame taken alone, colour Retinex with Grosse's thresholds takes the hard
+    # grey shadow edge for a reflectance edge and keeps it in its albedo
+    cret, _ = color_retinex(frames, thresholds="grosse")
+    assert np.all(_log_ratio_spread(cret, albedo) > 0.5)
+
+
+def test_weiss_flow_equals_weiss_at_zero_flow(rng):
+    frames = rng.uniform(0.0, 1.0, (4, 9, 11, 3)).astype(np.float32)
+    frames[1, 2, 3] = 0.0                                        # a pixel at the eps floor
+    zero = np.zeros((3, 9, 11, 2), np.float32)
+    for colour in ("chromaticity", "channels"):
+        a, s = weiss(frames, colour=colour)
+        for vis in (None, np.ones((3, 9, 11), np.float32)):
+            af, sf = weiss_flow(frames, zero, vis, colour=colour)
+            np.testing.assert_allclose(af, a, rtol=1e-6, atol=1e-7)
+            np.testing.assert_allclose(sf, s, rtol=1e-6, atol=1e-7)
+
+
+def test_weiss_flow_follows_a_panning_camera(rng):
+    # the camera pans 2 px right and 1 px down per frame over the blocks while the shadow
+    # band moves across the image: along the flow the shadow is gone from the albedo
+    albedo, shading, frames = _moving_shadow_scene(rng, shift=(2, 1))
+    t, h, w, _ = frames.shape
+    flow = np.zeros((t - 1, h, w, 2), np.float32)
+    flow[..., 0], flow[..., 1] = 2.0, 1.0
+    vis = np.ones((t - 1, h, w), np.float32)
+    vis[:, h - 1:] = 0
+    vis[:, :, w - 2:] = 0
+    a, s = weiss_flow(frames, flow, vis)
+    assert a.shape == frames.shape and s.shape == frames.shape[:3]
+    plain, _ = weiss(frames)
+    assert lmse(a, albedo) < 1e-3
+    assert lmse(a, albedo) < 0.05 * lmse(plain, albedo)
+    assert lmse(a, albedo) < 0.05 * lmse(color_retinex(frames)[0], albedo)
+    # and it does not flicker along the flow (one scale chained through the frames)
+    assert albedo_flicker(a, flow, vis) < 0.02
+    # radius=0: each frame alone, the shadow stays
+    alone, _ = weiss_flow(frames, flow, vis, radius=0)
+    assert lmse(alone, albedo) > 10 * lmse(a, albedo)
+
+
+def test_invert_flow_of_a_translation():
+    u = np.zeros((6, 7, 2))
+    u[..., 0] = 1.5
+    v, ok = _invert_flow(u, np.ones((6, 7)))
+    np.testing.assert_allclose(v, -u, atol=1e-12)
+    # pixels of frame t+1 left of x = 1.5 come from outside frame t
+    np.testing.assert_array_equal(ok, np.broadcast_to(np.arange(7) >= 2, (6, 7)))
+
+
+@pytest.mark.parametrize("shape", [(3, 1, 5), (3, 5, 1), (2, 2, 2), (3, 7, 4)])
+def test_weiss_odd_sizes(rng, shape):
+    frames = rng.uniform(0.05, 1.0, shape + (3,))
+    a, s = weiss(frames)
+    assert a.shape == frames.shape and s.shape == shape
+    flow = rng.uniform(-0.7, 0.7, (shape[0] - 1,) + shape[1:] + (2,))
+    a, s = weiss_flow(frames, flow)
+    assert a.shape == frames.shape and s.shape == shape
+    assert np.all(np.isfinite(a)) and np.all(a >= 0) and np.all(np.isfinite(s))
+
+
+def test_weiss_non_contiguous_input(rng):
+    frames = rng.uniform(0.05, 1.0, (4, 10, 12, 3))
+    view = frames[:, ::-1, ::2]
+    a, s = weiss(view)
+    a0, s0 = weiss(np.ascontiguousarray(view))
+    np.testing.assert_array_equal(a, a0)
+    flow = np.zeros((3, 10, 6, 2))
+    np.testing.assert_array_equal(weiss_flow(view, flow)[0], weiss_flow(np.ascontiguousarray(view), flow)[0])
+
+
+_OK = np.full((3, 4, 5, 3), 0.5)
+_FLOW = np.zeros((2, 4, 5, 2))
+
+
+@pytest.mark.parametrize("call, exc, msg", [
+    (lambda: weiss(np.zeros((3, 4, 5, 3), np.uint8)), TypeError, "to_linear_float"),
+    (lambda: weiss(_OK[:1]), ValueError, "at least 2 frames"),
+    (lambda: weiss(_OK[0]), ValueError, "at least 2 frames"),
+    (lambda: weiss(_OK[..., :2]), ValueError, r"\(T, H, W, 3\)"),
+    (lambda: weiss(-_OK), ValueError, ">= 0"),
+    (lambda: weiss(_OK * np.nan), ValueError, "NaN"),
+    (lambda: weiss(_OK, eps=0.0), ValueError, "eps"),
+    (lambda: weiss(_OK, colour="rgb"), ValueError, "colour"),
+    (lambda: weiss_flow(_OK, _FLOW[:1]), ValueError, r"\(T-1, H, W, 2\)"),
+    (lambda: weiss_flow(_OK, _FLOW[..., :1]), ValueError, r"\(T-1, H, W, 2\)"),
+    (lambda: weiss_flow(_OK, _FLOW * np.nan), ValueError, "NaN"),
+    (lambda: weiss_flow(_OK, _FLOW.astype(bool)), TypeError, "flow"),
+    (lambda: weiss_flow(_OK, _FLOW, np.ones((2, 4, 4))), ValueError, "visibility"),
+    (lambda: weiss_flow(_OK, _FLOW, radius=-1), ValueError, "radius"),
+    (lambda: weiss_flow(_OK, _FLOW, radius=1.5), ValueError, "radius"),
+    (lambda: weiss_flow(_OK, _FLOW, colour="grey"), ValueError, "colour"),
+])
+def test_weiss_rejects(call, exc, msg):
+    with pytest.raises(exc, match=msg):
+        call()
+
+
+def test_weiss_beats_the_input_and_grosse_retinex_on_the_static_moving_light_kind():
+    from ivkernels import synthetic
+
+    seq = synthetic.render_sequence("static_moving_light", n_frames=5, size=(48, 64), seed=3)
+    a, s = weiss(seq.frames)
+    c, _ = color_retinex(seq.frames, thresholds="grosse")
+    assert lmse(a, seq.albedo) < lmse(c, seq.albedo) < lmse(seq.frames, seq.albedo)

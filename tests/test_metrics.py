@@ -1,8 +1,8 @@
-"""LMSE, flow errors, temporal incoherence and albedo consistency."""
+"""LMSE, flow errors, temporal incoherence, albedo consistency and flicker."""
 import numpy as np
 import pytest
 
-from ivkernels.metrics import (_dis_flow, albedo_consistency, angular_error, endpoint_error, flow_errors,
+from ivkernels.metrics import (_dis_flow, albedo_consistency, albedo_flicker, angular_error, endpoint_error, flow_errors,
                                intrinsic_lmse, lmse, temporal_incoherence)
 
 
@@ -204,6 +204,9 @@ def test_temporal_incoherence_dis_tracks_translation(rng):
     ramp = np.linspace(0.3, 1.0, albedo.shape[2], dtype=np.float32)
     flicker = albedo * np.stack([ramp, ramp[::-1], ramp])[:, None, :, None]
     assert temporal_incoherence(flicker, flow, vis)["epe_visible"] > coherent["epe_visible"]
+    # a broadcast (static) albedo, which is not contiguous, is accepted
+    static = np.broadcast_to(albedo[0], albedo.shape)
+    assert temporal_incoherence(static, np.zeros_like(flow))["epe"] < 0.1
     # the global scale of the albedo does not matter (normalised per sequence)
     scaled = temporal_incoherence(0.5 * albedo, flow, vis)
     assert scaled["epe"] == pytest.approx(coherent["epe"], abs=1e-6)
@@ -251,3 +254,70 @@ def test_albedo_consistency(rng):
         albedo_consistency(albedo, flow, vis, eps=0.0)
     with pytest.raises(ValueError, match="flow_gt"):
         albedo_consistency(albedo, flow[..., :1], vis)
+
+
+# ----------------------------------------------------------------------------- albedo flicker
+def test_albedo_flicker_hand_computed_static():
+    # 3 frames of 2x2 RGB: frame 1 has one pixel doubled (all channels), frame 2 equals frame 0
+    a = np.full((3, 2, 2, 3), 0.25)
+    a[1, 0, 1] = 0.5
+    # p99 is taken over all 36 values, 3 of them 0.5: a global scale, which cancels
+    # pairs (0,1) and (1,2): one pixel of 4 changes by |log 2| each time -> mean log(2)/4
+    assert albedo_flicker(a) == pytest.approx(np.log(2.0) / 4.0, rel=1e-12)
+    # a global scale changes nothing; a per-frame scale is flicker (unlike albedo_consistency)
+    assert albedo_flicker(7.0 * a) == pytest.approx(np.log(2.0) / 4.0, rel=1e-12)
+    b = np.full((2, 2, 2, 3), 0.25)
+    b[1] *= 1.5
+    assert albedo_flicker(b) == pytest.approx(np.log(1.5), rel=1e-12)
+    # the mask keeps pixels of frame t: without (0, 1) nothing changes
+    mask = np.ones((2, 2), bool)
+    mask[0, 1] = False
+    assert albedo_flicker(a, mask=mask) == pytest.approx(0.0, abs=1e-15)
+    # the eps floor acts on the normalised albedo: 0 and 1e-6 of a 0.25 albedo are the same
+    c = np.full((2, 2, 2, 3), 0.25)
+    c[1, 0, 0] = 0.0
+    d = c.copy()
+    d[1, 0, 0] = 1e-6
+    assert albedo_flicker(c) == pytest.approx(albedo_flicker(d), rel=1e-12)
+    assert albedo_flicker(c) == pytest.approx(np.log(1.0 / 1e-3) / 4.0, rel=1e-12)
+
+
+def test_albedo_flicker_along_flow(rng):
+    albedo, flow, vis = _translating_texture(rng)
+    assert albedo_flicker(albedo, flow, vis) == pytest.approx(0.0, abs=1e-5)
+    # zero flow on a moving texture: flicker, which the flow explains away
+    assert albedo_flicker(albedo) > 0.05
+    # a frame brightened as a whole: |log 2| on both of its pairs, at every counted pixel
+    scaled = albedo * np.array([1.0, 2.0, 1.0], np.float32)[:, None, None, None]
+    assert albedo_flicker(scaled, flow, vis) == pytest.approx(np.log(2.0), rel=1e-4)
+    assert albedo_consistency(scaled, flow, vis) == pytest.approx(0.0, abs=1e-5)
+    # pixels marked occluded are not compared
+    changed = albedo.copy()
+    changed[1, 10:30, 10:30] *= 0.5
+    hidden = vis.copy()
+    hidden[0, 9:29, 8:28] = 0
+    hidden[1, 10:30, 10:30] = 0
+    assert albedo_flicker(changed, flow, vis) > 0.05
+    assert albedo_flicker(changed, flow, hidden) == pytest.approx(0.0, abs=1e-5)
+
+
+def test_albedo_flicker_rejects(rng):
+    albedo, flow, vis = _translating_texture(rng)
+    with pytest.raises(ValueError, match="at least 2 frames"):
+        albedo_flicker(albedo[:1])
+    with pytest.raises(ValueError, match=r"\(T, H, W, 3\)"):
+        albedo_flicker(albedo[..., 0])
+    with pytest.raises(ValueError, match="flow_gt"):
+        albedo_flicker(albedo, flow[:1], vis)
+    with pytest.raises(ValueError, match="needs a flow"):
+        albedo_flicker(albedo, None, vis)
+    with pytest.raises(ValueError, match="mask"):
+        albedo_flicker(albedo, mask=np.ones((3, 3), bool))
+    with pytest.raises(ValueError, match="empty"):
+        albedo_flicker(albedo, mask=np.zeros(albedo.shape[1:3], bool))
+    with pytest.raises(ValueError, match="no visible pixel"):
+        albedo_flicker(albedo, flow + 1000.0, vis)
+    with pytest.raises(ValueError, match="eps"):
+        albedo_flicker(albedo, eps=0.0)
+    with pytest.raises(ValueError, match="99th percentile"):
+        albedo_flicker(np.zeros_like(albedo))

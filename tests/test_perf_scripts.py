@@ -18,3 +18,25 @@ def test_bench_kernels_quick_vecops_prints_a_table():
     assert "| kernel" in out and "W1/W2" in out
     assert "| vecops.dot" in out and "| vecops.fill" in out
     assert "memory roof" in out
+
+
+def test_accuracy_baselines_on_a_tiny_sequence():
+    proc = subprocess.run(
+        [sys.executable, str(PERF / "accuracy.py"), "--size", "32", "48", "--frames", "3", "--seed", "5",
+         "--kinds", "static_moving_light", "objects_camera", "--no-mit",
+         "--methods", "CRET", "CRET-tuned", "Weiss", "Weiss-gtflow", "GT"],
+        capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    out = proc.stdout
+    assert "seed 5 is a training seed" in out
+    assert "mean over 2 kinds" in out and "flicker" in out
+    for name in ("CRET-tuned", "Weiss-gtflow", "GT"):
+        assert f"\n{name} " in out
+    assert "IV-noflow" not in out
+    assert "summary" in out
+
+
+def test_tune_baselines_refuses_the_evaluation_seed():
+    proc = subprocess.run([sys.executable, str(PERF / "tune_baselines.py"), "--seeds", "0", "1"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode != 0 and "evaluation seed" in proc.stderr

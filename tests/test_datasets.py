@@ -1,0 +1,86 @@
+"""MIT-Berkeley loader: the real objects when present, a tiny written copy always."""
+import cv2
+import numpy as np
+import pytest
+
+from ivkernels import datasets
+from ivkernels.datasets import MIT_OBJECTS, available_mit_objects, load_mit_object
+
+PRESENT = available_mit_objects()
+
+
+def _write_object(folder, rng, h=12, w=10):
+    """A fake object folder: 16-bit PNGs as the real ones (RGB written BGR, mask 0/65025)."""
+    folder.mkdir(parents=True)
+    albedo = rng.uniform(0.1, 0.9, (h, w, 3))
+    mask = np.zeros((h, w), bool)
+    mask[2:10, 2:8] = True
+    shading = rng.uniform(0.2, 1.0, (10, h, w))
+
+    def put(name, x):
+        x16 = np.round(np.clip(x, 0, 1) * 65535).astype(np.uint16)
+        cv2.imwrite(str(folder / name), x16[..., ::-1] if x16.ndim == 3 else x16)
+
+    put("reflectance.png", albedo)
+    put("shading.png", shading[0])
+    put("diffuse.png", albedo * shading[0][..., None])
+    cv2.imwrite(str(folder / "mask.png"), np.where(mask, 65025, 0).astype(np.uint16))
+    for k in range(10):
+        put(f"light{k + 1:02d}.png", albedo * shading[k][..., None])
+    return albedo, shading, mask
+
+
+def test_load_written_object(tmp_path, rng):
+    albedo, shading, mask = _write_object(tmp_path / "apple", rng)
+    assert available_mit_objects(tmp_path) == ("apple",)
+    obj = load_mit_object("apple", root=tmp_path)
+    assert obj.name == "apple"
+    assert obj.frames.shape == (10, 12, 10, 3) and obj.frames.dtype == np.float32
+    assert obj.albedo.shape == (12, 10, 3) and obj.mask.dtype == np.bool_
+    assert obj.frame_shading.shape == (10, 12, 10)
+    np.testing.assert_array_equal(obj.mask, mask)
+    # read as linear value / 65535, channels in RGB order
+    np.testing.assert_allclose(obj.albedo, albedo, atol=1e-4)
+    np.testing.assert_allclose(obj.frames[3], albedo * shading[3][..., None], atol=1e-4)
+    np.testing.assert_allclose(obj.shading, shading[0], atol=1e-4)
+    # the derived per-frame shading is the luminance ratio inside the mask, 0 outside
+    ratio = (albedo * shading[..., None]).mean(-1) / albedo.mean(-1)
+    np.testing.assert_allclose(obj.frame_shading[:, mask], ratio[:, mask], rtol=1e-3)
+    assert np.all(obj.frame_shading[:, ~mask] == 0)
+
+
+def test_load_scaled_object(tmp_path, rng):
+    _write_object(tmp_path / "box", rng)
+    obj = load_mit_object("box", root=tmp_path, scale=0.5)
+    assert obj.frames.shape == (10, 6, 5, 3) and obj.mask.shape == (6, 5)
+    # only pixels wholly inside the object stay in the mask: rows 2..9, cols 2..7 -> 1..4, 1..3
+    expect = np.zeros((6, 5), bool)
+    expect[1:5, 1:4] = True
+    np.testing.assert_array_equal(obj.mask, expect)
+
+
+def test_load_rejects(tmp_path, monkeypatch):
+    with pytest.raises(ValueError, match="unknown MIT object"):
+        load_mit_object("teapot", root=tmp_path)
+    for bad in (0.0, 1.5, -1, True):
+        with pytest.raises(ValueError, match="scale"):
+            load_mit_object("apple", root=tmp_path, scale=bad)
+    with pytest.raises(FileNotFoundError, match="IVKERNELS_MIT_DATA"):
+        load_mit_object("apple", root=tmp_path)
+    assert available_mit_objects(tmp_path) == ()
+    monkeypatch.setenv("IVKERNELS_MIT_DATA", str(tmp_path))
+    assert datasets.default_mit_root() == tmp_path
+
+
+@pytest.mark.skipif(not PRESENT, reason="MIT-Berkeley training objects not present")
+def test_real_objects_are_linear_and_consistent():
+    assert set(PRESENT) <= set(MIT_OBJECTS)
+    obj = load_mit_object(PRESENT[0], scale=0.25)
+    assert obj.frames.shape[0] == 10 and obj.frames.shape[1:] == obj.albedo.shape
+    assert obj.mask.any() and 0 <= obj.frames.min() and obj.frames.max() <= 1
+    # diffuse = reflectance * shading holds as linear values (a few % after the best scale)
+    m = obj.mask & (obj.albedo.min(-1) > 0.02)
+    prod = (obj.albedo * obj.shading[..., None])[m]
+    diff = obj.diffuse[m]
+    alpha = np.sum(prod * diff) / np.sum(prod * prod)
+    assert np.sqrt(np.mean((alpha * prod - diff) ** 2) / np.mean(diff ** 2)) < 0.1
