@@ -329,6 +329,33 @@ def temporal_incoherence(albedo, flow_gt, visibility=None, flow_method=None) -> 
     return {"epe": epe, "epe_visible": epe_vis}
 
 
+def _warped_abs_difference(log_a: np.ndarray, flow: np.ndarray, vis, sel_mask=None):
+    """``(sum, count)`` of ``|L_{t+1}(x + u_t(x)) - L_t(x)|`` over channels and the pixels
+    with known flow that land inside frame ``t+1`` and are visible (``vis``)
+    and selected (``sel_mask``, frames ``t``); bilinear ``cv2.remap``."""
+    t, h, w, _ = log_a.shape
+    known = valid_flow_mask(flow)
+    fl = np.where(known[..., None], flow, 0.0).astype(np.float64)
+    gx, gy = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+    total, count = 0.0, 0
+    for k in range(t - 1):
+        mx = gx + fl[k, ..., 0]
+        my = gy + fl[k, ..., 1]
+        sel = known[k] & (mx >= 0) & (mx <= w - 1) & (my >= 0) & (my <= h - 1)
+        if vis is not None:
+            sel &= vis[k]
+        if sel_mask is not None:
+            sel &= sel_mask[k]
+        if not np.any(sel):
+            continue
+        warped = cv2.remap(log_a[k + 1], mx.astype(np.float32), my.astype(np.float32),
+                           interpolation=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        diff = np.abs(warped[sel].astype(np.float64) - log_a[k][sel].astype(np.float64))
+        total += float(diff.sum())
+        count += diff.size
+    return total, count
+
+
 def albedo_consistency(albedo, flow_gt, visibility=None, eps: float = 1e-3) -> float:
     """Mean absolute change of log albedo along the ground-truth flow.
 
@@ -357,23 +384,7 @@ def albedo_consistency(albedo, flow_gt, visibility=None, eps: float = 1e-3) -> f
     log_a = np.log(np.maximum(a, eps))
     log_a -= np.median(log_a.reshape(t, -1), axis=1)[:, None, None, None]
     log_a = log_a.astype(np.float32)
-    known = valid_flow_mask(flow_gt)
-    fl = np.where(known[..., None], flow_gt, 0.0)
-    gx, gy = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
-    total, count = 0.0, 0
-    for k in range(t - 1):
-        mx = gx + fl[k, ..., 0]
-        my = gy + fl[k, ..., 1]
-        sel = known[k] & (mx >= 0) & (mx <= w - 1) & (my >= 0) & (my <= h - 1)
-        if vis is not None:
-            sel &= vis[k]
-        if not np.any(sel):
-            continue
-        warped = cv2.remap(log_a[k + 1], mx.astype(np.float32), my.astype(np.float32),
-                           interpolation=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        diff = np.abs(warped[sel].astype(np.float64) - log_a[k][sel])
-        total += float(diff.sum())
-        count += diff.size
+    total, count = _warped_abs_difference(log_a, flow_gt, vis)
     if count == 0:
         raise ValueError("albedo_consistency: no visible pixel with known flow lands inside the next frame")
     return total / count
@@ -439,26 +450,7 @@ def albedo_flicker(albedo, flow=None, visibility=None, mask=None, eps: float = 1
             raise ValueError("albedo_flicker: the mask is empty")
         return float(np.mean(np.abs(log_a[1:] - log_a[:-1])[sel]))
     flow, vis = _check_flow_visibility(flow, visibility, t, h, w)
-    log_a = log_a.astype(np.float32)
-    known = valid_flow_mask(flow)
-    fl = np.where(known[..., None], flow, 0.0).astype(np.float64)
-    gx, gy = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
-    total, count = 0.0, 0
-    for k in range(t - 1):
-        mx = gx + fl[k, ..., 0]
-        my = gy + fl[k, ..., 1]
-        sel = known[k] & (mx >= 0) & (mx <= w - 1) & (my >= 0) & (my <= h - 1)
-        if vis is not None:
-            sel &= vis[k]
-        if sel_mask is not None:
-            sel &= sel_mask[k]
-        if not np.any(sel):
-            continue
-        warped = cv2.remap(log_a[k + 1], mx.astype(np.float32), my.astype(np.float32),
-                           interpolation=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        diff = np.abs(warped[sel].astype(np.float64) - log_a[k][sel].astype(np.float64))
-        total += float(diff.sum())
-        count += diff.size
+    total, count = _warped_abs_difference(log_a.astype(np.float32), flow, vis, sel_mask)
     if count == 0:
         raise ValueError("albedo_flicker: no visible pixel with known flow lands inside the next frame")
     return total / count

@@ -19,6 +19,7 @@ import time
 import numpy as np
 
 import ivkernels as iv
+from calibrate import parse_grid
 from ivkernels import metrics, synthetic
 
 
@@ -40,11 +41,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if 0 in args.seeds:
         raise SystemExit("seed 0 is the evaluation seed; measure on other seeds")
-    fields = {}
-    for item in args.set:
-        name, _, value = item.partition("=")
-        fields[name] = int(value) if value.lstrip("-").isdigit() else float(value)
-    base = iv.Params().replace(**fields)
+    base = iv.Params().replace(**parse_grid(args.set)[0])
     print(f"{'sequence':<28} {'iters':>6} {'solve s':>8} {'CPU s':>8} {'E final':>12} {'drop %':>7} "
           f"{'LMSE':>7}")
     for seed in args.seeds:

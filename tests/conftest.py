@@ -14,3 +14,19 @@ def pytest_generate_tests(metafunc):
 @pytest.fixture
 def rng():
     return np.random.default_rng(0)
+
+
+@pytest.fixture
+def frames8():
+    """Three random 16x16 sRGB uint8 frames (the input-contract batteries' input)."""
+    return np.random.default_rng(0).integers(0, 256, (3, 16, 16, 3), dtype=np.uint8)
+
+
+@pytest.fixture
+def image_folder(tmp_path, frames8):
+    """``frames8`` written as a folder of PNGs (overridden where a test file needs another)."""
+    from ivkernels.io import write_png_sequence
+
+    folder = tmp_path / "frames"
+    write_png_sequence(folder, frames8)
+    return folder

@@ -26,20 +26,8 @@ def _cuda_present() -> bool:
 
 
 @pytest.fixture
-def frames8():
-    return np.random.default_rng(0).integers(0, 256, (3, 16, 16, 3), dtype=np.uint8)
-
-
-@pytest.fixture
 def frames_f(frames8):
     return to_linear_float(frames8)
-
-
-@pytest.fixture
-def image_folder(tmp_path, frames8):
-    folder = tmp_path / "frames"
-    write_png_sequence(folder, frames8)
-    return folder
 
 
 @pytest.fixture

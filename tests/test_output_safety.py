@@ -20,18 +20,6 @@ DEAD_PID = 2**31 - 2      # beyond any pid_max: no such process
 
 
 @pytest.fixture
-def frames8():
-    return np.random.default_rng(0).integers(0, 256, (3, 16, 16, 3), dtype=np.uint8)
-
-
-@pytest.fixture
-def image_folder(tmp_path, frames8):
-    folder = tmp_path / "frames"
-    write_png_sequence(folder, frames8)
-    return folder
-
-
-@pytest.fixture
 def umask022():
     old = os.umask(0o022)
     yield

@@ -135,21 +135,26 @@ def _small_problem(backend, rng, T=3, h=11, w=13):
     return energy, x0
 
 
+def _assert_directional_derivatives(be, fun, x0, g, rng, n_directions=3, h=1e-2):
+    """``g . d`` against the central difference of ``fun`` (evaluating its own
+    ``X``, ``G``) along random unit directions ``d`` around ``x0``."""
+    for _ in range(n_directions):
+        d = rng.standard_normal(x0.shape)
+        d /= np.linalg.norm(d)
+        vals = []
+        for sgn in (1, -1):
+            be.vecops.copy(be.asarray((x0 + sgn * h * d).astype(np.float32)), fun.X)
+            vals.append(fun(fun.X, fun.G))
+        fd = (vals[0] - vals[1]) / (2 * h)
+        assert fd == pytest.approx(g @ d, rel=2e-2, abs=1e-2 * np.abs(g).max())
+
+
 def test_assembled_gradient_matches_directional_difference(backend, rng):
     energy, x0 = _small_problem(backend, rng)
     be = backend
     energy(energy.X, energy.G)
     g = be.numpy(energy.G).astype(np.float64).copy()
-    for _ in range(3):
-        d = rng.standard_normal(x0.shape)
-        d /= np.linalg.norm(d)
-        h = 1e-2
-        vals = []
-        for sgn in (1, -1):
-            be.vecops.copy(be.asarray((x0 + sgn * h * d).astype(np.float32)), energy.X)
-            vals.append(energy(energy.X, energy.G))
-        fd = (vals[0] - vals[1]) / (2 * h)
-        assert fd == pytest.approx(g @ d, rel=2e-2, abs=1e-2 * np.abs(g).max())
+    _assert_directional_derivatives(be, energy, x0, g, rng)
 
 
 def test_fixed_frames_get_no_gradient(backend, rng):
@@ -186,16 +191,7 @@ def test_constrained_gradient_matches_directional_difference(backend, rng):
     A = be.numpy(energy.A).reshape(-1, 3)
     I = be.numpy(energy.I).reshape(-1, 3)
     np.testing.assert_allclose(A, I - S0[:, None], atol=1e-6)     # A follows S
-    for _ in range(3):
-        d = rng.standard_normal(S0.shape)
-        d /= np.linalg.norm(d)
-        h = 1e-2
-        vals = []
-        for sgn in (1, -1):
-            be.vecops.copy(be.asarray((S0 + sgn * h * d).astype(np.float32)), problem.X)
-            vals.append(problem(problem.X, problem.G))
-        fd = (vals[0] - vals[1]) / (2 * h)
-        assert fd == pytest.approx(g @ d, rel=2e-2, abs=1e-2 * np.abs(g).max())
+    _assert_directional_derivatives(be, problem, S0, g, rng)
 
 
 def test_constrained_energy_has_no_data_term_and_fixed_frames_stay(backend, rng):
