@@ -58,6 +58,10 @@ from dataclasses import dataclass
 import numpy as np
 
 
+#: Data terms of :class:`ClassicNLSettings` (``data_term``).
+DATA_TERMS = ("brightness", "gradient", "census")
+
+
 @dataclass(frozen=True)
 class ClassicNLSettings:
     """Parameters of Classic+NL (defaults: the public code's ``classic+nl``).
@@ -76,7 +80,10 @@ class ClassicNLSettings:
         automatic level count (0 = no cap).
     Input
         ``rof_iters``, ``rof_theta``, ``texture_alpha``: ROF texture input
-        (``texture_alpha = 0`` keeps the plain grey image).
+        (``texture_alpha = 0`` keeps the plain grey image); ``log_input``:
+        start from the log of the linear grey level instead of the sRGB
+        grey (shading becomes additive, and the ROF structure removes it
+        where it is smooth).
     Solver
         ``sor_sweeps`` red-black sweeps per linear system of the robust
         GNC stages and ``sor_sweeps_quadratic`` in the quadratic first
@@ -106,6 +113,16 @@ class ClassicNLSettings:
         the edge (MATLAB's ``edge(u, 'sobel')``), and its Sobel magnitude
         is at least ``edge_min`` (pixels per pixel; 0 = no floor);
         ``edge_radius`` dilation of the edges (2 = 5x5).
+    Data term
+        ``data_term``: ``"brightness"`` (Classic+NL's brightness constancy
+        of the texture image), ``"gradient"`` (brightness with weight
+        ``brightness_weight`` plus constancy of the texture image's x and y
+        derivatives with weight ``gradient_weight``, Brox et al. 2004) or
+        ``"census"`` (constancy of the soft census transform of the texture
+        image: ``census_scale * d / sqrt(d^2 + census_eps^2)`` for each
+        difference ``d`` to a neighbour in a ``2 census_radius + 1`` square,
+        grey levels of the [0, 255] texture image).  Every channel has its
+        own generalised Charbonnier penalty.
     """
 
     lam: float = 3.0
@@ -137,6 +154,13 @@ class ClassicNLSettings:
     edge_scale: float = 4.0
     edge_min: float = 0.0
     edge_radius: int = 2
+    log_input: bool = False
+    data_term: str = "brightness"
+    brightness_weight: float = 1.0
+    gradient_weight: float = 1.0
+    census_radius: int = 1
+    census_eps: float = 4.0
+    census_scale: float = 16.0
 
     def __post_init__(self):
         for name in ("gnc_stages", "warps", "gnc_levels", "wm_radius", "rof_iters", "sor_sweeps",
@@ -153,6 +177,17 @@ class ClassicNLSettings:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
         if not 0.0 < self.a <= 1.0:
             raise ValueError(f"a must be in (0, 1], got {self.a!r}")
+        if self.data_term not in DATA_TERMS:
+            raise ValueError(f"data_term must be one of {DATA_TERMS}, got {self.data_term!r}")
+        for name in ("brightness_weight", "gradient_weight"):
+            if not getattr(self, name) >= 0.0:
+                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)!r}")
+        if isinstance(self.census_radius, bool) or not isinstance(self.census_radius, (int, np.integer)) \
+                or not 1 <= self.census_radius <= 3:
+            raise ValueError(f"census_radius must be an int in [1, 3], got {self.census_radius!r}")
+        for name in ("census_eps", "census_scale"):
+            if not getattr(self, name) > 0.0:
+                raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
         if not 0.0 < self.sor_omega < 2.0:
             raise ValueError(f"sor_omega must be in (0, 2), got {self.sor_omega!r}")
 
@@ -206,10 +241,27 @@ def gnc_schedule(stages: int) -> list[float]:
     return alphas
 
 
+def _features(be, s, tex3, gx3, gy3):
+    """Feature channels (T, h, w, C) of the data term and their weights (C,)."""
+    t_all, h, w = tex3.shape
+    if s.data_term == "gradient":
+        if s.brightness_weight == 0.0:
+            feat = be.empty((t_all, h, w, 2))
+            be.flow_classic.gradient_channels(tex3, feat)
+            return feat, (s.gradient_weight, s.gradient_weight)
+        feat = be.empty((t_all, h, w, 3))
+        be.flow_classic.pack_image_gradient(tex3, gx3, gy3, feat)
+        return feat, (s.brightness_weight, s.gradient_weight, s.gradient_weight)
+    c = (2 * s.census_radius + 1) ** 2 - 1
+    feat = be.empty((t_all, h, w, c))
+    be.flow_classic.soft_census(tex3, feat, s.census_radius, s.census_eps, s.census_scale)
+    return feat, (1.0,) * c
+
+
 class _Level:
     """Buffers of one pyramid level: images of all T frames and the per-warp work arrays."""
 
-    def __init__(self, be, texture, lab, n_flows: int):
+    def __init__(self, be, texture, lab, n_flows: int, settings=None):
         t_all, h, w, _ = texture.shape
         n = n_flows
         self.shape = (h, w)
@@ -221,14 +273,26 @@ class _Level:
         be.derivatives.image_gradient(texture, gx, gy)
         gx3, gy3 = gx.reshape((t_all, h, w)), gy.reshape((t_all, h, w))
         self.i1, self.i1x, self.i1y = tex3[0:n], gx3[0:n], gy3[0:n]
-        self.pack2 = be.empty((n, h, w, 3))                     # (I2, I2x, I2y)
-        fc.pack_image_gradient(tex3[1:n + 1], gx3[1:n + 1], gy3[1:n + 1], self.pack2)
+        term = "brightness" if settings is None else settings.data_term
+        if term == "brightness":
+            self.first = None
+            self.pack2 = be.empty((n, h, w, 3))                 # (I2, I2x, I2y)
+            fc.pack_image_gradient(tex3[1:n + 1], gx3[1:n + 1], gy3[1:n + 1], self.pack2)
+        else:
+            feat, weights = _features(be, settings, tex3, gx3, gy3)
+            c = feat.shape[3]
+            fgx, fgy = be.empty(feat.shape), be.empty(feat.shape)
+            be.derivatives.image_gradient(feat, fgx, fgy)
+            pack = be.empty((t_all, h, w, 3 * c))               # (F_c, F_cx, F_cy) per channel
+            fc.pack_channels_gradient(feat, fgx, fgy, pack)
+            self.first, self.pack2 = pack[0:n], pack[1:n + 1]
+            self.weights = be.asarray(np.asarray(weights, np.float32))
         # Occlusion input: the texture image as the first of three "colour" channels,
         # so that the maps kernel's colour distance is Classic+NL's |I2(x+u) - I1(x)|.
         zeros = be.zeros((t_all, h, w))
         self.occ_img = be.empty((t_all, h, w, 3))
         fc.pack_image_gradient(tex3, zeros, zeros, self.occ_img)
-        self.warped = be.empty((n, h, w, 3))
+        self.warped = be.empty(tuple(self.pack2.shape))
         self.inside = be.empty((n, h, w))
         self.du = be.zeros((n, h, w, 2))
         self.data = be.empty((n, h, w, 5))
@@ -288,7 +352,10 @@ class ClassicNL:
         t, h, w, _ = rgb.shape
         grey = be.empty((t, h, w, 1))
         grey3 = grey.reshape((t, h, w))
-        fc.srgb_grey(rgb, grey3)
+        if s.log_input:
+            fc.log_grey(rgb, grey3, 1e-3)
+        else:
+            fc.srgb_grey(rgb, grey3)
         if s.texture_alpha == 0.0 or s.rof_iters == 0:
             self._rescale(grey, 0.0, 255.0)
             return grey
@@ -325,8 +392,12 @@ class ClassicNL:
         quad_weight = 2.0 / (s.quad_sigma * s.quad_sigma)
         be.sampling.warp_bicubic(lv.pack2, flow, lv.warped, lv.inside)
         self._zero(lv.du)
-        fc.data_coefficients(lv.i1, lv.i1x, lv.i1y, lv.warped, lv.inside, lv.du, lv.data,
-                             s.blend, s.a, s.eps, quad_frac, quad_weight)
+        if lv.first is None:
+            fc.data_coefficients(lv.i1, lv.i1x, lv.i1y, lv.warped, lv.inside, lv.du, lv.data,
+                                 s.blend, s.a, s.eps, quad_frac, quad_weight)
+        else:
+            fc.data_coefficients_channels(lv.first, lv.warped, lv.inside, lv.du, lv.weights, lv.data,
+                                          s.blend, s.a, s.eps, quad_frac, quad_weight)
         fc.smoothness_weights(flow, lv.du, lv.smooth, s.a, s.eps, quad_frac, quad_weight)
         sweeps = s.sor_sweeps_quadratic if quad_frac == 1.0 and s.sor_sweeps_quadratic else s.sor_sweeps
         fc.assemble_system(flow, lv.data, lv.smooth, s.lam, lv.system)
@@ -404,7 +475,7 @@ class ClassicNL:
             if spacing not in pyramids:
                 tex_levels = self._pyramid(texture, sizes, spacing)
                 lab_levels = self._pyramid(lab, sizes, spacing)
-                pyramids[spacing] = [_Level(be, tx, lb, n) for tx, lb in zip(tex_levels, lab_levels)]
+                pyramids[spacing] = [_Level(be, tx, lb, n, s) for tx, lb in zip(tex_levels, lab_levels)]
             for lv in reversed(pyramids[spacing]):
                 if tuple(flow.shape[1:3]) != lv.shape:
                     resized = be.empty((n, *lv.shape, 2))
