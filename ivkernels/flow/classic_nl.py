@@ -67,7 +67,9 @@ class ClassicNLSettings:
     """Parameters of Classic+NL (defaults: the public code's ``classic+nl``).
 
     Energy
-        ``lam`` smoothness weight (lambda = 3); ``a``, ``eps`` generalised
+        ``lam`` smoothness weight (lambda = 3); ``lam_quadratic`` the
+        smoothness weight of the purely quadratic first GNC stage (0 = ``lam``),
+        multiplied by ``lam_coarse_factor ** k`` at its ``k``-th coarser level; ``a``, ``eps`` generalised
         Charbonnier ``(z^2 + eps^2)^a`` on data and smoothness;
         ``quad_sigma`` scale of the quadratic ``z^2 / sigma^2`` of the GNC
         blend (the public code reuses eps = 1e-3, so mixed stages are
@@ -126,6 +128,8 @@ class ClassicNLSettings:
     """
 
     lam: float = 3.0
+    lam_quadratic: float = 0.0
+    lam_coarse_factor: float = 1.0
     a: float = 0.45
     eps: float = 1e-3
     quad_sigma: float = 1e-3
@@ -172,6 +176,10 @@ class ClassicNLSettings:
         for name in ("spacing", "gnc_spacing"):
             if not getattr(self, name) > 1.0:
                 raise ValueError(f"{name} must be > 1, got {getattr(self, name)!r}")
+        if not self.lam_coarse_factor >= 1.0:
+            raise ValueError(f"lam_coarse_factor must be >= 1, got {self.lam_coarse_factor!r}")
+        if not self.lam_quadratic >= 0.0:
+            raise ValueError(f"lam_quadratic must be >= 0, got {self.lam_quadratic!r}")
         for name in ("lam", "eps", "quad_sigma", "sigma_x", "sigma_i", "occ_sigma_i", "occ_sigma_d"):
             if not getattr(self, name) > 0.0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
@@ -192,10 +200,16 @@ class ClassicNLSettings:
             raise ValueError(f"sor_omega must be in (0, 2), got {self.sor_omega!r}")
 
 
-#: The two settings of the public code: ``classic+nl`` and ``classic+nl-fast``.
+#: ``classic_nl``: the public code's ``classic+nl``.  ``classic_nl_fast``: its
+#: ``classic+nl-fast`` schedule (2 GNC stages, 3 warps) with the
+#: illumination-robust data term: gradient constancy of the texture image
+#: alone, lambda = 10, and the quadratic stage's lambda growing 1.5x per
+#: coarser level (see the module docstring for the measurements).
 PRESETS = {
     "classic_nl": ClassicNLSettings(),
-    "classic_nl_fast": ClassicNLSettings(gnc_stages=2, warps=3, quadratic_wm_finest=False),
+    "classic_nl_fast": ClassicNLSettings(gnc_stages=2, warps=3, quadratic_wm_finest=False,
+                                         data_term="gradient", brightness_weight=0.0, lam=10.0,
+                                         lam_coarse_factor=1.5),
 }
 
 
@@ -386,7 +400,7 @@ class ClassicNL:
 
     # -- the solver ---------------------------------------------------------
 
-    def _warp_step(self, lv: _Level, flow, quad_frac: float, weighted_median: bool) -> None:
+    def _warp_step(self, lv: _Level, flow, quad_frac: float, weighted_median: bool, depth: int = 0) -> None:
         """One warping step at a level: IRLS system, SOR, update, median filtering (step 4)."""
         be, s, fc = self.be, self.s, self.be.flow_classic
         quad_weight = 2.0 / (s.quad_sigma * s.quad_sigma)
@@ -400,10 +414,13 @@ class ClassicNL:
                                           s.blend, s.a, s.eps, quad_frac, quad_weight)
         fc.smoothness_weights(flow, lv.du, lv.smooth, s.a, s.eps, quad_frac, quad_weight)
         sweeps = s.sor_sweeps_quadratic if quad_frac == 1.0 and s.sor_sweeps_quadratic else s.sor_sweeps
-        fc.assemble_system(flow, lv.data, lv.smooth, s.lam, lv.system)
+        lam = s.lam
+        if quad_frac == 1.0:
+            lam = (s.lam_quadratic or s.lam) * s.lam_coarse_factor ** depth
+        fc.assemble_system(flow, lv.data, lv.smooth, lam, lv.system)
         for _ in range(sweeps):
-            fc.sor_sweep(lv.du, lv.system, lv.smooth, s.lam, s.sor_omega, 0)
-            fc.sor_sweep(lv.du, lv.system, lv.smooth, s.lam, s.sor_omega, 1)
+            fc.sor_sweep(lv.du, lv.system, lv.smooth, lam, s.sor_omega, 0)
+            fc.sor_sweep(lv.du, lv.system, lv.smooth, lam, s.sor_omega, 1)
         if not s.median:
             fc.apply_update(flow, lv.du, flow, s.limit_update)
             return
@@ -476,7 +493,7 @@ class ClassicNL:
                 tex_levels = self._pyramid(texture, sizes, spacing)
                 lab_levels = self._pyramid(lab, sizes, spacing)
                 pyramids[spacing] = [_Level(be, tx, lb, n, s) for tx, lb in zip(tex_levels, lab_levels)]
-            for lv in reversed(pyramids[spacing]):
+            for depth, lv in reversed(list(enumerate(pyramids[spacing]))):
                 if tuple(flow.shape[1:3]) != lv.shape:
                     resized = be.empty((n, *lv.shape, 2))
                     be.pyramid.resize_flow(flow, resized)
@@ -484,6 +501,6 @@ class ClassicNL:
                 weighted_median = (quad_frac < 1.0 or s.quadratic_wm_finest
                                    or lv.shape != (height, width))
                 for _ in range(s.warps):
-                    self._warp_step(lv, flow, quad_frac, weighted_median)
+                    self._warp_step(lv, flow, quad_frac, weighted_median, depth)
         be.synchronize()
         return np.array(be.numpy(flow), dtype=np.float32, copy=True)
