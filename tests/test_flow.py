@@ -165,7 +165,8 @@ def test_bad_input_raises(rng):
                                      dict(data_term="gradient", brightness_weight=0.0),
                                      dict(data_term="gradient", brightness_weight=1.0, gradient_weight=0.5),
                                      dict(data_term="census", census_eps=8.0),
-                                     dict(data_term="gradient", log_input=True, brightness_weight=0.0)])
+                                     dict(data_term="gradient", log_input=True, brightness_weight=0.0),
+                                     dict(data_term="gradient", data_outside=True)])
 def test_data_terms_recover_translation_and_zero(rng, options):
     frames, u = pair(rng, lambda x, y: np.broadcast_to([1.3, -0.6], x.shape + (2,)))
     flow = estimate_flow(frames, sor_sweeps=30, **options)

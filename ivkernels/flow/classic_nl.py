@@ -124,7 +124,11 @@ class ClassicNLSettings:
         image: ``census_scale * d / sqrt(d^2 + census_eps^2)`` for each
         difference ``d`` to a neighbour in a ``2 census_radius + 1`` square,
         grey levels of the [0, 255] texture image).  Every channel has its
-        own generalised Charbonnier penalty.
+        own generalised Charbonnier penalty.  ``data_outside``: keep the
+        data term where ``x + u`` leaves the image, comparing with the
+        replicated border (Classic+NL drops it there, so that in weakly
+        textured regions near the border nothing stops the flow from
+        running out of the image).
     """
 
     lam: float = 3.0
@@ -159,6 +163,7 @@ class ClassicNLSettings:
     edge_min: float = 0.0
     edge_radius: int = 2
     log_input: bool = False
+    data_outside: bool = False
     data_term: str = "brightness"
     brightness_weight: float = 1.0
     gradient_weight: float = 1.0
@@ -308,6 +313,11 @@ class _Level:
         fc.pack_image_gradient(tex3, zeros, zeros, self.occ_img)
         self.warped = be.empty(tuple(self.pack2.shape))
         self.inside = be.empty((n, h, w))
+        self.everywhere = None
+        if settings is not None and settings.data_outside:
+            self.everywhere = be.zeros((n, h, w))
+            be.flow_classic.scale_shift(self.everywhere.reshape((n, h, w, 1)), self.everywhere.reshape((n, h, w, 1)),
+                                        be.asarray(np.zeros(1, np.float32)), be.asarray(np.ones(1, np.float32)))
         self.du = be.zeros((n, h, w, 2))
         self.data = be.empty((n, h, w, 5))
         self.smooth = be.empty((n, h, w, 4))
@@ -406,11 +416,12 @@ class ClassicNL:
         quad_weight = 2.0 / (s.quad_sigma * s.quad_sigma)
         be.sampling.warp_bicubic(lv.pack2, flow, lv.warped, lv.inside)
         self._zero(lv.du)
+        inside = lv.inside if lv.everywhere is None else lv.everywhere
         if lv.first is None:
-            fc.data_coefficients(lv.i1, lv.i1x, lv.i1y, lv.warped, lv.inside, lv.du, lv.data,
+            fc.data_coefficients(lv.i1, lv.i1x, lv.i1y, lv.warped, inside, lv.du, lv.data,
                                  s.blend, s.a, s.eps, quad_frac, quad_weight)
         else:
-            fc.data_coefficients_channels(lv.first, lv.warped, lv.inside, lv.du, lv.weights, lv.data,
+            fc.data_coefficients_channels(lv.first, lv.warped, inside, lv.du, lv.weights, lv.data,
                                           s.blend, s.a, s.eps, quad_frac, quad_weight)
         fc.smoothness_weights(flow, lv.du, lv.smooth, s.a, s.eps, quad_frac, quad_weight)
         sweeps = s.sor_sweeps_quadratic if quad_frac == 1.0 and s.sor_sweeps_quadratic else s.sor_sweeps

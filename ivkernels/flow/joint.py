@@ -43,7 +43,9 @@ class JointPass:
     ``nan`` for the first), seconds spent in the flow and in the
     decomposition, and, when the truth was given, ``epe`` (flow end-point
     error, pixels), ``epe_visible`` (on pixels visible in the next frame),
-    ``occlusion_iou`` (see :func:`occlusion_iou`) and ``lmse`` (dict of
+    ``occlusion_iou`` (see :func:`occlusion_iou`), ``occluded`` (fraction of
+    pixels the occlusion map marks occluded; the truth's fraction is
+    ``occluded_true``) and ``lmse`` (dict of
     :func:`ivkernels.metrics.intrinsic_lmse`)."""
 
     index: int
@@ -53,6 +55,8 @@ class JointPass:
     epe: float | None = None
     epe_visible: float | None = None
     occlusion_iou: float | None = None
+    occluded: float | None = None
+    occluded_true: float | None = None
     lmse: dict | None = None
 
 
@@ -153,6 +157,8 @@ def joint_decompose(frames, passes: int = 2, method: str = "classic_nl_fast", so
             record.epe = metrics.endpoint_error(flow, truth.flow)
             record.epe_visible = metrics.endpoint_error(flow, truth.flow, mask=truth.visibility > 0.5)
             record.occlusion_iou = occlusion_iou(video.occlusion, truth.visibility)
+            record.occluded = float((video.occlusion < 0.5).mean())
+            record.occluded_true = float((truth.visibility < 0.5).mean())
             record.lmse = metrics.intrinsic_lmse(video.albedo, video.shading, truth.albedo, truth.shading)
         history.append(record)
         if k > 0 and change < tol:
