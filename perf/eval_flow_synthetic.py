@@ -34,7 +34,9 @@ def parse_candidate(text: str):
     """``NAME=METHOD[:k=v,...]`` -> (name, method, options)."""
     name, _, rest = text.partition("=")
     method, _, opts = rest.partition(":")
-    fields = {f.name: f.type for f in dataclasses.fields(__import__("ivkernels.flow", fromlist=["x"]).ClassicNLSettings)}
+    from ivkernels.flow import ClassicNLSettings
+
+    fields = {f.name: f.type for f in dataclasses.fields(ClassicNLSettings)}
     options = {}
     for item in filter(None, opts.split(",")):
         k, _, v = item.partition("=")

@@ -37,7 +37,8 @@ def main(argv=None) -> int:
 
     print(f"{args.frames} frames at {args.size[1]}x{args.size[0]}, seed {args.seed}, flow {args.method}, "
           f"passes 2.. on the {args.source}{' (cold start)' if args.cold else ''}")
-    print(f"{'kind':20s} {'pass':>4s} {'change':>7s} {'EPE':>6s} {'EPE vis':>7s} {'occ IoU':>7s} {'occ':>5s} {'occ gt':>6s} "
+    print(f"{'kind':20s} {'pass':>4s} {'change':>7s} {'EPE':>6s} {'EPE vis':>7s} {'occ IoU':>7s} "
+          f"{'occ':>5s} {'occ gt':>6s} "
           f"{'LMSE A':>7s} {'LMSE S':>7s} {'LMSE':>7s} {'flow s':>7s} {'dec s':>6s}")
     for kind in args.kinds:
         seq = synthetic.render_sequence(kind, n_frames=args.frames, size=tuple(args.size), seed=args.seed)
@@ -45,7 +46,8 @@ def main(argv=None) -> int:
                                  warm_start=not args.cold, truth=seq)
         for p in result.history:
             print(f"{kind:20s} {p.index:4d} {p.flow_change:7.3f} {p.epe:6.3f} {p.epe_visible:7.3f} "
-                  f"{p.occlusion_iou:7.3f} {p.occluded:5.3f} {p.occluded_true:6.3f} {p.lmse['albedo']:7.4f} {p.lmse['shading']:7.4f} "
+                  f"{p.occlusion_iou:7.3f} {p.occluded:5.3f} {p.occluded_true:6.3f} "
+                  f"{p.lmse['albedo']:7.4f} {p.lmse['shading']:7.4f} "
                   f"{p.lmse['mean']:7.4f} {p.flow_seconds:7.1f} {p.decompose_seconds:6.1f}", flush=True)
         sys.stdout.flush()
     return 0

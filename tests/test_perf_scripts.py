@@ -52,3 +52,14 @@ def test_eval_flow_synthetic_prints_a_table(tmp_path):
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
     assert "static_moving_light" in proc.stdout and "| zero" not in proc.stdout
     assert "grad " in proc.stdout and "zero " in proc.stdout
+
+
+@pytest.mark.slow
+def test_eval_joint_prints_every_pass():
+    proc = subprocess.run(
+        [sys.executable, str(PERF / "eval_joint.py"), "--passes", "2", "--frames", "2", "--size", "32", "48",
+         "--kinds", "static_moving_light"],
+        capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    rows = [line.split() for line in proc.stdout.splitlines() if line.startswith("static_moving_light")]
+    assert [r[1] for r in rows] == ["1", "2"]

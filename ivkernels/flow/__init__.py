@@ -11,7 +11,8 @@ Methods (:data:`FLOW_METHODS`):
     paper uses, on this package's kernels (:mod:`ivkernels.flow.classic_nl`);
     the fast setting has 2 GNC stages and 3 warps per level and a
     gradient-constancy data term that holds under changing light, the full
-    one the public code's 3 stages, 10 warps and brightness constancy.  Runs on the chosen backend ("warp" on "cpu" or "cuda", or
+    one the public code's 3 stages, 10 warps and brightness constancy.
+    Runs on the chosen backend ("warp" on "cpu" or "cuda", or
     "taichi").
 ``"dis"``, ``"farneback"``
     OpenCV's DIS (medium preset) and Farneback flows
