@@ -10,6 +10,7 @@ consecutive pair against the renderer's exact flow).
     python perf/eval_flow.py                                  # all methods, Middlebury
     python perf/eval_flow.py --methods classic_nl_fast dis --sequences RubberWhale Venus
     python perf/eval_flow.py --synthetic --threads 1
+    python perf/eval_flow.py --methods classic_nl_fast --set data_term=brightness lam=3
 """
 from __future__ import annotations
 
@@ -54,6 +55,24 @@ def synthetic_pairs(size, n_frames: int):
         yield f"syn:{kind}", seq.frames, seq.flow
 
 
+def parse_settings(items) -> dict:
+    """``["lam=3", "data_term=gradient"]`` -> typed fields of :class:`ClassicNLSettings`."""
+    import dataclasses
+
+    from ivkernels.flow import ClassicNLSettings
+
+    types = {f.name: f.type for f in dataclasses.fields(ClassicNLSettings)}
+    out = {}
+    for item in items:
+        key, _, value = item.partition("=")
+        if key not in types:
+            raise SystemExit(f"unknown Classic+NL setting {key!r}")
+        typ = types[key]
+        out[key] = (int(value) if typ == "int" else float(value) if typ == "float"
+                    else value.lower() in ("1", "true", "yes") if typ == "bool" else value)
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--methods", nargs="+", default=list(FLOW_METHODS), choices=FLOW_METHODS)
@@ -64,8 +83,15 @@ def main(argv=None) -> int:
     ap.add_argument("--backend", default="warp")
     ap.add_argument("--device", default="cpu")
     ap.add_argument("--threads", type=int, default=2, choices=(1, 2))
+    ap.add_argument("--set", nargs="+", default=[], metavar="FIELD=VALUE",
+                    help="ClassicNLSettings fields for the Classic+NL methods")
     args = ap.parse_args(argv)
     set_threads(args.threads)
+    options = parse_settings(args.set)
+
+    def flow_of(frames, m):
+        extra = options if m.startswith("classic_nl") else {}
+        return estimate_flow(frames, method=m, backend=args.backend, device=args.device, **extra)
 
     data = list(middlebury_pairs(args.data or default_data_dir(), args.sequences))
     if args.synthetic:
@@ -74,13 +100,13 @@ def main(argv=None) -> int:
     # Compile every kernel once so that timings measure the flow, not the JIT.
     warm = data[0][1][:, :48, :64]
     for m in args.methods:
-        estimate_flow(warm, method=m, backend=args.backend, device=args.device)
+        flow_of(warm, m)
 
     results = {m: {} for m in args.methods}
     for name, frames, gt in data:
         for m in args.methods:
             t0, c0 = time.perf_counter(), time.process_time()
-            flow = estimate_flow(frames, method=m, backend=args.backend, device=args.device)
+            flow = flow_of(frames, m)
             pairs = frames.shape[0] - 1
             seconds = (time.perf_counter() - t0) / pairs
             cpu = (time.process_time() - c0) / pairs
@@ -90,6 +116,8 @@ def main(argv=None) -> int:
                   f"  ({cpu:.2f} CPU s)", file=sys.stderr, flush=True)
 
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    if options:
+        print(f"Classic+NL settings changed: {options}")
     print(f"backend={args.backend} device={args.device} threads={args.threads} "
           f"cores={os.cpu_count()} load average at the end={load:.2f}")
     print("s/pair: wall-clock seconds per frame pair; cpu: CPU seconds of this process per pair")

@@ -159,3 +159,44 @@ def test_bad_input_raises(rng):
     with pytest.raises(ValueError, match="backend"):
         estimate_flow(good, backend="torch")
     assert FLOW_METHODS == ("classic_nl_fast", "classic_nl", "dis", "farneback")
+
+
+@pytest.mark.parametrize("options", [dict(data_term="brightness"),
+                                     dict(data_term="gradient", brightness_weight=0.0),
+                                     dict(data_term="gradient", brightness_weight=1.0, gradient_weight=0.5),
+                                     dict(data_term="census", census_eps=8.0),
+                                     dict(data_term="gradient", log_input=True, brightness_weight=0.0),
+                                     dict(data_term="gradient", data_outside=True)])
+def test_data_terms_recover_translation_and_zero(rng, options):
+    frames, u = pair(rng, lambda x, y: np.broadcast_to([1.3, -0.6], x.shape + (2,)))
+    flow = estimate_flow(frames, sor_sweeps=30, **options)
+    assert interior_epe(flow[0], u) < 0.15
+    still = np.stack([frames[0], frames[0]])
+    np.testing.assert_allclose(estimate_flow(still, sor_sweeps=30, **options), 0.0, atol=1e-5)
+
+
+def test_gradient_term_holds_under_changing_light(rng):
+    """A static scene whose light brightens unevenly between the frames: the
+    default (gradient) data term reports less than half the false motion of
+    brightness constancy."""
+    f = texture(rng)
+    y, x = np.mgrid[0:H, 0:W].astype(np.float64)
+    img = f(x, y)
+    gain = (0.75 + 0.5 * x / W + 0.2 * np.sin(y / 9.0)).astype(np.float32)[..., None]
+    frames = np.stack([img, np.clip(img * gain, 0, 1)])
+    zero = np.zeros((H, W, 2))
+    robust = interior_epe(estimate_flow(frames)[0], zero)
+    brightness = interior_epe(estimate_flow(frames, data_term="brightness", lam=3.0, lam_coarse_factor=1.0)[0], zero)
+    assert robust < 0.25 and robust < 0.5 * brightness
+
+
+def test_data_term_settings_checked():
+    assert PRESETS["classic_nl_fast"].data_term in ("brightness", "gradient", "census")
+    with pytest.raises(ValueError, match="data_term"):
+        ClassicNLSettings(data_term="ncc")
+    with pytest.raises(ValueError, match="census_radius"):
+        ClassicNLSettings(census_radius=0)
+    with pytest.raises(ValueError, match="brightness_weight"):
+        ClassicNLSettings(brightness_weight=-1.0)
+    with pytest.raises(ValueError, match="lam_coarse_factor"):
+        ClassicNLSettings(lam_coarse_factor=0.5)

@@ -40,3 +40,26 @@ def test_tune_baselines_refuses_the_evaluation_seed():
     proc = subprocess.run([sys.executable, str(PERF / "tune_baselines.py"), "--seeds", "0", "1"],
                           capture_output=True, text=True, timeout=300)
     assert proc.returncode != 0 and "evaluation seed" in proc.stderr
+
+
+@pytest.mark.slow
+def test_eval_flow_synthetic_prints_a_table(tmp_path):
+    proc = subprocess.run(
+        [sys.executable, str(PERF / "eval_flow_synthetic.py"), "--seeds", "1", "--frames", "2", "--size", "32", "48",
+         "--kinds", "static_moving_light", "--baselines", "zero", "--cache", str(tmp_path),
+         "--candidate", "grad=classic_nl_fast:lam=10.0,data_term=gradient"],
+        capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    assert "static_moving_light" in proc.stdout and "| zero" not in proc.stdout
+    assert "grad " in proc.stdout and "zero " in proc.stdout
+
+
+@pytest.mark.slow
+def test_eval_joint_prints_every_pass():
+    proc = subprocess.run(
+        [sys.executable, str(PERF / "eval_joint.py"), "--passes", "2", "--frames", "2", "--size", "32", "48",
+         "--kinds", "static_moving_light"],
+        capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    rows = [line.split() for line in proc.stdout.splitlines() if line.startswith("static_moving_light")]
+    assert [r[1] for r in rows] == ["1", "2"]

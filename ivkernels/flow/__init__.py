@@ -9,8 +9,10 @@ Methods (:data:`FLOW_METHODS`):
 ``"classic_nl_fast"`` (default), ``"classic_nl"``
     Classic+NL (Sun, Roth & Black, IJCV 2014), the flow the intrinsic-video
     paper uses, on this package's kernels (:mod:`ivkernels.flow.classic_nl`);
-    the fast setting has 2 GNC stages and 3 warps per level, the full one 3
-    and 10.  Runs on the chosen backend ("warp" on "cpu" or "cuda", or
+    the fast setting has 2 GNC stages and 3 warps per level and a
+    gradient-constancy data term that holds under changing light, the full
+    one the public code's 3 stages, 10 warps and brightness constancy.
+    Runs on the chosen backend ("warp" on "cpu" or "cuda", or
     "taichi").
 ``"dis"``, ``"farneback"``
     OpenCV's DIS (medium preset) and Farneback flows
@@ -20,11 +22,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.flow.classic_nl import PRESETS, ClassicNL, ClassicNLSettings, settings_for
+from ivkernels.flow.classic_nl import DATA_TERMS, PRESETS, ClassicNL, ClassicNLSettings, settings_for
 
 FLOW_METHODS = ("classic_nl_fast", "classic_nl", "dis", "farneback")
 
-__all__ = ["estimate_flow", "FLOW_METHODS", "ClassicNL", "ClassicNLSettings", "PRESETS", "as_linear_rgb"]
+__all__ = ["estimate_flow", "FLOW_METHODS", "ClassicNL", "ClassicNLSettings", "PRESETS", "DATA_TERMS",
+           "as_linear_rgb"]
 
 MIN_SIZE = 4
 

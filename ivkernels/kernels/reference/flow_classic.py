@@ -197,3 +197,58 @@ def thin_edges(sobel, cutoff):
                     if ay >= ax and b[y, x] > b[ym, x] and b[y, x] >= b[yp, x]:
                         out[t, y, x] = 1.0
     return out
+
+
+def soft_census(img, radius=1, eps=4.0, scale=1.0):
+    """(T, H, W) -> (T, H, W, (2r+1)^2 - 1): ``scale * d / sqrt(d^2 + eps^2)`` per neighbour,
+    offsets in row-major order without the centre, replicate border."""
+    img = np.asarray(img, np.float64)
+    _, h, w = img.shape
+    ys, xs = np.arange(h), np.arange(w)
+    out = []
+    for dy in range(-radius, radius + 1):
+        for dx in range(-radius, radius + 1):
+            if dy == 0 and dx == 0:
+                continue
+            nb = img[:, np.clip(ys + dy, 0, h - 1)][:, :, np.clip(xs + dx, 0, w - 1)]
+            d = nb - img
+            out.append(scale * d / np.sqrt(d * d + eps * eps))
+    return np.stack(out, axis=-1)
+
+
+def pack_channels_gradient(feat, gx, gy):
+    """(T, H, W, C) x 3 -> (T, H, W, 3C) with channels ``(feat_c, gx_c, gy_c)``."""
+    t, h, w, c = np.shape(feat)
+    return np.stack([feat, gx, gy], axis=-1).reshape(t, h, w, 3 * c).astype(np.float64)
+
+
+def data_coefficients_channels(first, warped, inside, du, weights, blend=0.5, a=0.45, eps=1e-3,
+                               quad_frac=0.0, quad_weight=2e6):
+    """(T, H, W, 5): ``sum_c w_c psi_c (Ix Ix, Ix Iy, Iy Iy, Ix It, Iy It)_c`` over the channel triples."""
+    weights = np.asarray(weights, np.float64)
+    first = np.asarray(first, np.float64)
+    warped = np.asarray(warped, np.float64)
+    ok = np.asarray(inside) > 0.5
+    du = np.asarray(du, np.float64)
+    total = 0.0
+    for c, wc in enumerate(weights):
+        f, g = first[..., 3 * c:3 * c + 3], warped[..., 3 * c:3 * c + 3]
+        ix = blend * g[..., 1] + (1 - blend) * f[..., 1]
+        iy = blend * g[..., 2] + (1 - blend) * f[..., 2]
+        it = g[..., 0] - f[..., 0]
+        psi = wc * robust_weight(it + ix * du[..., 0] + iy * du[..., 1], a, eps, quad_frac, quad_weight)
+        total = total + np.stack([psi * ix * ix, psi * ix * iy, psi * iy * iy, psi * ix * it, psi * iy * it], -1)
+    return np.where(ok[..., None], total, 0.0)
+
+
+def log_grey(rgb, floor=1e-3):
+    """(T, H, W, 3) linear RGB -> (T, H, W) ``log(max(grey, floor))``."""
+    return np.log(np.maximum(np.asarray(rgb, np.float64) @ np.asarray(GREY_WEIGHTS), floor))
+
+
+def gradient_channels(img):
+    """(T, H, W) -> (T, H, W, 2) 5-point derivatives ``(dI/dx, dI/dy)``, replicate border."""
+    from ivkernels.kernels.reference.derivatives import image_gradient
+
+    gx, gy = image_gradient(np.asarray(img, np.float64)[..., None])
+    return np.concatenate([gx, gy], axis=-1)

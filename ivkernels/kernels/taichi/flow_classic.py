@@ -144,6 +144,90 @@ def _data_coefficients(i1: nd3, i1x: nd3, i1y: nd3, warped: nd4, inside: nd3, du
 
 
 @ti.kernel
+def _log_grey(rgb: nd4, out: nd3, wr: ti.f32, wg: ti.f32, wb: ti.f32, floor: ti.f32):
+    for t, y in ti.ndrange(out.shape[0], out.shape[1]):
+        for x in range(out.shape[2]):
+            g = wr * rgb[t, y, x, 0] + wg * rgb[t, y, x, 1] + wb * rgb[t, y, x, 2]
+            out[t, y, x] = ti.log(ti.max(g, floor))
+
+
+@ti.kernel
+def _soft_census(img: nd3, out: nd4, radius: ti.i32, eps: ti.f32, scale: ti.f32):
+    height = img.shape[1]
+    width = img.shape[2]
+    for t, y in ti.ndrange(img.shape[0], height):
+        for x in range(width):
+            centre = img[t, y, x]
+            k = 0
+            for dy in range(-radius, radius + 1):
+                yy = ti.math.clamp(y + dy, 0, height - 1)
+                for dx in range(-radius, radius + 1):
+                    if dy != 0 or dx != 0:
+                        d = img[t, yy, ti.math.clamp(x + dx, 0, width - 1)] - centre
+                        out[t, y, x, k] = scale * d / ti.sqrt(d * d + eps * eps)
+                        k += 1
+
+
+@ti.kernel
+def _gradient_channels(img: nd3, out: nd4):
+    height = img.shape[1]
+    width = img.shape[2]
+    for t, y in ti.ndrange(img.shape[0], height):
+        ym2 = ti.max(y - 2, 0)
+        ym1 = ti.max(y - 1, 0)
+        yp1 = ti.min(y + 1, height - 1)
+        yp2 = ti.min(y + 2, height - 1)
+        for x in range(width):
+            xm2 = ti.max(x - 2, 0)
+            xm1 = ti.max(x - 1, 0)
+            xp1 = ti.min(x + 1, width - 1)
+            xp2 = ti.min(x + 2, width - 1)
+            out[t, y, x, 0] = (img[t, y, xm2] - 8.0 * img[t, y, xm1] + 8.0 * img[t, y, xp1] - img[t, y, xp2]) / 12.0
+            out[t, y, x, 1] = (img[t, ym2, x] - 8.0 * img[t, ym1, x] + 8.0 * img[t, yp1, x] - img[t, yp2, x]) / 12.0
+
+
+@ti.kernel
+def _pack_channels_gradient(feat: nd4, gx: nd4, gy: nd4, out: nd4):
+    for t, y in ti.ndrange(feat.shape[0], feat.shape[1]):
+        for x in range(feat.shape[2]):
+            for c in range(feat.shape[3]):
+                out[t, y, x, 3 * c] = feat[t, y, x, c]
+                out[t, y, x, 3 * c + 1] = gx[t, y, x, c]
+                out[t, y, x, 3 * c + 2] = gy[t, y, x, c]
+
+
+@ti.kernel
+def _data_coefficients_channels(first: nd4, warped: nd4, inside: nd3, du: nd4, weights: nd1, out: nd4,
+                                blend: ti.f32, a: ti.f32, eps: ti.f32, quad_frac: ti.f32,
+                                quad_weight: ti.f32):
+    for t, y in ti.ndrange(first.shape[0], first.shape[1]):
+        for x in range(first.shape[2]):
+            sxx = 0.0
+            sxy = 0.0
+            syy = 0.0
+            sxt = 0.0
+            syt = 0.0
+            if inside[t, y, x] > 0.5:
+                du0 = du[t, y, x, 0]
+                du1 = du[t, y, x, 1]
+                for c in range(weights.shape[0]):
+                    ix = blend * warped[t, y, x, 3 * c + 1] + (1.0 - blend) * first[t, y, x, 3 * c + 1]
+                    iy = blend * warped[t, y, x, 3 * c + 2] + (1.0 - blend) * first[t, y, x, 3 * c + 2]
+                    it = warped[t, y, x, 3 * c] - first[t, y, x, 3 * c]
+                    psi = weights[c] * robust_weight(it + ix * du0 + iy * du1, a, eps, quad_frac, quad_weight)
+                    sxx += psi * ix * ix
+                    sxy += psi * ix * iy
+                    syy += psi * iy * iy
+                    sxt += psi * ix * it
+                    syt += psi * iy * it
+            out[t, y, x, 0] = sxx
+            out[t, y, x, 1] = sxy
+            out[t, y, x, 2] = syy
+            out[t, y, x, 3] = sxt
+            out[t, y, x, 4] = syt
+
+
+@ti.kernel
 def _smoothness_weights(flow: nd4, du: nd4, out: nd4, a: ti.f32, eps: ti.f32,
                         quad_frac: ti.f32, quad_weight: ti.f32):
     height = flow.shape[1]
@@ -478,3 +562,60 @@ def thin_edges(sobel, cutoff, out) -> None:
     _check("cutoff", cutoff, (t, 2), "(T, 2)")
     _check("out", out, (t, h, w), "(T, H, W)")
     _thin_edges(sobel, cutoff, out)
+
+
+def log_grey(rgb, out, floor: float = 1e-3) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.log_grey`."""
+    _check("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
+    t, h, w, _ = rgb.shape
+    _check("out", out, (t, h, w), "(T, H, W)")
+    if not floor > 0.0:
+        raise ValueError(f"floor must be > 0, got {floor!r}")
+    _log_grey(rgb, out, *GREY_WEIGHTS, float(floor))
+
+
+def soft_census(img, out, radius: int = 1, eps: float = 4.0, scale: float = 1.0) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.soft_census`."""
+    _check("img", img, (None, None, None), "(T, H, W)")
+    t, h, w = img.shape
+    radius = int(radius)
+    if radius < 1:
+        raise ValueError(f"radius must be >= 1, got {radius}")
+    if not eps > 0.0:
+        raise ValueError(f"eps must be > 0, got {eps!r}")
+    c = (2 * radius + 1) ** 2 - 1
+    _check("out", out, (t, h, w, c), f"(T, H, W, {c})")
+    _soft_census(img, out, radius, float(eps), float(scale))
+
+
+def gradient_channels(img, out) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.gradient_channels`."""
+    _check("img", img, (None, None, None), "(T, H, W)")
+    t, h, w = img.shape
+    _check("out", out, (t, h, w, 2), "(T, H, W, 2)")
+    _gradient_channels(img, out)
+
+
+def pack_channels_gradient(feat, gx, gy, out) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.pack_channels_gradient`."""
+    _check("feat", feat, (None, None, None, None), "(T, H, W, C)")
+    t, h, w, c = feat.shape
+    _check("gx", gx, (t, h, w, c), "(T, H, W, C)")
+    _check("gy", gy, (t, h, w, c), "(T, H, W, C)")
+    _check("out", out, (t, h, w, 3 * c), "(T, H, W, 3C)")
+    _pack_channels_gradient(feat, gx, gy, out)
+
+
+def data_coefficients_channels(first, warped, inside, du, weights, out, blend: float = 0.5, a: float = 0.45,
+                               eps: float = 1e-3, quad_frac: float = 0.0, quad_weight: float = 2e6) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.data_coefficients_channels`."""
+    _check("weights", weights, (None,), "(C,)")
+    c = weights.shape[0]
+    _check("first", first, (None, None, None, 3 * c), "(T, H, W, 3C)")
+    t, h, w, _ = first.shape
+    _check("warped", warped, (t, h, w, 3 * c), "(T, H, W, 3C)")
+    _check("inside", inside, (t, h, w), "(T, H, W)")
+    _check("du", du, (t, h, w, 2), "(T, H, W, 2)")
+    _check("out", out, (t, h, w, 5), "(T, H, W, 5)")
+    _data_coefficients_channels(first, warped, inside, du, weights, out, float(blend), float(a), float(eps),
+                                float(quad_frac), float(quad_weight))

@@ -108,6 +108,18 @@ def srgb_grey_rows(row_begin: int, rgb: wp.array4d(dtype=float), out: wp.array3d
 
 
 @wp.kernel
+def log_grey_rows(row_begin: int, rgb: wp.array4d(dtype=float), out: wp.array3d(dtype=float),
+                  wr: float, wg: float, wb: float, floor: float):
+    r = row_begin + wp.tid()
+    height = out.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(out.shape[2]):
+        g = wr * rgb[t, y, x, 0] + wg * rgb[t, y, x, 1] + wb * rgb[t, y, x, 2]
+        out[t, y, x] = wp.log(wp.max(g, floor))
+
+
+@wp.kernel
 def min_max_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array3d(dtype=float)):
     r = row_begin + wp.tid()
     height = src.shape[1]
@@ -209,6 +221,96 @@ def data_coefficients_rows(row_begin: int, i1: wp.array3d(dtype=float), i1x: wp.
         out[t, y, x, 2] = psi * iy * iy
         out[t, y, x, 3] = psi * ix * it
         out[t, y, x, 4] = psi * iy * it
+
+
+@wp.kernel
+def soft_census_rows(row_begin: int, img: wp.array3d(dtype=float), out: wp.array4d(dtype=float),
+                     radius: int, eps: float, scale: float):
+    r = row_begin + wp.tid()
+    height = img.shape[1]
+    width = img.shape[2]
+    t = r // height
+    y = r - t * height
+    for x in range(width):
+        centre = img[t, y, x]
+        k = int(0)
+        for dy in range(-radius, radius + 1):
+            yy = wp.clamp(y + dy, 0, height - 1)
+            for dx in range(-radius, radius + 1):
+                if dy != 0 or dx != 0:
+                    d = img[t, yy, wp.clamp(x + dx, 0, width - 1)] - centre
+                    out[t, y, x, k] = scale * d / wp.sqrt(d * d + eps * eps)
+                    k += 1
+
+
+@wp.kernel
+def gradient_channels_rows(row_begin: int, img: wp.array3d(dtype=float), out: wp.array4d(dtype=float)):
+    r = row_begin + wp.tid()
+    height = img.shape[1]
+    width = img.shape[2]
+    t = r // height
+    y = r - t * height
+    ym2 = wp.max(y - 2, 0)
+    ym1 = wp.max(y - 1, 0)
+    yp1 = wp.min(y + 1, height - 1)
+    yp2 = wp.min(y + 2, height - 1)
+    for x in range(width):
+        xm2 = wp.max(x - 2, 0)
+        xm1 = wp.max(x - 1, 0)
+        xp1 = wp.min(x + 1, width - 1)
+        xp2 = wp.min(x + 2, width - 1)
+        out[t, y, x, 0] = (img[t, y, xm2] - 8.0 * img[t, y, xm1] + 8.0 * img[t, y, xp1] - img[t, y, xp2]) / 12.0
+        out[t, y, x, 1] = (img[t, ym2, x] - 8.0 * img[t, ym1, x] + 8.0 * img[t, yp1, x] - img[t, yp2, x]) / 12.0
+
+
+@wp.kernel
+def pack_channels_gradient_rows(row_begin: int, feat: wp.array4d(dtype=float), gx: wp.array4d(dtype=float),
+                                gy: wp.array4d(dtype=float), out: wp.array4d(dtype=float)):
+    r = row_begin + wp.tid()
+    height = feat.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(feat.shape[2]):
+        for c in range(feat.shape[3]):
+            out[t, y, x, 3 * c] = feat[t, y, x, c]
+            out[t, y, x, 3 * c + 1] = gx[t, y, x, c]
+            out[t, y, x, 3 * c + 2] = gy[t, y, x, c]
+
+
+@wp.kernel
+def data_coefficients_channels_rows(row_begin: int, first: wp.array4d(dtype=float),
+                                    warped: wp.array4d(dtype=float), inside: wp.array3d(dtype=float),
+                                    du: wp.array4d(dtype=float), weights: wp.array(dtype=float),
+                                    out: wp.array4d(dtype=float), blend: float, a: float, eps: float,
+                                    quad_frac: float, quad_weight: float):
+    r = row_begin + wp.tid()
+    height = first.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(first.shape[2]):
+        sxx = float(0.0)
+        sxy = float(0.0)
+        syy = float(0.0)
+        sxt = float(0.0)
+        syt = float(0.0)
+        if inside[t, y, x] > 0.5:
+            du0 = du[t, y, x, 0]
+            du1 = du[t, y, x, 1]
+            for c in range(weights.shape[0]):
+                ix = blend * warped[t, y, x, 3 * c + 1] + (1.0 - blend) * first[t, y, x, 3 * c + 1]
+                iy = blend * warped[t, y, x, 3 * c + 2] + (1.0 - blend) * first[t, y, x, 3 * c + 2]
+                it = warped[t, y, x, 3 * c] - first[t, y, x, 3 * c]
+                psi = weights[c] * robust_weight(it + ix * du0 + iy * du1, a, eps, quad_frac, quad_weight)
+                sxx += psi * ix * ix
+                sxy += psi * ix * iy
+                syy += psi * iy * iy
+                sxt += psi * ix * it
+                syt += psi * iy * it
+        out[t, y, x, 0] = sxx
+        out[t, y, x, 1] = sxy
+        out[t, y, x, 2] = syy
+        out[t, y, x, 3] = sxt
+        out[t, y, x, 4] = syt
 
 
 @wp.kernel
@@ -446,6 +548,23 @@ def srgb_grey(rgb, out) -> None:
     launch_rows(srgb_grey_rows, t * h, [rgb, out, *GREY_WEIGHTS], rgb.device)
 
 
+def log_grey(rgb, out, floor: float = 1e-3) -> None:
+    """Natural log of the linear grey level: ``out = log(max(0.2989 R + 0.5870 G + 0.1140 B, floor))``.
+
+    Under the image model ``i = a * s`` the log turns the shading into an
+    additive term, which the ROF structure part then absorbs where it is smooth.
+
+    rgb : (T, H, W, 3) float32, linear RGB.
+    out : (T, H, W) float32, log grey (<= 0 for input in [0, 1]).
+    """
+    check_array("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
+    t, h, w, _ = rgb.shape
+    check_array("out", out, (t, h, w), "(T, H, W)", rgb.device)
+    if not floor > 0.0:
+        raise ValueError(f"floor must be > 0, got {floor!r}")
+    launch_rows(log_grey_rows, t * h, [rgb, out, *GREY_WEIGHTS, float(floor)], rgb.device)
+
+
 def row_min_max(src, out) -> None:
     """Minimum and maximum of every image row and channel.
 
@@ -552,6 +671,92 @@ def data_coefficients(i1, i1x, i1y, warped, inside, du, out, blend: float = 0.5,
     check_array("out", out, (t, h, w, 5), "(T, H, W, 5)", dev)
     launch_rows(data_coefficients_rows, t * h,
                 [i1, i1x, i1y, warped, inside, du, out, float(blend), float(a), float(eps),
+                 float(quad_frac), float(quad_weight)], dev)
+
+
+def soft_census(img, out, radius: int = 1, eps: float = 4.0, scale: float = 1.0) -> None:
+    """Soft ternary (census) transform: one channel per neighbour of a window.
+
+    ``out[t, y, x, k] = scale * d_k / sqrt(d_k^2 + eps^2)`` with
+    ``d_k = img(y + dy_k, x + dx_k) - img(y, x)`` over the ``(2 radius + 1)^2 - 1``
+    offsets of the window in row-major order, the centre left out; neighbour
+    indices clamped (replicate border).  A smooth stand-in for the ternary
+    census of Stein (2004) / Zabih & Woodfill (1994): it keeps the sign of each
+    local difference and saturates its size, so it is unchanged by a gain or
+    an offset of the image that is constant over the window.
+
+    img : (T, H, W) float32.
+    out : (T, H, W, C) float32, ``C = (2 radius + 1)^2 - 1``.
+    """
+    check_array("img", img, (None, None, None), "(T, H, W)")
+    t, h, w = img.shape
+    radius = int(radius)
+    if radius < 1:
+        raise ValueError(f"radius must be >= 1, got {radius}")
+    if not eps > 0.0:
+        raise ValueError(f"eps must be > 0, got {eps!r}")
+    c = (2 * radius + 1) ** 2 - 1
+    check_array("out", out, (t, h, w, c), f"(T, H, W, {c})", img.device)
+    launch_rows(soft_census_rows, t * h, [img, out, radius, float(eps), float(scale)], img.device)
+
+
+def gradient_channels(img, out) -> None:
+    """x and y derivatives of an image as two channels, the feature of a gradient-constancy term.
+
+    The 5-point filter ``[1 -8 0 8 -1] / 12`` of
+    :func:`ivkernels.kernels.warp.derivatives.image_gradient`, replicate border.
+
+    img : (T, H, W) float32; out : (T, H, W, 2) float32 ``(dI/dx, dI/dy)``.
+    """
+    check_array("img", img, (None, None, None), "(T, H, W)")
+    t, h, w = img.shape
+    check_array("out", out, (t, h, w, 2), "(T, H, W, 2)", img.device)
+    launch_rows(gradient_channels_rows, t * h, [img, out], img.device)
+
+
+def pack_channels_gradient(feat, gx, gy, out) -> None:
+    """Interleave C channels with their derivatives: ``out[..., 3c : 3c + 3] = (feat_c, gx_c, gy_c)``.
+
+    feat, gx, gy : (T, H, W, C) float32; out : (T, H, W, 3C) float32.
+    """
+    check_array("feat", feat, (None, None, None, None), "(T, H, W, C)")
+    t, h, w, c = feat.shape
+    check_array("gx", gx, (t, h, w, c), "(T, H, W, C)", feat.device)
+    check_array("gy", gy, (t, h, w, c), "(T, H, W, C)", feat.device)
+    check_array("out", out, (t, h, w, 3 * c), "(T, H, W, 3C)", feat.device)
+    launch_rows(pack_channels_gradient_rows, t * h, [feat, gx, gy, out], feat.device)
+
+
+def data_coefficients_channels(first, warped, inside, du, weights, out, blend: float = 0.5, a: float = 0.45,
+                               eps: float = 1e-3, quad_frac: float = 0.0, quad_weight: float = 2e6) -> None:
+    """IRLS coefficients of a constancy term on C feature channels, summed.
+
+    ``E_D = sum_c w_c rho(It_c + Ix_c du + Iy_c dv)``, each channel linearised
+    as in :func:`data_coefficients` (``Ix_c = blend * I2x_c(x + u) + (1 - blend)
+    * I1x_c``, ``It_c = I2_c(x + u) - I1_c``) and penalised by its own robust
+    weight; all terms 0 where ``x + u`` leaves the image.  One channel with
+    weight 1 is :func:`data_coefficients`; the channels (I, Ix, Iy) with
+    weights (1, gamma, gamma) are brightness plus gradient constancy (Brox et
+    al., ECCV 2004); the :func:`soft_census` channels a census data term.
+
+    first : (T, H, W, 3C) float32, channels ``(I1_c, I1x_c, I1y_c)`` of the first frames.
+    warped : (T, H, W, 3C) float32, the same of the second frames warped by the flow.
+    inside : (T, H, W) float32, 1 where ``x + u`` lies in the image.
+    du : (T, H, W, 2) float32, current increment.
+    weights : (C,) float32 channel weights ``w_c``.
+    out : (T, H, W, 5) float32 ``sum_c psi_c (Ix Ix, Ix Iy, Iy Iy, Ix It, Iy It)_c``.
+    """
+    check_array("weights", weights, (None,), "(C,)")
+    c = weights.shape[0]
+    check_array("first", first, (None, None, None, 3 * c), "(T, H, W, 3C)", weights.device)
+    t, h, w, _ = first.shape
+    dev = first.device
+    check_array("warped", warped, (t, h, w, 3 * c), "(T, H, W, 3C)", dev)
+    check_array("inside", inside, (t, h, w), "(T, H, W)", dev)
+    check_array("du", du, (t, h, w, 2), "(T, H, W, 2)", dev)
+    check_array("out", out, (t, h, w, 5), "(T, H, W, 5)", dev)
+    launch_rows(data_coefficients_channels_rows, t * h,
+                [first, warped, inside, du, weights, out, float(blend), float(a), float(eps),
                  float(quad_frac), float(quad_weight)], dev)
 
 
