@@ -92,13 +92,15 @@ def test_taichi_backend_gives_the_same_decomposition(seq):
 
 
 @pytest.mark.slow
-def test_flow_from_albedo_solves_twice(seq):
-    video = iv.decompose(seq.frames, flow="dis", params=FAST, flow_from_albedo=True)
-    assert video.diagnostics["flow_method"] == "dis on the albedo"
-    assert "first_pass" in video.diagnostics
+def test_flow_passes_estimate_flow_and_decomposition_together(seq):
+    video = iv.decompose(seq.frames, flow="dis", params=FAST, flow_passes=2)
+    assert video.diagnostics["flow_method"] == "dis, 2 joint passes on the albedo"
+    assert len(video.diagnostics["joint_passes"]) == 2
     assert video.flow.shape == seq.flow.shape
-    with pytest.raises(ValueError, match="flow_from_albedo"):
-        iv.decompose(seq.frames, flow=seq.flow, params=FAST, flow_from_albedo=True)
+    with pytest.raises(ValueError, match="flow_passes > 1"):
+        iv.decompose(seq.frames, flow=seq.flow, params=FAST, flow_passes=2)
+    with pytest.raises(ValueError, match="flow_passes must be"):
+        iv.decompose(seq.frames, flow=seq.flow, params=FAST, flow_passes=0)
 
 
 def test_iteration_budget_per_level():
