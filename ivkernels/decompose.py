@@ -269,7 +269,9 @@ def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
         paper's "IV w/o flow" ablation); no flow is estimated then.
     backend : ``"warp"`` (default) or ``"taichi"``.
     device : ``"cpu"`` or ``"cuda"`` (Warp only).
-    params : :class:`ivkernels.Params`; defaults are the paper's weights.
+    params : :class:`ivkernels.Params`; defaults are the paper's weights where
+        they measured well and weights chosen on training sequences elsewhere
+        (each documented in ``Params``).
     progress : show a progress bar per stage.
     flow_passes : outer passes of flow and decomposition estimated together
         (:func:`ivkernels.flow.joint.joint_decompose`): pass 1 estimates the

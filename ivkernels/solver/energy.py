@@ -51,6 +51,10 @@ class WindowEnergy:
         resolution); the non-local window radius and sigma_s shrink with it.
     """
 
+    #: The terms of Eq. 2, in evaluation order (names used by ``term_energies``).
+    TERM_NAMES = ("data", "temporal_albedo", "temporal_shading", "coupling", "shading_local",
+                  "albedo_smooth", "albedo_sparsity")
+
     def __init__(self, be, log_image, w_lum, flow, occlusion, boundary, params: Params, prior,
                  n_fixed: int = 0, level_scale: float = 1.0):
         T, h, w, _ = log_image.shape
@@ -152,17 +156,12 @@ class WindowEnergy:
     def term_energies(self) -> dict[str, float]:
         """Each term's energy at the current ``X`` (diagnostics; leaves ``G`` dirty)."""
         out = {}
-        for name in self.term_names:
+        for name in self.TERM_NAMES:
             rows = self.be.zeros(self._rows_shape, dtype=np.float64)
             self._add_terms(rows, terms={name})
             out[name] = float(self.be.numpy(rows).sum())
         self.be.vecops.fill(self.G, 0.0)
         return out
-
-    @property
-    def term_names(self) -> list[str]:
-        return ["data", "temporal_albedo", "temporal_shading", "coupling", "shading_local",
-                "albedo_smooth", "albedo_sparsity"]
 
     # --------------------------------------------------------------- S~ step
     def update_coupling(self) -> None:
@@ -203,8 +202,7 @@ class ConstrainedEnergy:
     energy's shading buffer itself.
     """
 
-    TERMS = ("temporal_albedo", "temporal_shading", "coupling", "shading_local",
-             "albedo_smooth", "albedo_sparsity")
+    TERMS = tuple(name for name in WindowEnergy.TERM_NAMES if name != "data")
 
     def __init__(self, energy: WindowEnergy):
         self.energy = energy

@@ -106,12 +106,12 @@ class LBFGS:
         (relative energy change below ``rel_tol``: converged), ``"stationary"``
         (zero gradient), ``"line search"`` (no decrease along steepest descent
         either: converged to float32 precision) or ``"budget"`` (``iterations``
-        used up), and :attr:`iterations_done` how many steps were accepted.
+        used up).
         """
         v, m, B, G = self.be.vecops, self.memory, self._basis, self._gram
         f = fun(x, g)
         pending = None                              # slot whose y is formed next iteration
-        self.stop_reason, self.iterations_done = "budget", 0
+        self.stop_reason = "budget"
         for k in range(iterations):
             cur, prev = self._g_rows
             v.copy(g, B[cur])
@@ -172,7 +172,6 @@ class LBFGS:
             G[slot, slot] = ss
             pending = slot
             self._g_rows.reverse()
-            self.iterations_done += 1
             if on_iteration is not None:
                 on_iteration(k, f)
             if abs(f_old - f) <= rel_tol * max(1.0, abs(f)):

@@ -100,9 +100,9 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
     n_fixed = 0 if carried is None else carried[0].shape[0]
     t0 = time.perf_counter()
     pyramid = image_pyramid(be, frames_linear, shapes)
-    carried_pyr = None
+    carried_shading = None          # (k, h, w, 1) per level: the carried frames' log shading
     if carried is not None:
-        carried_pyr = (None, image_pyramid(be, be.asarray(carried[1][..., None]), shapes))
+        carried_shading = image_pyramid(be, be.asarray(carried[1][..., None]), shapes)
     log.add_time("pyramid", time.perf_counter() - t0)
 
     def make_energy(level, shape):
@@ -134,13 +134,12 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
         return finer
 
     def solve_level(level, shape, energy):
-        if carried_pyr is not None:
+        if carried_shading is not None:
             S_now = be.numpy(energy.S).copy()
-            S_now[:n_fixed] = be.numpy(carried_pyr[1][level])[..., 0]
+            S_now[:n_fixed] = be.numpy(carried_shading[level])[..., 0]
             be.vecops.copy(be.asarray(S_now.reshape(-1)), energy.S.reshape((energy.n,)))
         t = time.perf_counter()
-        problem = ConstrainedEnergy(energy)
-        problem.sync_albedo()
+        problem = ConstrainedEnergy(energy)           # sets A = I - S at each evaluation
         lbfgs = LBFGS(be, energy.n, memory=int(params.lbfgs_memory))
         iterations = level_iterations(params, level)
         reasons = []
