@@ -6,6 +6,7 @@ from ivkernels.backends import get_backend
 from ivkernels.kernels.launch import threads
 from ivkernels.kernels.reference import derivatives as ref_derivatives
 from ivkernels.kernels.reference import maps as ref
+from ivkernels.kernels.workspace import Workspace
 
 T, H, W = 2, 37, 53
 
@@ -28,9 +29,9 @@ def occlusion(be, fn, lab, flow, div_neg, *args):
     return be.numpy(out).copy()
 
 
-def boundary(be, mag, threshold, radius):
+def boundary(be, mag, threshold, radius, **kw):
     out = be.zeros(mag.shape)
-    be.maps.motion_boundary(be.asarray(mag), out, threshold, radius)
+    be.maps.motion_boundary(be.asarray(mag), out, threshold, radius, **kw)
     return be.numpy(out).copy()
 
 
@@ -80,6 +81,16 @@ def test_motion_boundary_hand_case(backend):
     np.testing.assert_array_equal(out, want)
 
 
+def test_motion_boundary_workspace_reused_across_shapes(backend, rng):
+    mags = [rng.random(shape, dtype=np.float32) ** 8 for shape in ((T, H, W), (1, 9, 11))]
+    ws = Workspace()
+    for _ in range(2):          # the second round finds the buffers left by the first
+        for mag in mags:
+            np.testing.assert_array_equal(boundary(backend, mag, 0.8, 2, workspace=ws),
+                                          ref.motion_boundary(mag, 0.8, 2))
+    assert len(ws) == 2
+
+
 def test_bad_input_raises(backend):
     m = backend.maps
     lab, flow, div, out = (backend.zeros(s) for s in ((T + 1, H, W, 3), (T, H, W, 2), (T, H, W), (T, H, W)))
@@ -97,6 +108,8 @@ def test_bad_input_raises(backend):
         m.motion_boundary(div, backend.zeros((T, H, W, 1)), 0.5, 1)
     with pytest.raises(TypeError, match="float32"):
         m.motion_boundary(backend.zeros((T, H, W), np.float64), out, 0.5, 1)
+    with pytest.raises(TypeError, match="workspace must be"):
+        m.motion_boundary(div, out, 0.5, 1, workspace=[])
 
 
 def test_warp_and_taichi_agree(rng):

@@ -1,29 +1,44 @@
-"""Objects the kernels' host functions keep between calls, on every backend.
+"""Small read-only tables the kernels' host functions share between calls.
 
-Scratch buffers (per-pixel intermediates of multi-pass kernels) are built
-once per key and *calling thread*, so two CPU threads running host functions
-at the same time never share one; small read-only tables are shared.  Keys
-start with the calling module's name and include everything the object
-depends on (device, shape, parameters).
+A table here depends on parameters only (a window radius and a sigma, never
+an image size): e.g. the spatial weights of the weighted median, (2r+1)^2
+floats.  The store is a process-wide LRU of at most :data:`MAX_TABLES`
+entries, so it stays a few kilobytes whatever is decomposed.  Per-pixel
+scratch buffers never go here: they live in a
+:class:`ivkernels.kernels.workspace.Workspace` owned by the caller.
 """
 from __future__ import annotations
 
 import threading
+from collections import OrderedDict
 
-_cache: dict = {}
+#: Entries kept; the least recently used one goes first.
+MAX_TABLES = 32
+
+_tables: OrderedDict = OrderedDict()
 _lock = threading.Lock()
 
 
 def cached(key: tuple, make):
-    """The object ``make()`` returns, built on the first call with ``key`` and kept."""
+    """The table ``make()`` returns for ``key``, built on first use and kept in the LRU.
+
+    ``key`` starts with the calling module's name and holds every parameter the
+    table depends on (and the device); the table must not be written to.
+    """
     with _lock:
-        obj = _cache.get(key)
-        if obj is None:
-            obj = make()
-            _cache[key] = obj
+        obj = _tables.get(key)
+        if obj is not None:
+            _tables.move_to_end(key)
+            return obj
+    obj = make()
+    with _lock:
+        obj = _tables.setdefault(key, obj)
+        _tables.move_to_end(key)
+        while len(_tables) > MAX_TABLES:
+            _tables.popitem(last=False)
     return obj
 
 
-def scratch(key: tuple, make):
-    """A scratch buffer built by ``make()`` once per ``key`` and calling thread."""
-    return cached((*key, threading.get_ident()), make)
+def cached_count() -> int:
+    """Number of tables held (at most :data:`MAX_TABLES`)."""
+    return len(_tables)

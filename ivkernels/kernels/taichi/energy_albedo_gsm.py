@@ -26,7 +26,8 @@ needs no atomics) and each row's energy summed in float64:
 Every unordered pair thus counts twice in the energy (once in each of its
 pixels' rows), exactly as a full-window visit would give.
 
-Scratch buffers (float32, cached per (shape, calling thread)) have the Warp
+Scratch buffers (float32, from the caller's workspace or allocated for the
+call, as in the Warp module) have the Warp
 module's layouts, ``B`` and the forward sums ``(T*H, W, 3)`` and the pairs
 ``(T*H, W, K, 2)`` with ``K = radius + radius (2 radius + 1)`` and the cell
 coefficients ``(n, 4)``, but are passed flat and indexed by pixel
@@ -40,8 +41,8 @@ import math
 import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.cache import scratch
 from ivkernels.kernels.taichi._checks import check_array, check_float, check_int
+from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
 nd2 = ti.types.ndarray(dtype=ti.f32, ndim=2)
@@ -201,18 +202,20 @@ def _gsm_backward_pairs_rows(B: nd1, sigma_inv: nd2, pairs: nd1, acc_in: nd1, la
         energy_rows[r] += ti.cast(lam, ti.f64) * e
 
 
-def _scratch(name: str, shape: tuple) -> np.ndarray:
-    """A float32 buffer of ``shape`` cached per (name, shape, calling thread)."""
-    return scratch((__name__, name, shape), lambda: np.empty(shape, np.float32))
+def _scratch(workspace, name: str, shape: tuple) -> np.ndarray:
+    """Float32 scratch buffer ``name`` from ``workspace`` (or allocated for this call)."""
+    return scratch_buffer(workspace, f"{__name__}.{name}", shape, np.float32,
+                          lambda: np.empty(shape, np.float32))
 
 
 def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_rows,
-                   lam: float, radius: int = 2) -> None:
+                   lam: float, radius: int = 2, *, workspace=None) -> None:
     """Add Eq. 11's GSM smoothness energy and gradient (see the Warp module).
 
     ``A`` (T, H, W, 3) float32 log albedo; ``sigma_inv`` (3, 3) float32;
     ``table_g``, ``table_dg`` (n,) float32; ``gA`` (T, H, W, 3) float32 and
-    ``energy_rows`` (T*H,) float64 accumulated.
+    ``energy_rows`` (T*H,) float64 accumulated; ``workspace`` an optional
+    :class:`ivkernels.kernels.workspace.Workspace` keeping the scratch buffers.
     """
     check_array("A", A, (None, None, None, 3), "(T, H, W, 3)", copy=False)
     T, H, W, _ = A.shape
@@ -227,6 +230,7 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
     r2_max = check_float("r2_max", r2_max, positive=True)
     lam = check_float("lam", lam)
     radius = check_int("radius", radius, 1, " (2 for the paper's 5x5 window)")
+    check_workspace(workspace)
     if T * H == 0 or W == 0:
         return
     n_forward = radius + radius * (2 * radius + 1)      # 12 for the 5x5 window
@@ -234,10 +238,10 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
         raise ValueError(f"A of shape {A.shape} with radius {radius} needs {T * H * W * n_forward * 2} "
                          f"pair entries, more than the 2**31 - 1 that 32-bit indices address; "
                          f"pass fewer frames per call or a smaller radius")
-    B = _scratch("whitened", (T * H * W * 3,))
-    pairs = _scratch("pairs", (T * H * W * n_forward * 2,))
-    acc = _scratch("forward_sum", (T * H * W * 3,))
-    coef = _scratch("cell_coefficients", (4 * n,))
+    B = _scratch(workspace, "whitened", (T * H * W * 3,))
+    pairs = _scratch(workspace, "pairs", (T * H * W * n_forward * 2,))
+    acc = _scratch(workspace, "forward_sum", (T * H * W * 3,))
+    coef = _scratch(workspace, "cell_coefficients", (4 * n,))
     cells_per_root = (n - 1) / math.sqrt(r2_max)
     _whiten_rows(A, sigma_inv, B)
     _cell_coefficients(table_g, table_dg, float(r2_max), float(cells_per_root), coef)

@@ -12,6 +12,7 @@ import numpy as np
 import taichi as ti
 
 from ivkernels.kernels.taichi._checks import check_array
+from ivkernels.kernels.workspace import check_workspace
 
 nd1_f64 = ti.types.ndarray(dtype=ti.f64, ndim=1)
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
@@ -81,10 +82,12 @@ def temporal_rows(X: nd4, flow: nd4, occ: nd3, gX: nd4, energy_rows: nd1_f64, la
         energy_rows[r] += ti.cast(lam, ti.f64) * e
 
 
-def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0) -> None:
+def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0, *,
+                  workspace=None) -> None:
     """Add the temporal term of Eq. 4 (albedo) or Eq. 8 (shading) and its gradient; see
     :func:`ivkernels.kernels.warp.energy_temporal.temporal_term` (NumPy arrays here;
-    ``X`` (T, H, W, C) or (T, H, W), ``gX`` shaped like ``X``)."""
+    ``X`` (T, H, W, C) or (T, H, W), ``gX`` shaped like ``X``).  The single
+    kernel needs no scratch: ``workspace`` is accepted, checked and unused."""
     if isinstance(X, np.ndarray) and X.ndim == 3:
         X = check_array("X", X, (None, None, None), "(T, H, W)")
         check_array("gX", gX, X.shape, "(T, H, W) like X", output=True)
@@ -96,6 +99,7 @@ def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0)
     flow = check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)")
     occ = check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)")
     check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dtype=np.float64, output=True)
+    check_workspace(workspace)
     if t < 2 or h * w * c == 0:
         return
     temporal_rows(X, flow, occ, gX, energy_rows, float(lam), float(alpha))

@@ -8,9 +8,9 @@ of :mod:`ivkernels.kernels.taichi.sampling`.  Parallel over the ``T * H`` rows.
 import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.cache import scratch
 from ivkernels.kernels.taichi._checks import check_array, check_int, check_positive
 from ivkernels.kernels.taichi.sampling import bilinear_at, clamped_corners, inside_image
+from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
@@ -135,11 +135,6 @@ def boundary_dilate_y_rows(hits: nd3, out: nd3, radius: ti.i32):
             out[t, y, x] = m
 
 
-def _scratch(shape: tuple) -> np.ndarray:
-    """A float32 buffer of ``shape`` cached per (shape, calling thread)."""
-    return scratch((__name__, shape), lambda: np.empty(shape, np.float32))
-
-
 def _check_occlusion_args(lab, flow, div_neg, out, sigma_e, sigma_d):
     lab = check_array("lab", lab, (None, None, None, 3), "(T+1, H, W, 3)")
     if lab.shape[0] < 2:
@@ -180,13 +175,17 @@ def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
         warp_reliability_rows(log_image, flow, occ, max_spread)
 
 
-def motion_boundary(sobel_mag, out, threshold: float, radius: int) -> None:
+def motion_boundary(sobel_mag, out, threshold: float, radius: int, *, workspace=None) -> None:
     """``w_bnd``: 1 where the (2r+1)^2 window holds ``sobel_mag > threshold``; see
-    :func:`ivkernels.kernels.warp.maps.motion_boundary`."""
+    :func:`ivkernels.kernels.warp.maps.motion_boundary` (the (T, H, W) float32
+    scratch comes from ``workspace``, or is allocated for this call)."""
     sobel_mag = check_array("sobel_mag", sobel_mag, (None, None, None), "(T, H, W)")
     check_array("out", out, sobel_mag.shape, "(T, H, W)", output=True)
     radius = check_int("radius", radius, 0)
+    check_workspace(workspace)
     if out.size:
-        hits = _scratch(tuple(sobel_mag.shape))
+        shape = tuple(sobel_mag.shape)
+        hits = scratch_buffer(workspace, f"{__name__}.boundary_hits", shape, np.float32,
+                              lambda: np.empty(shape, np.float32))
         boundary_dilate_x_rows(sobel_mag, hits, float(threshold), int(radius))
         boundary_dilate_y_rows(hits, out, int(radius))

@@ -10,8 +10,8 @@ loop runs over rows in parallel; each row only touches its own scratch row.
 import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.cache import scratch
 from ivkernels.kernels.taichi._checks import check_array, check_int, check_positive
+from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 from ivkernels.kernels.warp.median import KMEANS_ITERATIONS, MIN_SEPARATION, median_network
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
@@ -286,11 +286,10 @@ def _spatial_weights(radius: int, sigma: float) -> np.ndarray:
     return np.exp(-(d[:, None] ** 2 + d[None, :] ** 2) / (2.0 * sigma * sigma)).astype(np.float32).ravel()
 
 
-def _scratch(given, shape: tuple) -> np.ndarray:
-    """The caller's scratch ``given`` (checked) or a cached one of ``shape`` for the calling thread."""
-    if given is not None:
-        return check_array("scratch", given, shape, "(rows, floats per row)", output=True)
-    return scratch((__name__, shape), lambda: np.empty(shape, np.float32))
+def _scratch(workspace, name: str, shape: tuple) -> np.ndarray:
+    """Float32 scratch ``name`` of ``shape`` from ``workspace`` (or allocated for this call)."""
+    return scratch_buffer(workspace, f"{__name__}.{name}", shape, np.float32,
+                          lambda: np.empty(shape, np.float32))
 
 
 def median5x5(src, out) -> None:
@@ -304,7 +303,7 @@ def median5x5(src, out) -> None:
 
 
 def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float = 7.0,
-                            lam: float = 0.001, *, scratch=None) -> None:
+                            lam: float = 0.001, *, workspace=None) -> None:
     """S~ update of Eq. 13 (weighted median with surf of Eq. 10 and Li & Osher's
     quadratic pull); see :func:`ivkernels.kernels.warp.median.weighted_median_shading`."""
     S = check_array("S", S, (None, None, None), "(T, H, W)")
@@ -320,14 +319,15 @@ def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float
     lam = float(lam)
     if not lam >= 0.0:
         raise ValueError(f"lam must be >= 0, got {lam!r}")
-    buf = _scratch(scratch, shading_scratch_shape(S.shape, radius))
+    check_workspace(workspace)
+    buf = _scratch(workspace, "shading_window", shading_scratch_shape(S.shape, radius))
     if S.size:
         weighted_median_shading_rows(S, flow, w_bnd, out, buf, _spatial_weights(radius, sigma_s), radius, lam,
                                      KMEANS_ITERATIONS, MIN_SEPARATION)
 
 
 def weighted_median_flow(flow, lab, occ, mask, out, radius: int = 7, sigma_x: float = 7.0,
-                         sigma_i: float = 7.0, *, scratch=None) -> None:
+                         sigma_i: float = 7.0, *, workspace=None) -> None:
     """Classic+NL's non-local flow median; see
     :func:`ivkernels.kernels.warp.median.weighted_median_flow` (NumPy arrays here)."""
     flow = check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
@@ -339,6 +339,7 @@ def weighted_median_flow(flow, lab, occ, mask, out, radius: int = 7, sigma_x: fl
     radius = check_int("radius", radius, 0)
     sigma_x = check_positive("sigma_x", sigma_x)
     sigma_i = check_positive("sigma_i", sigma_i)
-    buf = _scratch(scratch, flow_scratch_shape(flow.shape, radius))
+    check_workspace(workspace)
+    buf = _scratch(workspace, "flow_window", flow_scratch_shape(flow.shape, radius))
     if flow.size:
         weighted_median_flow_rows(flow, lab, occ, mask, out, buf, radius, sigma_x, sigma_i)

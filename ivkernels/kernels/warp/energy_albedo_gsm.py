@@ -29,7 +29,8 @@ single full-window visit would give.
 
 Whitening.  With ``L`` upper triangular, ``L^T L = Sigma^-1`` (Cholesky), a
 whitening pass stores ``B(x) = L A(x)`` per pixel in a scratch buffer (the
-scratch buffers are cached per (device, shape, calling thread)); then
+scratch buffers, ~120 bytes per pixel, come from the caller's workspace,
+:mod:`ivkernels.kernels.workspace`); then
 ``r2 = |B(x) - B(y)|^2`` and
 
     dE/dA(x) = 4 lam L^T sum_{y in N(x)} g'(r2) (B(x) - B(y)),
@@ -42,9 +43,9 @@ from __future__ import annotations
 import math
 import warp as wp
 
-from ivkernels.kernels.cache import scratch
 from ivkernels.kernels.launch import launch_rows
 from ivkernels.kernels.warp._checks import check_array, check_float, check_int
+from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 
 wp.set_module_options({"enable_backward": False})
 
@@ -195,14 +196,14 @@ def gsm_backward_pairs_rows(row_begin: int, B: wp.array2d(dtype=wp.vec3), sigma_
     energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
 
 
-def _scratch(name: str, shape: tuple, dtype, device):
-    """A scratch buffer cached per (name, device, shape, calling thread)."""
-    return scratch((__name__, name, str(device), shape),
-                   lambda: wp.empty(shape, dtype=dtype, device=device))
+def _scratch(workspace, name: str, shape: tuple, dtype, device):
+    """Scratch buffer ``name`` from ``workspace`` (or allocated for this call)."""
+    return scratch_buffer(workspace, f"{__name__}.{name}", shape, dtype,
+                          lambda: wp.empty(shape, dtype=dtype, device=device), device)
 
 
 def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_rows,
-                   lam: float, radius: int = 2) -> None:
+                   lam: float, radius: int = 2, *, workspace=None) -> None:
     """Add Eq. 11's GSM smoothness energy and gradient.
 
     Parameters
@@ -220,6 +221,12 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
         ``lam * sum_{x in row} sum_{y in N(x)} g(r2)``.
     lam : Eq. 11's ``lambda_As``.
     radius : window radius (2: the paper's 5x5 window, 24 neighbours).
+    workspace : optional :class:`ivkernels.kernels.workspace.Workspace` that
+        keeps the scratch buffers (``B`` and the forward sums, 12 bytes per
+        pixel each; the pairs, ``8 K`` bytes per pixel with
+        ``K = radius + radius (2 radius + 1)``; the cell coefficients, 16 bytes
+        per table entry) between calls; without one they are allocated for
+        this call.
     """
     check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
     T, H, W, _ = A.shape
@@ -235,13 +242,14 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
     r2_max = check_float("r2_max", r2_max, positive=True)
     lam = check_float("lam", lam)
     radius = check_int("radius", radius, 1, " (2 for the paper's 5x5 window)")
+    check_workspace(workspace)
     cells_per_root = (n - 1) / math.sqrt(r2_max)
     n_forward = radius + radius * (2 * radius + 1)      # 12 for the 5x5 window
-    B = _scratch("whitened", (T * H, W), wp.vec3, dev)
-    pairs = _scratch("pairs", (T * H, W, n_forward), wp.vec2, dev)
-    acc = _scratch("forward_sum", (T * H, W), wp.vec3, dev)
+    B = _scratch(workspace, "whitened", (T * H, W), wp.vec3, dev)
+    pairs = _scratch(workspace, "pairs", (T * H, W, n_forward), wp.vec2, dev)
+    acc = _scratch(workspace, "forward_sum", (T * H, W), wp.vec3, dev)
     launch_rows(whiten_rows, T * H, [A, sigma_inv, B], device=dev)
-    coef = _scratch("cell_coefficients", (n,), wp.vec4, dev)
+    coef = _scratch(workspace, "cell_coefficients", (n,), wp.vec4, dev)
     wp.launch(cell_coefficients, dim=n, inputs=[table_g, table_dg, float(r2_max), float(cells_per_root), coef],
               device=dev)
     launch_rows(gsm_forward_pairs_rows, T * H,

@@ -16,7 +16,8 @@ the bilinear sample with corners clamped to the image (the convention of
 The gradient in ``X_t`` is a gather; the gradient in ``X_{t+1}`` lands on the
 four corners of ``x + u`` (a bilinear splat with atomic adds).  They are two
 launches: the gather over all rows, which also stores each pixel's
-``lam occ rho'(d)`` in a scratch buffer, then the splat of the stored values,
+``lam occ rho'(d)`` in a scratch buffer (from the caller's workspace,
+:mod:`ivkernels.kernels.workspace`), then the splat of the stored values,
 split only at frame boundaries so concurrent CPU launches never write the
 same gradient frame.
 Energies go to the rows of frame ``t`` (conventions in :mod:`ivkernels.kernels`).
@@ -25,10 +26,10 @@ from __future__ import annotations
 
 import warp as wp
 
-from ivkernels.kernels.cache import scratch
 from ivkernels.kernels.launch import launch_rows
 from ivkernels.kernels.warp._checks import check_array
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners
+from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 
 wp.set_module_options({"enable_backward": False})
 
@@ -105,12 +106,8 @@ def temporal_splat_rows(row_begin: int, flow: wp.array4d(dtype=float), occ: wp.a
                 wp.atomic_add(gX, t + 1, y1, x1, c, fx * fy * g)
 
 
-def _weight_scratch(shape: tuple, device):
-    """The (T-1, H, W, C) float32 splat-weight buffer, cached per (device, shape, calling thread)."""
-    return scratch((__name__, str(device), shape), lambda: wp.empty(shape, dtype=float, device=device))
-
-
-def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0) -> None:
+def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0, *,
+                  workspace=None) -> None:
     """Add the temporal term of Eq. 4 (albedo) or Eq. 8 (shading) and its gradient.
 
     ``E = lam * sum_{t<T-1} sum_{x,c} occ_t(x) rho(X_{t+1}(x + u_t(x), c) - X_t(x, c))``,
@@ -127,6 +124,9 @@ def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0)
     energy_rows : wp.array float64 (T*H,), accumulated; the pair (t, t+1)
         adds to the rows of frame t, the last frame's rows get nothing.
     lam : lambda_TA (10) or lambda_TS (1).  alpha : Tukey scale (log units).
+    workspace : optional :class:`ivkernels.kernels.workspace.Workspace` that
+        keeps the (T-1, H, W, C) float32 splat weights between calls; without
+        one they are allocated for this call.
 
     With T = 1 there is no pair and nothing is added.
     """
@@ -142,9 +142,12 @@ def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0)
     check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)", dev)
     check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", dev)
     check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dev, dtype=wp.float64)
+    check_workspace(workspace)
     if t < 2:
         return
-    weight = _weight_scratch((t - 1, h, w, c), dev)
+    shape = (t - 1, h, w, c)
+    weight = scratch_buffer(workspace, f"{__name__}.splat_weight", shape, float,
+                            lambda: wp.empty(shape, dtype=float, device=dev), dev)
     launch_rows(temporal_gather_rows, (t - 1) * h,
                 [X, flow, occ, gX, weight, energy_rows, float(lam), float(alpha)], device=dev)
     launch_rows(temporal_splat_rows, (t - 1) * h, [flow, occ, weight, gX], device=dev, align=h)

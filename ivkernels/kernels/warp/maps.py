@@ -15,10 +15,10 @@ from __future__ import annotations
 
 import warp as wp
 
-from ivkernels.kernels.cache import scratch
 from ivkernels.kernels.launch import launch_rows
 from ivkernels.kernels.warp._checks import check_array, check_int, check_positive
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners, inside_image
+from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 
 wp.set_module_options({"enable_backward": False})
 
@@ -247,10 +247,10 @@ def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
     launch_rows(warp_reliability_rows, (t - 1) * h, [log_image, flow, occ, max_spread], device=dev)
 
 
-def motion_boundary(sobel_mag, out, threshold: float, radius: int) -> None:
+def motion_boundary(sobel_mag, out, threshold: float, radius: int, *, workspace=None) -> None:
     """Motion-boundary map ``w_bnd`` (Sec. 3.3, Eq. 9): threshold, then a square dilation
     as a row pass (running count of edge pixels) and a column pass (max) through
-    a float32 (T, H, W) scratch buffer cached per (device, shape, calling thread).
+    a float32 (T, H, W) scratch buffer.
 
     ``out[t, y, x] = 1`` if any pixel of the ``(2 radius + 1)^2`` window around
     ``(y, x)`` (clipped to the image) has ``sobel_mag > threshold``, else 0.
@@ -262,17 +262,19 @@ def motion_boundary(sobel_mag, out, threshold: float, radius: int) -> None:
     out : wp.array float32 (T, H, W), written, 0 or 1.  Must not overlap sobel_mag.
     threshold : edge magnitude, pixels per pixel.
     radius : dilation radius in pixels, int >= 0 (0 = threshold only).
+    workspace : optional :class:`ivkernels.kernels.workspace.Workspace` that
+        keeps the scratch buffer between calls; without one it is allocated
+        for this call.
     """
     check_array("sobel_mag", sobel_mag, (None, None, None), "(T, H, W)")
     check_array("out", out, tuple(sobel_mag.shape), "(T, H, W)", sobel_mag.device)
     radius = check_int("radius", radius, 0)
+    check_workspace(workspace)
     rows = sobel_mag.shape[0] * sobel_mag.shape[1]
-    hits = _scratch(tuple(sobel_mag.shape), sobel_mag.device)
+    shape, dev = tuple(sobel_mag.shape), sobel_mag.device
+    hits = scratch_buffer(workspace, f"{__name__}.boundary_hits", shape, wp.float32,
+                          lambda: wp.empty(shape, dtype=wp.float32, device=dev), dev)
     launch_rows(boundary_dilate_x_rows, rows, [sobel_mag, hits, float(threshold), int(radius)],
                 device=sobel_mag.device)
     launch_rows(boundary_dilate_y_rows, rows, [hits, out, int(radius)], device=sobel_mag.device)
 
-
-def _scratch(shape: tuple, device):
-    """A float32 buffer of ``shape`` cached per (device, shape, calling thread)."""
-    return scratch((__name__, str(device), shape), lambda: wp.empty(shape, dtype=wp.float32, device=device))

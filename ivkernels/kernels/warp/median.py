@@ -11,19 +11,22 @@ weights is one shared (2r+1)^2 table).  The 5x5 median runs a branch-free
 compare-exchange network (:func:`median_network`) written out as straight-line
 code on 25 scalars (:func:`median25`).
 
-Scratch convention: the host functions take ``scratch=None`` and then allocate
-a float32 buffer lazily and cache it per (device, shape, calling thread); pass
-``scratch=`` (see :func:`shading_scratch_shape`, :func:`flow_scratch_shape`)
-to own the memory instead.
+Scratch convention: the weighted medians take ``workspace=None``, a
+:class:`ivkernels.kernels.workspace.Workspace` that keeps their float32
+scratch (:func:`shading_scratch_shape`, :func:`flow_scratch_shape`) between
+calls; without one the buffer is allocated for the call.  The shading
+median's spatial weight table depends on (radius, sigma) only and is shared
+through the bounded table cache of :mod:`ivkernels.kernels.cache`.
 """
 from __future__ import annotations
 
 import numpy as np
 import warp as wp
 
-from ivkernels.kernels.cache import cached, scratch
+from ivkernels.kernels.cache import cached
 from ivkernels.kernels.launch import launch_rows
 from ivkernels.kernels.warp._checks import check_array, check_int, check_positive
+from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 
 wp.set_module_options({"enable_backward": False})
 
@@ -460,7 +463,8 @@ def flow_scratch_shape(flow_shape: tuple, radius: int) -> tuple:
 
 
 def _cached_table(key: tuple, make, dtype, device):
-    """A small read-only table (``make()`` as a NumPy array) cached per key and device."""
+    """A small read-only table (``make()`` as a NumPy array) kept per key and device in the
+    bounded table cache (:mod:`ivkernels.kernels.cache`)."""
     return cached((__name__, *key, str(device)), lambda: wp.array(make(), dtype=dtype, device=device))
 
 
@@ -470,12 +474,10 @@ def _spatial_weights(radius: int, sigma: float) -> np.ndarray:
     return np.exp(-(d[:, None] ** 2 + d[None, :] ** 2) / (2.0 * sigma * sigma)).astype(np.float32).ravel()
 
 
-def _scratch(given, shape: tuple, device):
-    """The caller's scratch ``given`` (checked) or a cached one of ``shape`` for this device and thread."""
-    if given is not None:
-        check_array("scratch", given, shape, "(rows, floats per row)", device)
-        return given
-    return scratch((__name__, str(device), shape), lambda: wp.empty(shape, dtype=wp.float32, device=device))
+def _scratch(workspace, name: str, shape: tuple, device):
+    """Float32 scratch ``name`` of ``shape`` from ``workspace`` (or allocated for this call)."""
+    return scratch_buffer(workspace, f"{__name__}.{name}", shape, wp.float32,
+                          lambda: wp.empty(shape, dtype=wp.float32, device=device), device)
 
 
 def median5x5(src, out) -> None:
@@ -493,7 +495,7 @@ def median5x5(src, out) -> None:
 
 
 def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float = 7.0,
-                            lam: float = 0.001, *, scratch=None) -> None:
+                            lam: float = 0.001, *, workspace=None) -> None:
     """Update of the coupling variable S~ (Eq. 13), the non-local term of Eq. 9-10.
 
     For frames ``t < T'`` and pixels with ``w_bnd >= 0.5`` (the paper's
@@ -529,8 +531,9 @@ def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float
     radius : window half-size (7 gives the paper's 15x15).
     sigma_s : spatial scale of w_nl in pixels.
     lam : weight of the quadratic pull towards S(x), >= 0.
-    scratch : optional float32 wp.array of shape :func:`shading_scratch_shape`;
-        by default a buffer cached per (device, shape, thread) is used.
+    workspace : optional :class:`ivkernels.kernels.workspace.Workspace` that
+        keeps the float32 scratch of shape :func:`shading_scratch_shape`
+        between calls; without one it is allocated for this call.
     """
     check_array("S", S, (None, None, None), "(T, H, W)")
     t, h, w = S.shape
@@ -545,7 +548,8 @@ def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float
     lam = float(lam)
     if not lam >= 0.0:
         raise ValueError(f"lam must be >= 0, got {lam!r}")
-    buf = _scratch(scratch, shading_scratch_shape(S.shape, radius), S.device)
+    check_workspace(workspace)
+    buf = _scratch(workspace, "shading_window", shading_scratch_shape(S.shape, radius), S.device)
     spatial = _cached_table(("spatial", radius, sigma_s), lambda: _spatial_weights(radius, sigma_s),
                             wp.float32, S.device)
     launch_rows(weighted_median_shading_rows, t * h,
@@ -554,7 +558,7 @@ def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float
 
 
 def weighted_median_flow(flow, lab, occ, mask, out, radius: int = 7, sigma_x: float = 7.0,
-                         sigma_i: float = 7.0, *, scratch=None) -> None:
+                         sigma_i: float = 7.0, *, workspace=None) -> None:
     """Classic+NL's non-local flow median (each flow component independently).
 
     Where ``mask >= 0.5``, ``out`` is the (lower) weighted median of the flow
@@ -570,8 +574,9 @@ def weighted_median_flow(flow, lab, occ, mask, out, radius: int = 7, sigma_x: fl
     occ : wp.array float32 (T, H, W), occlusion weight (1 visible, 0 occluded).
     mask : wp.array float32 (T, H, W), 1 where the median is taken.
     out : wp.array float32 (T, H, W, 2), written.  Must not overlap ``flow``.
-    scratch : optional float32 wp.array of shape :func:`flow_scratch_shape`;
-        by default a buffer cached per (device, shape, thread) is used.
+    workspace : optional :class:`ivkernels.kernels.workspace.Workspace` that
+        keeps the float32 scratch of shape :func:`flow_scratch_shape` between
+        calls; without one it is allocated for this call.
     """
     check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
     t, h, w, _ = flow.shape
@@ -582,6 +587,7 @@ def weighted_median_flow(flow, lab, occ, mask, out, radius: int = 7, sigma_x: fl
     radius = check_int("radius", radius, 0)
     sigma_x = check_positive("sigma_x", sigma_x)
     sigma_i = check_positive("sigma_i", sigma_i)
-    buf = _scratch(scratch, flow_scratch_shape(flow.shape, radius), flow.device)
+    check_workspace(workspace)
+    buf = _scratch(workspace, "flow_window", flow_scratch_shape(flow.shape, radius), flow.device)
     launch_rows(weighted_median_flow_rows, t * h,
                 [flow, lab, occ, mask, out, buf, radius, sigma_x, sigma_i], device=flow.device)
