@@ -24,11 +24,17 @@ the data-consistent set ``A = I - S`` (see its docstring for why).
 The non-local shading term of Eq. 9 is handled through the coupling variable
 ``S~`` (Eq. 13): with ``S~`` fixed it is constant, and :meth:`update_coupling`
 sets ``S~`` to the 15x15 weighted median of ``S`` near motion boundaries.
+
+Each :class:`WindowEnergy` owns the buffers its kernels need, scratch
+included (a :class:`ivkernels.kernels.workspace.Workspace`: the GSM term's
+~120 bytes per pixel, the temporal splat weights, the median's window
+rows); they are freed with it when the solver moves to the next level.
 """
 from __future__ import annotations
 
 import numpy as np
 
+from ivkernels.kernels.workspace import Workspace
 from ivkernels.params import Params
 
 
@@ -71,6 +77,7 @@ class WindowEnergy:
         self.A, self.S = self.X[: 3 * n].reshape((T, h, w, 3)), self.X[3 * n:].reshape((T, h, w))
         self.gA, self.gS = self.G[: 3 * n].reshape((T, h, w, 3)), self.G[3 * n:].reshape((T, h, w))
         self.S_tilde = be.empty((T, h, w))
+        self.workspace = Workspace()        # the kernels' scratch buffers, freed with this energy
         self._rows_shape = (T * h,)
         self._gsm = None
         if params.lam_albedo_smooth > 0:
@@ -105,11 +112,13 @@ class WindowEnergy:
         if self.temporal:
             if want("temporal_albedo") and p.lam_temporal_albedo > 0:
                 be.energy_temporal.temporal_term(self.A, self.flow, self.occlusion, self.gA, rows,
-                                                 lam=p.lam_temporal_albedo, alpha=p.tukey_alpha)
+                                                 lam=p.lam_temporal_albedo, alpha=p.tukey_alpha,
+                                                 workspace=self.workspace)
             if want("temporal_shading") and p.lam_temporal_shading > 0:
                 be.energy_temporal.temporal_term(self.S.reshape((T, h, w, 1)), self.flow,
                                                  self.occlusion, self.gS.reshape((T, h, w, 1)), rows,
-                                                 lam=p.lam_temporal_shading, alpha=p.tukey_alpha)
+                                                 lam=p.lam_temporal_shading, alpha=p.tukey_alpha,
+                                                 workspace=self.workspace)
             if want("coupling") and p.lam_coupling > 0:
                 be.energy_shading.coupling_term(self.S, self.S_tilde, self.boundary, self.gS, rows,
                                                 lam=p.lam_coupling)
@@ -119,7 +128,8 @@ class WindowEnergy:
         if want("albedo_smooth") and self._gsm is not None:
             sigma_inv, table_g, table_dg, r2_max = self._gsm
             be.energy_albedo_gsm.gsm_smoothness(self.A, sigma_inv, table_g, table_dg, r2_max,
-                                                self.gA, rows, lam=p.lam_albedo_smooth)
+                                                self.gA, rows, lam=p.lam_albedo_smooth,
+                                                workspace=self.workspace)
         if want("albedo_sparsity") and self._entropy is not None:
             whiten, lo, h, taps, sigma_p, scratch = self._entropy
             be.energy_albedo_entropy.entropy_term(self.A, whiten, lo, h, taps, sigma_p, scratch,
@@ -174,7 +184,8 @@ class WindowEnergy:
         sigma_s = max(1.0, p.sigma_s * self.level_scale)
         ratio = p.lam_coupling / p.lam_shading_nonlocal if p.lam_shading_nonlocal > 0 else 0.0
         be.median.weighted_median_shading(self.S, self.flow, self.boundary, self.S_tilde,
-                                          radius=radius, sigma_s=sigma_s, lam=ratio)
+                                          radius=radius, sigma_s=sigma_s, lam=ratio,
+                                          workspace=self.workspace)
 
 
 class ConstrainedEnergy:

@@ -10,7 +10,7 @@ import numpy as np
 from ivkernels.params import Params
 
 
-def motion_maps(be, frames_linear, flow, params: Params):
+def motion_maps(be, frames_linear, flow, params: Params, *, workspace=None):
     """Occlusion and motion-boundary weights of a window.
 
     Parameters
@@ -18,6 +18,9 @@ def motion_maps(be, frames_linear, flow, params: Params):
     be : backend.
     frames_linear : (T, H, W, 3) backend array, linear RGB in [0, 1].
     flow : (T-1, H, W, 2) backend array, forward flow in pixels (x, y).
+    workspace : optional :class:`ivkernels.kernels.workspace.Workspace` of the
+        caller for the kernels' scratch; without one it is allocated for this
+        call and freed on return.
 
     Returns
     -------
@@ -43,7 +46,8 @@ def motion_maps(be, frames_linear, flow, params: Params):
     sobel = be.empty((n, H, W))
     be.derivatives.flow_sobel_magnitude(flow, sobel)
     boundary = be.empty((n, H, W))
-    be.maps.motion_boundary(sobel, boundary, params.boundary_threshold, int(params.boundary_radius))
+    be.maps.motion_boundary(sobel, boundary, params.boundary_threshold, int(params.boundary_radius),
+                            workspace=workspace)
     return occlusion, boundary
 
 
