@@ -7,7 +7,7 @@ from ivkernels.decompose import window_ranges
 from ivkernels.priors import load_albedo_prior
 from ivkernels.solver.energy import WindowEnergy
 from ivkernels.solver.lbfgs import LBFGS
-from ivkernels.solver.pyramid import level_shapes
+from ivkernels.solver.pyramid import coarse_to_fine, level_shapes
 
 
 @pytest.mark.parametrize("n, window, overlap", [(1, 8, 2), (8, 8, 2), (9, 8, 2), (30, 8, 2),
@@ -25,6 +25,32 @@ def test_windows_cover_every_frame_and_link_every_pair(n, window, overlap):
             assert start + carried == prev_stop
         covered.update(range(start, stop))
     assert covered == set(range(n))
+
+
+def test_coarse_to_fine_gives_every_callback_its_level_index():
+    # two levels of one shape (a pyramid scale close to 1): the index, not the shape, tells them apart
+    shapes = [(9, 12), (9, 12), (5, 6)]
+    calls = []
+
+    def init(level, shape):
+        calls.append(("init", level, shape))
+        return [level]
+
+    def upsample(level, shape, state):
+        calls.append(("upsample", level, shape, state[-1]))
+        return state + [level]
+
+    def solve_level(level, shape, state):
+        calls.append(("solve", level, shape))
+        return state
+
+    assert coarse_to_fine(shapes, solve_level, init, upsample) == [2, 1, 0]
+    assert calls == [("init", 2, (5, 6)), ("solve", 2, (5, 6)),
+                     ("upsample", 1, (9, 12), 2), ("solve", 1, (9, 12)),
+                     ("upsample", 0, (9, 12), 1), ("solve", 0, (9, 12))]
+    assert coarse_to_fine([(4, 4)], solve_level, init, upsample) == [0]
+    with pytest.raises(ValueError, match="at least one level"):
+        coarse_to_fine([], solve_level, init, upsample)
 
 
 def test_level_shapes():

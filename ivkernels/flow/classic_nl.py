@@ -73,6 +73,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ivkernels.kernels.workspace import Workspace
+from ivkernels.solver.pyramid import coarse_to_fine
 
 #: Data terms of :class:`ClassicNLSettings` (``data_term``).
 DATA_TERMS = ("brightness", "gradient", "census")
@@ -426,8 +428,10 @@ class ClassicNL:
 
     # -- the solver ---------------------------------------------------------
 
-    def _warp_step(self, lv: _Level, flow, quad_frac: float, weighted_median: bool, depth: int = 0) -> None:
-        """One warping step at a level: IRLS system, SOR, update, median filtering (step 4)."""
+    def _warp_step(self, lv: _Level, flow, quad_frac: float, weighted_median: bool, depth: int = 0,
+                   workspace: Workspace | None = None) -> None:
+        """One warping step at a level: IRLS system, SOR, update, median filtering (step 4);
+        ``workspace`` keeps the median kernels' scratch (the run's own)."""
         be, s, fc = self.be, self.s, self.be.flow_classic
         quad_weight = 2.0 / (s.quad_sigma * s.quad_sigma)
         be.sampling.warp_bicubic(lv.pack2, flow, lv.warped, lv.inside)
@@ -455,9 +459,9 @@ class ClassicNL:
         if not weighted_median:
             be.median.median5x5(lv.raw, flow)
             return
-        self._median(lv, lv.raw, flow)
+        self._median(lv, lv.raw, flow, workspace)
 
-    def _median(self, lv: _Level, raw, out) -> None:
+    def _median(self, lv: _Level, raw, out, workspace: Workspace | None = None) -> None:
         """5x5 median everywhere, 15x15 weighted median near flow edges: ``raw`` -> ``out``."""
         be, s = self.be, self.s
         n = raw.shape[0]
@@ -470,12 +474,13 @@ class ClassicNL:
         energy = be.numpy(lv.row_energy).reshape(n, h, 2).astype(np.float64).sum(axis=1)
         cutoff = np.maximum(s.edge_scale * energy / (h * w), s.edge_min ** 2).astype(np.float32)
         be.flow_classic.thin_edges(lv.sobel, be.asarray(cutoff), lv.edges)
-        be.maps.motion_boundary(lv.edges, lv.mask, 0.5, s.edge_radius)
+        be.maps.motion_boundary(lv.edges, lv.mask, 0.5, s.edge_radius, workspace=workspace)
         be.median.median5x5(raw, lv.med)
         # Classic+NL averages the squared Lab differences over the 3 channels; the
         # kernel sums them, hence sigma_i * sqrt(3).
         be.median.weighted_median_flow(raw, lv.lab[0:n], lv.occ, lv.mask, lv.wmed,
-                                       s.wm_radius, s.sigma_x, s.sigma_i * math.sqrt(3.0))
+                                       s.wm_radius, s.sigma_x, s.sigma_i * math.sqrt(3.0),
+                                       workspace=workspace)
         be.flow_classic.select_masked(lv.mask, lv.wmed, lv.med, out)
 
     def __call__(self, frames: np.ndarray, init: np.ndarray | None = None) -> np.ndarray:
@@ -513,6 +518,15 @@ class ClassicNL:
             flow = be.empty((n, *stage1[-1], 2))
             be.pyramid.resize_flow(full, flow)
 
+        def fit(level, shape, flow):
+            """``flow`` resized to ``shape`` (vectors scaled with it) unless it has that size."""
+            if tuple(flow.shape[1:3]) == tuple(shape):
+                return flow
+            resized = be.empty((n, *shape, 2))
+            be.pyramid.resize_flow(flow, resized)
+            return resized
+
+        workspace = Workspace()             # the median kernels' scratch, freed when the run returns
         pyramids = {}
         for stage, quad_frac in enumerate(gnc_schedule(s.gnc_stages)):
             sizes, spacing = (stage1, s.spacing) if stage == 0 else (later, s.gnc_spacing)
@@ -520,14 +534,20 @@ class ClassicNL:
                 tex_levels = self._pyramid(texture, sizes, spacing)
                 lab_levels = self._pyramid(lab, sizes, spacing)
                 pyramids[spacing] = [_Level(be, tx, lb, n, s) for tx, lb in zip(tex_levels, lab_levels)]
-            for depth, lv in reversed(list(enumerate(pyramids[spacing]))):
-                if tuple(flow.shape[1:3]) != lv.shape:
-                    resized = be.empty((n, *lv.shape, 2))
-                    be.pyramid.resize_flow(flow, resized)
-                    flow = resized
+            levels = pyramids[spacing]
+
+            def solve_level(depth, shape, flow, levels=levels, quad_frac=quad_frac):
+                lv = levels[depth]
                 weighted_median = (quad_frac < 1.0 or s.quadratic_wm_finest
                                    or lv.shape != (height, width))
                 for _ in range(s.warps):
-                    self._warp_step(lv, flow, quad_frac, weighted_median, depth)
+                    self._warp_step(lv, flow, quad_frac, weighted_median, depth, workspace)
+                return flow
+
+            def init(level, shape, carried=flow):
+                # the previous stage's flow (or the initial one), fitted to the coarsest level
+                return fit(level, shape, carried)
+
+            flow = coarse_to_fine(sizes, solve_level, init, fit)
         be.synchronize()
         return np.array(be.numpy(flow), dtype=np.float32, copy=True)

@@ -2,7 +2,8 @@
 
 :func:`coarse_to_fine` knows nothing about the energy: it takes the per-level
 solver as an argument (as scikit-image's registration code does), so the
-intrinsic-video solver and any other per-level method share it.
+intrinsic-video solver (:mod:`ivkernels.solver.window_solver`) and each GNC
+stage of Classic+NL (:mod:`ivkernels.flow.classic_nl`) run the same loop.
 """
 from __future__ import annotations
 
@@ -79,18 +80,26 @@ def image_pyramid(be, frames, shapes: list[tuple[int, int]]) -> list:
 
 def coarse_to_fine(shapes: list[tuple[int, int]], solve_level: Callable, init: Callable,
                    upsample: Callable):
-    """Run ``solve_level`` from the coarsest shape to the finest.
+    """Run ``solve_level`` from the coarsest shape to the finest; returns the finest state.
+
+    Every callback gets the index ``level`` of the level it works on (0 = the
+    finest, ``len(shapes) - 1`` the coarsest), so per-level buffers and
+    schedules are looked up by index, never recovered from a shape.
 
     Parameters
     ----------
-    shapes : level shapes, finest first (:func:`level_shapes`).
-    solve_level : ``solve_level(level_index, shape, state) -> state``.
-    init : ``init(shape) -> state`` at the coarsest level.
-    upsample : ``upsample(state, shape) -> state`` between levels.
+    shapes : level shapes (h, w), finest first (:func:`level_shapes`, or any
+        other pyramid's sizes).
+    solve_level : ``solve_level(level, shape, state) -> state``.
+    init : ``init(level, shape) -> state`` at the coarsest level.
+    upsample : ``upsample(level, shape, state) -> state``: the state solved at
+        ``level + 1`` brought to ``level``, of shape ``shape``.
     """
+    if not shapes:
+        raise ValueError("coarse_to_fine needs at least one level shape")
     state = None
     for level in range(len(shapes) - 1, -1, -1):
         shape = shapes[level]
-        state = init(shape) if state is None else upsample(state, shape)
+        state = init(level, shape) if level == len(shapes) - 1 else upsample(level, shape, state)
         state = solve_level(level, shape, state)
     return state

@@ -118,17 +118,16 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
         log.add_time("levels", time.perf_counter() - t)
         return energy
 
-    def init(shape):
-        energy = make_energy(len(shapes) - 1, shape)
+    def init(level, shape):
+        energy = make_energy(level, shape)
         be.vecops.copy(_initial_shading(be, energy.I, params).reshape((energy.n,)),
                        energy.S.reshape((energy.n,)))
         return energy
 
-    def upsample(energy, shape):
+    def upsample(level, shape, energy):
         # Shading is smooth and survives resampling; the albedo follows it
         # through A = I - S, so it keeps the texture the coarser level could not see.
         S_up = resize(be, energy.S.reshape((*energy.shape, 1)), shape)
-        level = shapes.index(shape)
         finer = make_energy(level, shape)
         be.vecops.copy(S_up.reshape((finer.n,)), finer.S.reshape((finer.n,)))
         return finer
