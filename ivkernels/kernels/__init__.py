@@ -30,6 +30,9 @@ Array convention (written down once, used everywhere)
   of NumPy memory on the CPU), ``numpy.ndarray`` for Taichi.  Outputs are
   passed in pre-allocated (``out=`` style) so that the solver allocates every
   buffer once; functions return nothing unless documented.
+* Host functions that need per-pixel scratch take ``workspace=None``, a
+  :class:`ivkernels.kernels.workspace.Workspace` owned by the caller; without
+  one the scratch is allocated for that call only.
 * Energy kernels *add* their contribution: gradient buffers are accumulated
   (``grad += dE/dX``) and the energy is added per row into a float64 array
   ``energy_rows`` of length ``T * H`` (summed on the host), so no scalar
