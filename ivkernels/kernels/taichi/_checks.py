@@ -6,13 +6,33 @@ raises a ``TypeError`` (not a ``numpy.ndarray``, wrong dtype) or a
 argument, what was expected and what was given.  The kernels take
 ``ti.types.ndarray()`` arguments, which must be C-contiguous: array checks
 return a C-contiguous array, copying an input if needed; outputs are written
-in place and are refused unless already contiguous.
+in place and are refused unless already contiguous.  The rules that do not
+depend on the array type (scalars, aliasing) live in
+:mod:`ivkernels.kernels.checks`.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.kernels.checks import check_float, check_int, check_positive  # noqa: F401  (re-exported)
+from ivkernels.kernels.checks import check_float, check_int, check_positive, check_separate  # noqa: F401
+
+try:
+    from numpy.lib.array_utils import byte_bounds
+except ImportError:             # NumPy < 2
+    from numpy import byte_bounds
+
+
+def memory_span(a: np.ndarray):
+    """``("cpu", first byte, one past the last byte)`` of a NumPy array's memory; ``None`` if empty."""
+    if a.size == 0:
+        return None
+    lo, hi = byte_bounds(a)
+    return ("cpu", lo, hi)
+
+
+def check_disjoint(name_a: str, a, name_b: str, b, why: str) -> None:
+    """Raise ValueError if arrays ``a`` and ``b`` share memory (:func:`ivkernels.kernels.checks.check_separate`)."""
+    check_separate(name_a, memory_span(a), name_b, memory_span(b), why)
 
 
 def check_array(name: str, a, shape: tuple | None, layout: str, *, dtype=np.float32,
