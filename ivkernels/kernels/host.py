@@ -11,6 +11,7 @@ Contents
 * sRGB: :func:`srgb_encode`, the one NumPy sRGB encoder of the project.
 * ``flow_classic``: :data:`GREY_WEIGHTS`.
 * ``pyramid``: :func:`gaussian_kernel`.
+* ``energy_albedo_entropy``: :class:`EntropyScratch`, :func:`entropy_scratch_layout`.
 * ``median``: :data:`KMEANS_ITERATIONS`, :data:`MIN_SEPARATION`,
   :func:`median_network`, :func:`spatial_weights`,
   :func:`shading_scratch_shape`, :func:`flow_scratch_shape`.
@@ -18,6 +19,7 @@ Contents
 from __future__ import annotations
 
 import math
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -60,6 +62,31 @@ def gaussian_kernel(sigma: float) -> np.ndarray:
     k = np.arange(-radius, radius + 1, dtype=np.float64)
     w = np.exp(-0.5 * (k / sigma) ** 2)
     return (w / w.sum()).astype(np.float32)
+
+
+# ----------------------------------------------------------------------------
+# energy_albedo_entropy
+# ----------------------------------------------------------------------------
+
+class EntropyScratch(NamedTuple):
+    """Preallocated backend arrays of ``entropy_term``, laid out by :func:`entropy_scratch_layout`.
+
+    hist, tmp, blurred : float32 (T, B, B, B); row_flags : int32 (2, T, B, B);
+    dots : float64 (T,).
+    """
+
+    hist: Any
+    row_flags: Any
+    tmp: Any
+    blurred: Any
+    dots: Any
+
+
+def entropy_scratch_layout(n_frames: int, bins: int) -> dict:
+    """Field name -> ``(shape, NumPy dtype)`` of :class:`EntropyScratch` for T frames and B^3 bins."""
+    cube = (n_frames, bins, bins, bins)
+    return {"hist": (cube, np.float32), "row_flags": ((2, n_frames, bins, bins), np.int32),
+            "tmp": (cube, np.float32), "blurred": (cube, np.float32), "dots": ((n_frames,), np.float64)}
 
 
 # ----------------------------------------------------------------------------

@@ -7,11 +7,11 @@ gradient) and the normalisation.  Outermost loops run in parallel over image
 rows or histogram rows; ``+=`` on an ndarray inside them is atomic.
 """
 import math
-from typing import NamedTuple
 
 import numpy as np
 import taichi as ti
 
+from ivkernels.kernels.host import EntropyScratch, entropy_scratch_layout
 from ivkernels.kernels.taichi._checks import check_array, check_float, check_int
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
@@ -169,31 +169,14 @@ def _check_hist(name: str, hist, T) -> int:
     return B
 
 
-class EntropyScratch(NamedTuple):
-    """Preallocated buffers of :func:`entropy_term` (see :func:`allocate_entropy_scratch`).
-
-    hist, tmp, blurred : float32 (T, B, B, B); row_flags : int32 (2, T, B, B);
-    dots : float64 (T,).
-    """
-
-    hist: np.ndarray
-    row_flags: np.ndarray
-    tmp: np.ndarray
-    blurred: np.ndarray
-    dots: np.ndarray
-
-
 def allocate_entropy_scratch(n_frames: int, bins: int, device="cpu") -> EntropyScratch:
     """Allocate :class:`EntropyScratch` for ``n_frames`` frames and a ``bins^3`` cube."""
     if device != "cpu":
         raise ValueError(f"the taichi backend runs on device='cpu' only, got {device!r}")
     n_frames = check_int("n_frames", n_frames, 1)
     bins = check_int("bins", bins, 2)
-    cube = (n_frames, bins, bins, bins)
-    return EntropyScratch(hist=np.empty(cube, np.float32),
-                          row_flags=np.empty((2, n_frames, bins, bins), np.int32),
-                          tmp=np.empty(cube, np.float32), blurred=np.empty(cube, np.float32),
-                          dots=np.empty((n_frames,), np.float64))
+    return EntropyScratch(**{name: np.empty(shape, dtype)
+                             for name, (shape, dtype) in entropy_scratch_layout(n_frames, bins).items()})
 
 
 def entropy_histogram(A, whiten, lo: float, h: float, hist, row_flags) -> None:

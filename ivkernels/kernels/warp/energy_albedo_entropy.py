@@ -43,10 +43,10 @@ dot accumulates per frame and is split at histogram-frame boundaries.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
 
 import warp as wp
 
+from ivkernels.kernels.host import EntropyScratch, entropy_scratch_layout
 from ivkernels.kernels.launch import launch_rows
 from ivkernels.kernels.warp._checks import check_array, check_float, check_int
 
@@ -252,31 +252,12 @@ def _check_hist(name: str, hist, T: int | None, device) -> int:
     return B
 
 
-class EntropyScratch(NamedTuple):
-    """Preallocated buffers of :func:`entropy_term` (see :func:`allocate_entropy_scratch`).
-
-    hist, tmp, blurred : float32 (T, B, B, B); row_flags : int32 (2, T, B, B);
-    dots : float64 (T,).
-    """
-
-    hist: wp.array
-    row_flags: wp.array
-    tmp: wp.array
-    blurred: wp.array
-    dots: wp.array
-
-
 def allocate_entropy_scratch(n_frames: int, bins: int, device="cpu") -> EntropyScratch:
     """Allocate :class:`EntropyScratch` for ``n_frames`` frames and a ``bins^3`` cube on ``device``."""
     n_frames = check_int("n_frames", n_frames, 1)
     bins = check_int("bins", bins, 2)
-    cube = (n_frames, bins, bins, bins)
-    return EntropyScratch(
-        hist=wp.empty(cube, dtype=wp.float32, device=device),
-        row_flags=wp.empty((2, n_frames, bins, bins), dtype=wp.int32, device=device),
-        tmp=wp.empty(cube, dtype=wp.float32, device=device),
-        blurred=wp.empty(cube, dtype=wp.float32, device=device),
-        dots=wp.empty((n_frames,), dtype=wp.float64, device=device))
+    return EntropyScratch(**{name: wp.empty(shape, dtype=wp.dtype_from_numpy(dtype), device=device)
+                             for name, (shape, dtype) in entropy_scratch_layout(n_frames, bins).items()})
 
 
 def entropy_histogram(A, whiten, lo: float, h: float, hist, row_flags) -> None:
