@@ -11,7 +11,8 @@ Contents
 * sRGB: :func:`srgb_encode`, the one NumPy sRGB encoder of the project.
 * ``flow_classic``: :data:`GREY_WEIGHTS`.
 * ``pyramid``: :func:`gaussian_kernel`.
-* ``energy_albedo_entropy``: :class:`EntropyScratch`, :func:`entropy_scratch_layout`.
+* ``energy_albedo_entropy``: :class:`EntropyScratch`, :func:`allocate_entropy_scratch_with`,
+  :func:`run_entropy_steps`.
 * ``median``: :data:`KMEANS_ITERATIONS`, :data:`MIN_SEPARATION`,
   :func:`median_network`, :func:`spatial_weights`,
   :func:`shading_scratch_shape`, :func:`flow_scratch_shape`.
@@ -22,6 +23,8 @@ import math
 from typing import Any, NamedTuple
 
 import numpy as np
+
+from ivkernels.kernels.checks import check_int
 
 # ----------------------------------------------------------------------------
 # sRGB
@@ -82,11 +85,33 @@ class EntropyScratch(NamedTuple):
     dots: Any
 
 
-def entropy_scratch_layout(n_frames: int, bins: int) -> dict:
-    """Field name -> ``(shape, NumPy dtype)`` of :class:`EntropyScratch` for T frames and B^3 bins."""
+def allocate_entropy_scratch_with(empty, n_frames: int, bins: int) -> EntropyScratch:
+    """:class:`EntropyScratch` for ``n_frames`` frames and a ``bins^3`` cube, each field made by
+    ``empty(shape, numpy_dtype)`` (a backend's allocator); ``n_frames >= 1``, ``bins >= 2``."""
+    n_frames = check_int("n_frames", n_frames, 1)
+    bins = check_int("bins", bins, 2)
     cube = (n_frames, bins, bins, bins)
-    return {"hist": (cube, np.float32), "row_flags": ((2, n_frames, bins, bins), np.int32),
-            "tmp": (cube, np.float32), "blurred": (cube, np.float32), "dots": ((n_frames,), np.float64)}
+    return EntropyScratch(hist=empty(cube, np.float32), row_flags=empty((2, n_frames, bins, bins), np.int32),
+                          tmp=empty(cube, np.float32), blurred=empty(cube, np.float32),
+                          dots=empty((n_frames,), np.float64))
+
+
+def run_entropy_steps(family, A, whiten, lo: float, h: float, taps, sigma_p: float, scratch,
+                      gA, energy_rows, lam: float) -> None:
+    """Eq. 12's energy and gradient by the five host functions of a backend's ``energy_albedo_entropy``
+    module ``family``: histogram, blur, dot, sliced gradient, energy (``entropy_term`` of every backend).
+
+    ``A`` (T, H, W, 3) has been checked by the caller; ``scratch`` must be an
+    :class:`EntropyScratch` (TypeError otherwise).
+    """
+    if not isinstance(scratch, EntropyScratch):
+        raise TypeError(f"scratch must be an EntropyScratch (allocate_entropy_scratch), "
+                        f"got {type(scratch).__name__}")
+    family.entropy_histogram(A, whiten, lo, h, scratch.hist, scratch.row_flags)
+    family.entropy_blur(scratch.hist, taps, scratch.row_flags, scratch.tmp, scratch.blurred)
+    family.entropy_dot(scratch.hist, scratch.blurred, scratch.dots)
+    family.entropy_slice_gradient(A, whiten, lo, h, scratch.blurred, scratch.dots, gA, lam)
+    family.entropy_energy(scratch.dots, sigma_p, A.shape[1] * A.shape[2], energy_rows, lam)
 
 
 # ----------------------------------------------------------------------------

@@ -6,10 +6,12 @@ the other backends; the blur here reads the whole cube and leaves plane 1 at 0.
 """
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 
 from ivkernels.kernels.checks import check_float, check_int
-from ivkernels.kernels.host import EntropyScratch, entropy_scratch_layout
+from ivkernels.kernels.host import EntropyScratch, allocate_entropy_scratch_with, run_entropy_steps
 from ivkernels.kernels.numpy._adapt import add, arrays, write
 from ivkernels.kernels.reference import energy_albedo_entropy as ref
 
@@ -18,10 +20,7 @@ def allocate_entropy_scratch(n_frames: int, bins: int, device="cpu") -> EntropyS
     """:class:`~ivkernels.kernels.host.EntropyScratch` of NumPy arrays for ``n_frames`` frames, ``bins^3`` bins."""
     if device != "cpu":
         raise ValueError(f"the numpy backend runs on device='cpu' only, got {device!r}")
-    n_frames = check_int("n_frames", n_frames, 1)
-    bins = check_int("bins", bins, 2)
-    return EntropyScratch(**{name: np.empty(shape, dtype)
-                             for name, (shape, dtype) in entropy_scratch_layout(n_frames, bins).items()})
+    return allocate_entropy_scratch_with(np.empty, n_frames, bins)
 
 
 def _cube(name: str, a) -> int:
@@ -84,14 +83,8 @@ def entropy_term(A, whiten, lo: float, h: float, taps, sigma_p: float, scratch: 
                  gA, energy_rows, lam: float) -> None:
     """Add Eq. 12's energy and gradient for every frame of ``A`` (T, H, W, 3); ``scratch`` is overwritten."""
     arrays(A=A)
-    T, H, W, _ = A.shape
-    if not isinstance(scratch, EntropyScratch):
-        raise TypeError(f"scratch must be an EntropyScratch (allocate_entropy_scratch), "
-                        f"got {type(scratch).__name__}")
-    entropy_histogram(A, whiten, lo, h, scratch.hist, scratch.row_flags)
-    entropy_blur(scratch.hist, taps, scratch.row_flags, scratch.tmp, scratch.blurred)
-    entropy_dot(scratch.hist, scratch.blurred, scratch.dots)
-    entropy_slice_gradient(A, whiten, lo, h, scratch.blurred, scratch.dots, gA, lam)
-    entropy_energy(scratch.dots, sigma_p, H * W, energy_rows, lam)
+    if A.ndim != 4:
+        raise ValueError(f"A must have shape (T, H, W, 3), got {A.shape}")
+    run_entropy_steps(sys.modules[__name__], A, whiten, lo, h, taps, sigma_p, scratch, gA, energy_rows, lam)
 
 
