@@ -13,12 +13,15 @@
 * :func:`weiss_flow` generalises it to moving scenes: every frame is aligned
   to every other along the (composed) optical flow before the median.
 
-All take and return linear RGB; shading is grey (white illuminant), as in
-:func:`ivkernels.decompose`.
+All take frames as :func:`ivkernels.decompose` does (uint8 / uint16 sRGB, or
+float linear RGB in [0, 1]; :mod:`ivkernels.validation`) and return linear
+RGB; shading is grey (white illuminant), as in :func:`ivkernels.decompose`.
 """
 from __future__ import annotations
 
 import numpy as np
+
+from ivkernels.validation import check_frames, linear_frames
 
 __all__ = ["color_retinex", "weiss", "weiss_flow", "GROSSE_THRESHOLDS", "TUNED_THRESHOLDS"]
 
@@ -77,27 +80,15 @@ def _poisson_neumann(gx: np.ndarray, gy: np.ndarray) -> np.ndarray:
 
 
 def _check_frames(frames, name: str, min_frames: int = 1):
-    """Validated float64 ``(T, H, W, 3)`` linear RGB and whether one image was given."""
-    x = np.asarray(frames)
-    if not np.issubdtype(x.dtype, np.floating):
-        raise TypeError(
-            f"{name}: expected float linear RGB, got dtype {x.dtype} "
-            "(convert uint8/uint16 sRGB with ivkernels.io.to_linear_float)"
-        )
-    single = x.ndim == 3
-    if single:
-        x = x[None]
-    if x.ndim != 4 or x.shape[-1] != 3:
-        raise ValueError(f"{name}: expected (T, H, W, 3) or (H, W, 3) linear RGB, got shape {np.shape(frames)}")
-    if min(x.shape[:3]) == 0:
-        raise ValueError(f"{name}: empty input, shape {x.shape}")
-    if x.shape[0] < min_frames:
-        raise ValueError(f"{name}: needs at least {min_frames} frames (T, H, W, 3), got shape {np.shape(frames)}")
-    if not np.all(np.isfinite(x)):
-        raise ValueError(f"{name}: input contains NaN or infinite values")
-    if x.min() < 0:
-        raise ValueError(f"{name}: linear RGB must be >= 0, got minimum {x.min():.4g}")
-    return x.astype(np.float64), single
+    """Float64 ``(T, H, W, 3)`` linear RGB, and whether one ``(H, W, 3)`` image was given.
+
+    The frames pass the rules of :mod:`ivkernels.validation`, the same as for
+    :func:`ivkernels.decompose`: uint8 / uint16 are sRGB and decoded, float
+    frames are linear RGB in ``[0, 1]``; a stack, one frame or a list of frames.
+    """
+    single = not isinstance(frames, (list, tuple)) and np.ndim(frames) == 3
+    checked = check_frames(frames, name, min_frames=min_frames, what=name)
+    return linear_frames(checked).astype(np.float64), single
 
 
 def _check_positive(name: str, **values) -> None:
@@ -133,7 +124,7 @@ def color_retinex(frames, threshold_gray: float | None = None, threshold_color: 
 
     Parameters
     ----------
-    frames : ``(T, H, W, 3)`` or ``(H, W, 3)`` float, linear RGB ``>= 0``.
+    frames : ``(T, H, W, 3)`` or ``(H, W, 3)``: float linear RGB in [0, 1], or uint8 / uint16 sRGB.
     threshold_gray, threshold_color : thresholds on log-differences (see 2);
         ``None`` takes the value of the preset ``thresholds``.
     eps : floor applied before taking logs (linear units).
@@ -299,7 +290,7 @@ def weiss(frames, eps: float = 1e-3, colour: str = "chromaticity"):
 
     Parameters
     ----------
-    frames : ``(T, H, W, 3)`` float, linear RGB ``>= 0``, ``T >= 2``, a
+    frames : ``(T, H, W, 3)`` float linear RGB in [0, 1] (or uint8 / uint16 sRGB), ``T >= 2``, a
         static scene (camera and objects still; light free).
     eps : floor applied before taking logs (linear units).
     colour : ``"chromaticity"`` or ``"channels"`` (see above).
@@ -445,7 +436,7 @@ def weiss_flow(frames, flow, visibility=None, eps: float = 1e-3, colour: str = "
 
     Parameters
     ----------
-    frames : ``(T, H, W, 3)`` float, linear RGB ``>= 0``, ``T >= 2``.
+    frames : ``(T, H, W, 3)`` float linear RGB in [0, 1] (or uint8 / uint16 sRGB), ``T >= 2``.
     flow : ``(T-1, H, W, 2)`` forward flow t -> t+1 in pixels, ``(dx, dy)``
         (ground truth or estimated, e.g. :func:`ivkernels.estimate_flow`).
     visibility : optional ``(T-1, H, W)``, 1 (or ``>= 0.5``) where pixel

@@ -28,6 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ivkernels.backends import backend_names
+
 
 class _Parser(argparse.ArgumentParser):
     """Usage errors in one line (the usage itself is under ``--help``), exit status 2."""
@@ -45,7 +47,8 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("input", help="video file (mp4, avi, ...) or folder of images (png, jpg, tif)")
     d.add_argument("-o", "--out", required=True,
                    help="output folder (must not exist; --force replaces one ivkernels wrote)")
-    d.add_argument("--backend", default="warp", choices=["warp", "taichi"])
+    d.add_argument("--backend", default="warp", choices=backend_names(),
+                   help="kernel backend (numpy: the slow exact references, for checking)")
     d.add_argument("--device", default="cpu", help="'cpu' or 'cuda' (warp only)")
     d.add_argument("--flow", default=None,
                    help="flow method (classic_nl_fast, classic_nl, dis, farneback) or a folder of "

@@ -29,6 +29,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from ivkernels.kernels.host import srgb_encode
+
 IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp")
 VIDEO_EXTENSIONS_WRITE = (".mp4", ".mkv", ".mov")
 
@@ -92,8 +94,7 @@ def linear_to_srgb(x) -> np.ndarray:
     same shape and float dtype.
     """
     x = _check_float(x, "linear_to_srgb")
-    x = np.clip(x, 0.0, 1.0)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * x ** (1.0 / 2.4) - 0.055).astype(x.dtype, copy=False)
+    return srgb_encode(x, x.dtype)
 
 
 @lru_cache(maxsize=2)

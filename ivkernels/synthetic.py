@@ -95,6 +95,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ivkernels.kernels.host import srgb_encode
+
 __all__ = ["KINDS", "SyntheticSequence", "render_sequence"]
 
 KINDS = ("free_camera", "objects_camera", "static_moving_light", "rotating_shadows")
@@ -153,9 +155,7 @@ class SyntheticSequence:
 
     def frames_srgb8(self) -> np.ndarray:
         """Frames encoded with the sRGB transfer function, (T, H, W, 3) uint8."""
-        x = np.clip(self.frames.astype(np.float64), 0.0, 1.0)
-        srgb = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055)
-        return np.round(srgb * 255.0).astype(np.uint8)
+        return np.round(srgb_encode(self.frames) * 255.0).astype(np.uint8)
 
 
 # --------------------------------------------------------------------------- #

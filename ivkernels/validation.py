@@ -15,9 +15,10 @@ everywhere:
   and dtype (a frame that differs is named).
 * **flow** (:func:`check_flow`): float, ``(T-1, H, W, 2)``, finite, and
   at most :data:`MAX_FLOW` pixels in each component once in float32.
-* **backend and device** (:func:`check_backend_device`): ``"warp"`` on
-  ``"cpu"`` or ``"cuda[:N]"`` (a CUDA device must be present), ``"taichi"``
-  on ``"cpu"``.
+* **backend and device** (:func:`check_backend_device`): a backend named in
+  the registry (:func:`ivkernels.backends.backend_names`: ``"warp"`` on
+  ``"cpu"`` or ``"cuda[:N]"``, a CUDA device must be present; ``"taichi"``
+  and ``"numpy"`` on ``"cpu"``), on a kind of device it declares.
 * **memory** (:func:`check_memory`): the bytes a call will hold are estimated
   from the shapes alone and compared with the memory available *before*
   anything is allocated.
@@ -60,7 +61,6 @@ SOLVER_BYTES_PER_PIXEL = 640
 #: Working memory of the flow, bytes per pixel per frame given to one call.
 FLOW_BYTES_PER_PIXEL = 512
 FRAME_DTYPES = (np.uint8, np.uint16, np.float32, np.float64)
-BACKENDS = ("warp", "taichi")
 
 
 class NotEnoughMemoryError(MemoryError, ValueError):
@@ -252,22 +252,21 @@ def check_flow(flow, n_frames: int, height: int, width: int, name: str = "flow")
 # ----------------------------------------------------------------------------
 
 def check_backend_device(backend, device) -> None:
-    """Refuse an unknown backend, a malformed device, or a CUDA device that is not present."""
-    if not isinstance(backend, str) or backend not in BACKENDS:
-        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    """Refuse a backend the registry does not hold, a malformed device, a device
+    the backend does not run on, or a CUDA device that is not present."""
+    from ivkernels.backends import backend_spec
+    from ivkernels.backends.registry import device_kind
+
+    spec = backend_spec(backend)
     if not isinstance(device, str):
         raise TypeError(f"device must be a string, 'cpu' or 'cuda[:N]', got {device!r}")
-    if device == "cpu":
+    kind = device_kind(device)
+    if kind not in spec.devices:
+        raise ValueError(f"the {backend} backend runs on device={' or '.join(repr(d) for d in spec.devices)} "
+                         f"only, got {device!r}")
+    if kind == "cpu":
         return
-    if backend == "taichi":
-        raise ValueError(f"the taichi backend runs on device='cpu' only, got {device!r}")
-    index = 0
-    if device == "cuda":
-        pass
-    elif device.startswith("cuda:") and device[5:].isdigit():
-        index = int(device[5:])
-    else:
-        raise ValueError(f"device must be 'cpu' or 'cuda[:N]', got {device!r}")
+    index = int(device[5:]) if device.startswith("cuda:") else 0
     count = cuda_device_count()
     if count == 0:
         raise ValueError(f"device={device!r}: no CUDA device is available (Warp finds none); "

@@ -1,4 +1,10 @@
-"""Shared fixtures: every kernel battery runs on every backend present."""
+"""Shared fixtures: every kernel battery runs on every registered backend present.
+
+The ``backend`` parameter holds the backends of the registry
+(:func:`ivkernels.backends.available_backends`) except the oracles: the
+batteries compare each backend with the NumPy references, and the ``numpy``
+backend *is* those references.  ``any_backend`` holds them all.
+"""
 import numpy as np
 import pytest
 
@@ -6,9 +12,10 @@ from ivkernels.backends import available_backends
 
 
 def pytest_generate_tests(metafunc):
-    if "backend" in metafunc.fixturenames:
-        backends = available_backends()
-        metafunc.parametrize("backend", backends, ids=[f"{b.name}-{b.device}" for b in backends])
+    for fixture, oracles in (("backend", False), ("any_backend", True)):
+        if fixture in metafunc.fixturenames:
+            backends = available_backends(oracles=oracles)
+            metafunc.parametrize(fixture, backends, ids=[f"{b.name}-{b.device}" for b in backends])
 
 
 @pytest.fixture

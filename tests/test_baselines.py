@@ -81,12 +81,13 @@ def test_color_retinex_thresholds():
 
 
 @pytest.mark.parametrize("frames, kw, exc, msg", [
-    (np.zeros((4, 5, 3), np.uint8), {}, TypeError, "to_linear_float"),
+    (np.zeros((4, 5, 3), np.int32), {}, TypeError, "unsupported dtype"),
     (np.zeros((4, 5)), {}, ValueError, r"\(T, H, W, 3\)"),
     (np.zeros((2, 4, 5, 4)), {}, ValueError, r"\(T, H, W, 3\)"),
     (np.zeros((0, 4, 5, 3)), {}, ValueError, "empty"),
     (np.full((4, 5, 3), np.nan), {}, ValueError, "NaN"),
-    (np.full((4, 5, 3), -0.5), {}, ValueError, ">= 0"),
+    (np.full((4, 5, 3), -0.5), {}, ValueError, r"linear RGB in \[0, 1\]"),
+    (np.full((4, 5, 3), 2.0), {}, ValueError, r"linear RGB in \[0, 1\]"),
     (np.ones((4, 5, 3)), {"threshold_gray": 0.0}, ValueError, "threshold_gray"),
     (np.ones((4, 5, 3)), {"threshold_color": np.nan}, ValueError, "threshold_color"),
     (np.ones((4, 5, 3)), {"eps": -1.0}, ValueError, "eps"),
@@ -94,6 +95,16 @@ def test_color_retinex_thresholds():
 def test_color_retinex_rejects(frames, kw, exc, msg):
     with pytest.raises(exc, match=msg):
         color_retinex(frames, **kw)
+
+
+def test_baselines_take_frames_as_decompose_does(rng):
+    """One rule for frames (ivkernels.validation): uint8 is sRGB, decoded as decompose decodes it."""
+    from ivkernels.io import to_linear_float
+
+    srgb = rng.integers(1, 256, (3, 6, 7, 3), dtype=np.uint8)
+    linear = to_linear_float(srgb)
+    np.testing.assert_array_equal(color_retinex(srgb)[0], color_retinex(linear)[0])
+    np.testing.assert_array_equal(weiss(list(srgb))[0], weiss(linear)[0])
 
 
 def test_color_retinex_beats_image_on_synthetic_sequences():
@@ -236,11 +247,11 @@ _FLOW = np.zeros((2, 4, 5, 2))
 
 
 @pytest.mark.parametrize("call, exc, msg", [
-    (lambda: weiss(np.zeros((3, 4, 5, 3), np.uint8)), TypeError, "to_linear_float"),
+    (lambda: weiss(np.zeros((3, 4, 5, 3), np.int32)), TypeError, "unsupported dtype"),
     (lambda: weiss(_OK[:1]), ValueError, "at least 2 frames"),
     (lambda: weiss(_OK[0]), ValueError, "at least 2 frames"),
     (lambda: weiss(_OK[..., :2]), ValueError, r"\(T, H, W, 3\)"),
-    (lambda: weiss(-_OK), ValueError, ">= 0"),
+    (lambda: weiss(-_OK), ValueError, r"linear RGB in \[0, 1\]"),
     (lambda: weiss(_OK * np.nan), ValueError, "NaN"),
     (lambda: weiss(_OK, eps=0.0), ValueError, "eps"),
     (lambda: weiss(_OK, colour="rgb"), ValueError, "colour"),

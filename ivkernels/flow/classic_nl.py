@@ -363,12 +363,6 @@ class ClassicNL:
 
     # -- small host helpers -------------------------------------------------
 
-    def _zero(self, a) -> None:
-        if self.be.name == "warp":
-            a.zero_()
-        else:
-            a.fill(0.0)
-
     def _min_max(self, a) -> np.ndarray:
         """(C, 2) channel-wise (min, max) of a (T, H, W, C) array."""
         t, h, _, c = a.shape
@@ -435,7 +429,7 @@ class ClassicNL:
         be, s, fc = self.be, self.s, self.be.flow_classic
         quad_weight = 2.0 / (s.quad_sigma * s.quad_sigma)
         be.sampling.warp_bicubic(lv.pack2, flow, lv.warped, lv.inside)
-        self._zero(lv.du)
+        self.be.zero(lv.du)
         inside = lv.inside if lv.everywhere is None else lv.everywhere
         if lv.first is None:
             fc.data_coefficients(lv.i1, lv.i1x, lv.i1y, lv.warped, inside, lv.du, lv.data,

@@ -14,6 +14,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from ivkernels.kernels.host import srgb_encode
+
 #: Farneback parameters: pyramid scale, levels, window, iterations, poly_n, poly_sigma, flags.
 FARNEBACK_DEFAULTS = dict(pyr_scale=0.5, levels=5, winsize=15, iterations=3, poly_n=5, poly_sigma=1.2, flags=0)
 
@@ -29,9 +31,7 @@ _DIS_PRESETS = {
 
 def grey8(frames: np.ndarray) -> np.ndarray:
     """(T, H, W, 3) linear RGB in [0, 1] -> (T, H, W) uint8 sRGB grey."""
-    c = np.clip(frames, 0.0, 1.0)
-    enc = np.where(c > 0.0031308, 1.055 * np.power(c, 1.0 / 2.4) - 0.055, 12.92 * c)
-    grey = enc @ np.array([0.299, 0.587, 0.114], np.float32)
+    grey = srgb_encode(frames, np.float32) @ np.array([0.299, 0.587, 0.114], np.float32)
     return np.clip(np.rint(grey * 255.0), 0, 255).astype(np.uint8)
 
 

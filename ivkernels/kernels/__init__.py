@@ -9,8 +9,21 @@ Layout
     The same host functions, same names and signatures, implemented with
     Taichi kernels taking ``ti.types.ndarray()`` arguments.
 ``kernels/reference/<family>.py``
-    Plain NumPy references of the same operations.  Used by the tests and the
-    benchmarks only, never by the solver.
+    Plain NumPy references of the same operations, functional (they return
+    their results).  Used by the tests, the benchmarks and the NumPy backend.
+``kernels/numpy/<family>.py``
+    The same host functions again, as thin adapters writing the references'
+    results into the outputs: the slow, exact ``"numpy"`` backend.
+``kernels/host.py``
+    Backend-neutral host code every backend shares: tables (Gaussian taps,
+    the median's spatial weights and compare-exchange network), constants,
+    scratch shapes and the one NumPy sRGB encoder.
+``kernels/checks.py``, ``kernels/warp/_checks.py``, ``kernels/ndarray_checks.py``
+    Argument checks: the rules that do not depend on the array type (scalars,
+    aliasing), and their ``wp.array`` and ``numpy.ndarray`` front ends.
+
+The host functions every backend must provide, with their signatures, are
+declared in :mod:`ivkernels.backends.protocols` and checked by the tests.
 
 Families: ``colour``, ``sampling``, ``derivatives``, ``maps``, ``pyramid``,
 ``vecops``, ``median``, ``energy_data``, ``energy_temporal``,
@@ -40,7 +53,8 @@ Array convention (written down once, used everywhere)
 
 Threads
 -------
-Warp's CPU backend runs one launch on one thread and releases the GIL.  Warp
+The thread count is kept in :mod:`ivkernels.kernels.thread_count`, which
+imports no backend.  Warp's CPU backend runs one launch on one thread and releases the GIL.  Warp
 host functions launch through :mod:`ivkernels.kernels.launch`, which splits the
 row domain (``T * H`` rows, one kernel thread per row looping over ``x``) into
 two bands launched from two Python threads.  Kernels that scatter (bilinear

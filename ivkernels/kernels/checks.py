@@ -55,3 +55,20 @@ def check_int(name: str, value, minimum: int, hint: str = "") -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
         raise ValueError(f"{name} must be an int >= {minimum}{hint}, got {value!r}")
     return int(value)
+
+
+def check_separate(name_a: str, span_a, name_b: str, span_b, why: str) -> None:
+    """Raise ValueError if two arrays share memory: the one aliasing rule of every backend.
+
+    ``span_a``, ``span_b`` : ``(device, first byte, one past the last byte)``
+    of each array's memory (see ``memory_span`` in each backend's checks), or
+    ``None`` for an empty array, which overlaps nothing.  Arrays on different
+    devices never overlap; on one device, any common byte is an overlap (a
+    partial overlap is refused as firmly as the same array passed twice).
+    ``why`` says in the message what the function needs the separation for.
+    """
+    if span_a is None or span_b is None or span_a[0] != span_b[0]:
+        return
+    if span_a[1] < span_b[2] and span_b[1] < span_a[2]:
+        raise ValueError(f"{name_a} must not alias {name_b}: they must be different arrays "
+                         f"sharing no memory ({why})")

@@ -18,23 +18,17 @@ code path.
 from __future__ import annotations
 
 import contextlib
-import os
 import threading
 from concurrent.futures import ThreadPoolExecutor
 
 import warp as wp
 
-_state = threading.local()
-_DEFAULT_THREADS = max(1, min(2, int(os.environ.get("IVKERNELS_THREADS", os.cpu_count() or 1))))
+from ivkernels.kernels.thread_count import _state, get_threads  # noqa: F401  (get_threads re-exported)
+
 _pool: ThreadPoolExecutor | None = None
 _pool_lock = threading.Lock()
 _warm: set = set()
 _warm_lock = threading.Lock()
-
-
-def get_threads() -> int:
-    """Number of CPU threads Warp host functions launch on (1 or 2)."""
-    return getattr(_state, "threads", _DEFAULT_THREADS)
 
 
 def set_threads(n: int) -> None:

@@ -20,13 +20,15 @@ def correlate_xy(img: np.ndarray, kernel: np.ndarray) -> np.ndarray:
     return out
 
 
-FIVE_POINT = np.array([1.0, -8.0, 0.0, 8.0, -1.0]) / 12.0
+#: The 5-point derivative's taps times 12 (integers, so a constant image gives exactly 0).
+FIVE_POINT_TIMES_12 = np.array([1.0, -8.0, 0.0, 8.0, -1.0])
 SOBEL_X = np.array([[-1.0, 0, 1], [-2, 0, 2], [-1, 0, 1]]) / 8.0
 
 
 def image_gradient(src: np.ndarray):
     """Return ``(gx, gy)``: correlation with ``[1 -8 0 8 -1] / 12`` along x and y."""
-    return correlate_xy(src, FIVE_POINT[None, :]), correlate_xy(src, FIVE_POINT[:, None])
+    return (correlate_xy(src, FIVE_POINT_TIMES_12[None, :]) / 12.0,
+            correlate_xy(src, FIVE_POINT_TIMES_12[:, None]) / 12.0)
 
 
 def flow_sobel_magnitude(flow: np.ndarray) -> np.ndarray:

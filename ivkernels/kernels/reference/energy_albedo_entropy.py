@@ -65,25 +65,32 @@ def entropy_blur(hist, taps):
     return out
 
 
-def entropy_term(A, whiten, lo: float, h: float, taps, sigma_p: float, lam: float, bins: int):
-    """Eq. 12 by the histogram algorithm, and its exact gradient.
+def entropy_dot(hist, blurred):
+    """``<hist_t, blurred_t>`` per frame, float64 (T,)."""
+    return np.einsum("tijk,tijk->t", np.asarray(hist, np.float64), np.asarray(blurred, np.float64))
 
-    ``E_t = -lam log(<hist_t, blurred_t> / (N^2 sqrt(4 pi sigma_p^2)))`` with
-    ``N = H W``; ``dE/dA(x) = -2 lam W^T grad(interp blurred)(W A(x)) / <hist, blurred>``
-    where ``interp`` is the trilinear interpolant (its gradient is zero along
-    an axis where the coordinate was clamped).
 
-    Returns ``energy_rows`` (T*H,) float64 with ``E_t`` in row ``t*H`` and
-    ``gA`` (T, H, W, 3) float64.
+def entropy_energy(dots, sigma_p: float, n_pixels: int, lam: float, rows_per_frame: int):
+    """``E_t = -lam log(dots[t] / (n_pixels^2 sqrt(4 pi sigma_p^2)))`` in row ``t * rows_per_frame``
+    of a float64 ``(T * rows_per_frame,)`` array, zeros elsewhere."""
+    dots = np.asarray(dots, np.float64)
+    energy_rows = np.zeros(len(dots) * rows_per_frame)
+    energy_rows[::rows_per_frame] = -lam * (np.log(dots) - 2 * np.log(n_pixels)
+                                            - 0.5 * np.log(4 * np.pi * sigma_p ** 2))
+    return energy_rows
+
+
+def entropy_slice_gradient(A, whiten, lo: float, h: float, blurred, dots, lam: float):
+    """``dE/dA(x) = -2 lam W^T grad(interp blurred)(W A(x)) / dots[t]``, float64 (T, H, W, 3).
+
+    ``interp`` is the trilinear interpolant of ``blurred`` (T, B, B, B) on the
+    histogram's grid; its gradient is zero along an axis where the coordinate
+    was clamped onto the cube.
     """
     A = np.asarray(A, np.float64)
-    T, H, W, _ = A.shape
-    hist = entropy_histogram(A, whiten, lo, h, bins)
-    blurred = entropy_blur(hist, taps)
-    dots = np.einsum("tijk,tijk->t", hist, blurred)
-    energy_rows = np.zeros(T * H)
-    energy_rows[::H] = -lam * (np.log(dots) - 2 * np.log(H * W) - 0.5 * np.log(4 * np.pi * sigma_p ** 2))
-    i0, f, inside = _bin_coords(A, whiten, lo, h, bins)
+    blurred = np.asarray(blurred, np.float64)
+    T = A.shape[0]
+    i0, f, inside = _bin_coords(A, whiten, lo, h, blurred.shape[1])
     t = np.broadcast_to(np.arange(T)[:, None], i0.shape[:2])
     grad_c = np.zeros(i0.shape)
     for (i, j, k), _, signs in _corners(i0, f):
@@ -95,9 +102,27 @@ def entropy_term(A, whiten, lo: float, h: float, taps, sigma_p: float, lam: floa
                 w = w * (f[..., ax] if signs[ax] else 1 - f[..., ax])
             grad_c[..., axis] += (1.0 if signs[axis] else -1.0) * w * v
     grad_u = np.where(inside, grad_c / h, 0.0)
-    scale = (-2.0 * lam / dots)[:, None, None]
-    gA = scale * (grad_u @ np.asarray(whiten, np.float64))
-    return energy_rows, gA.reshape(A.shape)
+    scale = (-2.0 * lam / np.asarray(dots, np.float64))[:, None, None]
+    return (scale * (grad_u @ np.asarray(whiten, np.float64))).reshape(A.shape)
+
+
+def entropy_term(A, whiten, lo: float, h: float, taps, sigma_p: float, lam: float, bins: int):
+    """Eq. 12 by the histogram algorithm, and its exact gradient.
+
+    ``E_t = -lam log(<hist_t, blurred_t> / (N^2 sqrt(4 pi sigma_p^2)))`` with
+    ``N = H W`` (:func:`entropy_energy`), and the gradient of
+    :func:`entropy_slice_gradient`.
+
+    Returns ``energy_rows`` (T*H,) float64 with ``E_t`` in row ``t*H`` and
+    ``gA`` (T, H, W, 3) float64.
+    """
+    A = np.asarray(A, np.float64)
+    T, H, W, _ = A.shape
+    hist = entropy_histogram(A, whiten, lo, h, bins)
+    blurred = entropy_blur(hist, taps)
+    dots = entropy_dot(hist, blurred)
+    return (entropy_energy(dots, sigma_p, H * W, lam, H),
+            entropy_slice_gradient(A, whiten, lo, h, blurred, dots, lam))
 
 
 def entropy_direct(A, whiten, sigma_p: float, lam: float):

@@ -8,12 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-GREY_WEIGHTS = (0.2989, 0.5870, 0.1140)
-
-
-def srgb_encode(c):
-    c = np.clip(np.asarray(c, np.float64), 0.0, 1.0)
-    return np.where(c > 0.0031308, 1.055 * np.power(c, 1.0 / 2.4) - 0.055, 12.92 * c)
+from ivkernels.kernels.host import GREY_WEIGHTS, srgb_encode
 
 
 def robust_weight(z, a=0.45, eps=1e-3, quad_frac=0.0, quad_weight=2e6):

@@ -6,8 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-KMEANS_ITERATIONS = 8
-MIN_SEPARATION = 0.5
+from ivkernels.kernels.host import KMEANS_ITERATIONS, MIN_SEPARATION
 
 
 def median5x5(src):

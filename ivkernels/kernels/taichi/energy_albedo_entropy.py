@@ -7,11 +7,12 @@ gradient) and the normalisation.  Outermost loops run in parallel over image
 rows or histogram rows; ``+=`` on an ndarray inside them is atomic.
 """
 import math
-from typing import NamedTuple
+import sys
 
 import numpy as np
 import taichi as ti
 
+from ivkernels.kernels.host import EntropyScratch, allocate_entropy_scratch_with, run_entropy_steps
 from ivkernels.kernels.taichi._checks import check_array, check_float, check_int
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
@@ -169,31 +170,11 @@ def _check_hist(name: str, hist, T) -> int:
     return B
 
 
-class EntropyScratch(NamedTuple):
-    """Preallocated buffers of :func:`entropy_term` (see :func:`allocate_entropy_scratch`).
-
-    hist, tmp, blurred : float32 (T, B, B, B); row_flags : int32 (2, T, B, B);
-    dots : float64 (T,).
-    """
-
-    hist: np.ndarray
-    row_flags: np.ndarray
-    tmp: np.ndarray
-    blurred: np.ndarray
-    dots: np.ndarray
-
-
 def allocate_entropy_scratch(n_frames: int, bins: int, device="cpu") -> EntropyScratch:
     """Allocate :class:`EntropyScratch` for ``n_frames`` frames and a ``bins^3`` cube."""
     if device != "cpu":
         raise ValueError(f"the taichi backend runs on device='cpu' only, got {device!r}")
-    n_frames = check_int("n_frames", n_frames, 1)
-    bins = check_int("bins", bins, 2)
-    cube = (n_frames, bins, bins, bins)
-    return EntropyScratch(hist=np.empty(cube, np.float32),
-                          row_flags=np.empty((2, n_frames, bins, bins), np.int32),
-                          tmp=np.empty(cube, np.float32), blurred=np.empty(cube, np.float32),
-                          dots=np.empty((n_frames,), np.float64))
+    return allocate_entropy_scratch_with(np.empty, n_frames, bins)
 
 
 def entropy_histogram(A, whiten, lo: float, h: float, hist, row_flags) -> None:
@@ -271,11 +252,4 @@ def entropy_term(A, whiten, lo: float, h: float, taps, sigma_p: float, scratch: 
     check_array("A", A, (None, None, None, 3), "(T, H, W, 3)", copy=False)
     T, H, W, _ = A.shape
     check_array("energy_rows", energy_rows, (T * H,), "(T*H,)", dtype=np.float64, copy=False)
-    if not isinstance(scratch, EntropyScratch):
-        raise TypeError(f"scratch must be an EntropyScratch (allocate_entropy_scratch), "
-                        f"got {type(scratch).__name__}")
-    entropy_histogram(A, whiten, lo, h, scratch.hist, scratch.row_flags)
-    entropy_blur(scratch.hist, taps, scratch.row_flags, scratch.tmp, scratch.blurred)
-    entropy_dot(scratch.hist, scratch.blurred, scratch.dots)
-    entropy_slice_gradient(A, whiten, lo, h, scratch.blurred, scratch.dots, gA, lam)
-    entropy_energy(scratch.dots, sigma_p, H * W, energy_rows, lam)
+    run_entropy_steps(sys.modules[__name__], A, whiten, lo, h, taps, sigma_p, scratch, gA, energy_rows, lam)

@@ -9,7 +9,7 @@ iteration that owns it.
 import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.taichi._checks import check_array
+from ivkernels.kernels.taichi._checks import check_array, check_disjoint
 
 nd1_f64 = ti.types.ndarray(dtype=ti.f64, ndim=1)
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
@@ -83,8 +83,7 @@ def constrained_albedo(I, S, A) -> None:
     check_array("A", A, (t, h, w, 3), "(T, H, W, 3)", output=True)
     if t * h * w == 0:
         return
-    if np.shares_memory(A, I):
-        raise ValueError("constrained_albedo: A must not alias I")
+    check_disjoint("A", A, "I", I, "constrained_albedo writes A while reading I")
     constrained_albedo_rows(I, S, A)
 
 

@@ -10,9 +10,11 @@ loop runs over rows in parallel; each row only touches its own scratch row.
 import numpy as np
 import taichi as ti
 
+from ivkernels.kernels.cache import cached
+from ivkernels.kernels.host import (KMEANS_ITERATIONS, MIN_SEPARATION, flow_scratch_shape,  # noqa: F401
+                                    median_network, shading_scratch_shape, spatial_weights)
 from ivkernels.kernels.taichi._checks import check_array, check_int, check_positive
 from ivkernels.kernels.workspace import check_workspace, scratch_buffer
-from ivkernels.kernels.warp.median import KMEANS_ITERATIONS, MIN_SEPARATION, median_network
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
 nd2 = ti.types.ndarray(dtype=ti.f32, ndim=2)
@@ -116,7 +118,7 @@ def median5x5_rows(src: nd4, out: nd4):
                     yy = ti.min(ti.max(y + j - 2, 0), height - 1)
                     for i in ti.static(range(5)):
                         v[5 * j + i] = src[t, yy, ti.min(ti.max(x + i - 2, 0), width - 1), c]
-                # the pruned median network of ivkernels.kernels.warp.median.median_network,
+                # the pruned median network of ivkernels.kernels.host.median_network,
                 # unrolled at compile time (static wire indices keep v in registers), in
                 # blocks of 16 pairs (Taichi warns on static loops over 32 iterations)
                 for q0 in ti.static(range(0, len(_PAIRS25), 16)):
@@ -270,20 +272,9 @@ def weighted_median_flow_rows(flow: nd4, lab: nd4, occ: nd3, mask: nd3, out: nd4
 # Host functions
 # ----------------------------------------------------------------------------
 
-def shading_scratch_shape(S_shape: tuple, radius: int) -> tuple:
-    """Shape of the float32 scratch of :func:`weighted_median_shading`: ``(T*H, 2*(2r+1)^2)``."""
-    return (S_shape[0] * S_shape[1], 2 * (2 * radius + 1) ** 2)
-
-
-def flow_scratch_shape(flow_shape: tuple, radius: int) -> tuple:
-    """Shape of the float32 scratch of :func:`weighted_median_flow`: ``(T*H, 3*(2r+1)^2)``."""
-    return (flow_shape[0] * flow_shape[1], 3 * (2 * radius + 1) ** 2)
-
-
-def _spatial_weights(radius: int, sigma: float) -> np.ndarray:
-    """``exp(-|d|^2 / (2 sigma^2))`` over the (2r+1)^2 window offsets, row-major, float32."""
-    d = np.arange(-radius, radius + 1, dtype=np.float64)
-    return np.exp(-(d[:, None] ** 2 + d[None, :] ** 2) / (2.0 * sigma * sigma)).astype(np.float32).ravel()
+def _spatial_table(radius: int, sigma: float) -> np.ndarray:
+    """:func:`ivkernels.kernels.host.spatial_weights`, built once per (radius, sigma) and kept (read-only)."""
+    return cached((__name__, "spatial", radius, sigma), lambda: spatial_weights(radius, sigma))
 
 
 def _scratch(workspace, name: str, shape: tuple) -> np.ndarray:
@@ -322,7 +313,7 @@ def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float
     check_workspace(workspace)
     buf = _scratch(workspace, "shading_window", shading_scratch_shape(S.shape, radius))
     if S.size:
-        weighted_median_shading_rows(S, flow, w_bnd, out, buf, _spatial_weights(radius, sigma_s), radius, lam,
+        weighted_median_shading_rows(S, flow, w_bnd, out, buf, _spatial_table(radius, sigma_s), radius, lam,
                                      KMEANS_ITERATIONS, MIN_SEPARATION)
 
 

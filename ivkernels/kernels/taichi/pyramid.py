@@ -10,7 +10,8 @@ import math
 import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.taichi._checks import check_array
+from ivkernels.kernels.host import gaussian_kernel
+from ivkernels.kernels.taichi._checks import check_array, check_disjoint
 from ivkernels.kernels.taichi.sampling import bilinear_at, clamped_corners
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
@@ -72,14 +73,6 @@ def resize_flow_rows(src: nd4, out: nd4, scale_x: ti.f32, scale_y: ti.f32, gain_
             out[t, y, x, 1] = bilinear_at(src, t, 1, x0, x1, fx, y0, y1, fy) * gain_y
 
 
-def gaussian_kernel(sigma: float) -> np.ndarray:
-    """Normalised 1-D Gaussian taps ``exp(-k^2 / 2 sigma^2)``, k = -r..r, r = max(1, ceil(3 sigma))."""
-    radius = max(1, math.ceil(3.0 * sigma))
-    k = np.arange(-radius, radius + 1, dtype=np.float64)
-    w = np.exp(-0.5 * (k / sigma) ** 2)
-    return (w / w.sum()).astype(np.float32)
-
-
 def gaussian_blur(src, out, scratch, sigma: float) -> None:
     """Separable Gaussian blur truncated at 3 sigma, replicate border; ``sigma <= 0``
     copies.  Pyramid choice: ``sigma = 1 / sqrt(2 * scale)`` before resampling by
@@ -87,8 +80,8 @@ def gaussian_blur(src, out, scratch, sigma: float) -> None:
     src = check_array("src", src, (None, None, None, None), "(T, H, W, C)")
     check_array("out", out, src.shape, "(T, H, W, C)", output=True)
     check_array("scratch", scratch, src.shape, "(T, H, W, C)", output=True)
-    if np.shares_memory(scratch, src) or np.shares_memory(scratch, out):
-        raise ValueError("scratch must be a separate buffer from src and out")
+    check_disjoint("scratch", scratch, "src", src, "it holds the x-blurred image")
+    check_disjoint("scratch", scratch, "out", out, "it holds the x-blurred image")
     sigma = float(sigma)
     if not math.isfinite(sigma):
         raise ValueError(f"sigma must be finite, got {sigma}")

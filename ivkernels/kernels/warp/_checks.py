@@ -4,13 +4,27 @@ Every host function checks its arguments up front, before any launch, and
 raises a ``TypeError`` (not a ``wp.array``, wrong dtype) or a ``ValueError``
 (wrong shape, wrong device, bad scalar) naming the argument, what was
 expected and what was given.  :mod:`ivkernels.kernels.taichi._checks` holds
-the same checks for NumPy arrays.
+the same checks for NumPy arrays; the rules that do not depend on the array
+type (scalars, aliasing) live in :mod:`ivkernels.kernels.checks`.
 """
 from __future__ import annotations
 
 import warp as wp
 
-from ivkernels.kernels.checks import check_float, check_int, check_positive  # noqa: F401  (re-exported)
+from ivkernels.kernels.checks import check_float, check_int, check_positive, check_separate  # noqa: F401
+
+
+def memory_span(a):
+    """``(device, first byte, one past the last byte)`` of a ``wp.array``'s memory; ``None`` if empty."""
+    if a.size == 0 or a.ptr is None:
+        return None
+    extent = sum((n - 1) * s for n, s in zip(a.shape, a.strides)) + wp.types.type_size_in_bytes(a.dtype)
+    return (str(a.device), a.ptr, a.ptr + extent)
+
+
+def check_disjoint(name_a: str, a, name_b: str, b, why: str) -> None:
+    """Raise ValueError if ``wp.array`` s ``a`` and ``b`` share memory (:func:`ivkernels.kernels.checks.check_separate`)."""
+    check_separate(name_a, memory_span(a), name_b, memory_span(b), why)
 
 
 def check_array(name: str, a, shape: tuple | None, layout: str, device=None, *, dtype=wp.float32) -> None:

@@ -43,10 +43,11 @@ dot accumulates per frame and is split at histogram-frame boundaries.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+import sys
 
 import warp as wp
 
+from ivkernels.kernels.host import EntropyScratch, allocate_entropy_scratch_with, run_entropy_steps
 from ivkernels.kernels.launch import launch_rows
 from ivkernels.kernels.warp._checks import check_array, check_float, check_int
 
@@ -252,31 +253,12 @@ def _check_hist(name: str, hist, T: int | None, device) -> int:
     return B
 
 
-class EntropyScratch(NamedTuple):
-    """Preallocated buffers of :func:`entropy_term` (see :func:`allocate_entropy_scratch`).
-
-    hist, tmp, blurred : float32 (T, B, B, B); row_flags : int32 (2, T, B, B);
-    dots : float64 (T,).
-    """
-
-    hist: wp.array
-    row_flags: wp.array
-    tmp: wp.array
-    blurred: wp.array
-    dots: wp.array
-
-
 def allocate_entropy_scratch(n_frames: int, bins: int, device="cpu") -> EntropyScratch:
     """Allocate :class:`EntropyScratch` for ``n_frames`` frames and a ``bins^3`` cube on ``device``."""
-    n_frames = check_int("n_frames", n_frames, 1)
-    bins = check_int("bins", bins, 2)
-    cube = (n_frames, bins, bins, bins)
-    return EntropyScratch(
-        hist=wp.empty(cube, dtype=wp.float32, device=device),
-        row_flags=wp.empty((2, n_frames, bins, bins), dtype=wp.int32, device=device),
-        tmp=wp.empty(cube, dtype=wp.float32, device=device),
-        blurred=wp.empty(cube, dtype=wp.float32, device=device),
-        dots=wp.empty((n_frames,), dtype=wp.float64, device=device))
+    def empty(shape, dtype):
+        return wp.empty(shape, dtype=wp.dtype_from_numpy(dtype), device=device)
+
+    return allocate_entropy_scratch_with(empty, n_frames, bins)
 
 
 def entropy_histogram(A, whiten, lo: float, h: float, hist, row_flags) -> None:
@@ -408,11 +390,4 @@ def entropy_term(A, whiten, lo: float, h: float, taps, sigma_p: float, scratch: 
     check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
     T, H, W, _ = A.shape
     check_array("energy_rows", energy_rows, (T * H,), "(T*H,)", A.device, dtype=wp.float64)
-    if not isinstance(scratch, EntropyScratch):
-        raise TypeError(f"scratch must be an EntropyScratch (allocate_entropy_scratch), "
-                        f"got {type(scratch).__name__}")
-    entropy_histogram(A, whiten, lo, h, scratch.hist, scratch.row_flags)
-    entropy_blur(scratch.hist, taps, scratch.row_flags, scratch.tmp, scratch.blurred)
-    entropy_dot(scratch.hist, scratch.blurred, scratch.dots)
-    entropy_slice_gradient(A, whiten, lo, h, scratch.blurred, scratch.dots, gA, lam)
-    entropy_energy(scratch.dots, sigma_p, H * W, energy_rows, lam)
+    run_entropy_steps(sys.modules[__name__], A, whiten, lo, h, taps, sigma_p, scratch, gA, energy_rows, lam)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array
+from ivkernels.kernels.warp._checks import check_array, check_disjoint
 
 wp.set_module_options({"enable_backward": False})
 
@@ -119,8 +119,7 @@ def constrained_albedo(I, S, A) -> None:
     dev = I.device
     check_array("S", S, (t, h, w), "(T, H, W)", dev)
     check_array("A", A, (t, h, w, 3), "(T, H, W, 3)", dev)
-    if A.ptr == I.ptr and t * h * w:
-        raise ValueError("constrained_albedo: A must not alias I")
+    check_disjoint("A", A, "I", I, "constrained_albedo writes A while reading I")
     launch_rows(constrained_albedo_rows, t * h, [I, S, A], device=dev)
 
 

@@ -39,14 +39,11 @@ from __future__ import annotations
 
 import warp as wp
 
-from ivkernels.kernels.warp._checks import check_array
-
+from ivkernels.kernels.host import GREY_WEIGHTS  # noqa: F401  (rgb2gray weights, re-exported)
 from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.warp._checks import check_array, check_disjoint
 
 wp.set_module_options({"enable_backward": False})
-
-#: ``rgb2gray`` weights (ITU-R BT.601) applied to sRGB-encoded values.
-GREY_WEIGHTS = (0.2989, 0.5870, 0.1140)
 
 
 # ----------------------------------------------------------------------------
@@ -610,8 +607,7 @@ def rof_dual_step(img, p_in, p_out, theta: float, delta: float) -> None:
     t, h, w = img.shape
     check_array("p_in", p_in, (t, h, w, 2), "(T, H, W, 2)", img.device)
     check_array("p_out", p_out, (t, h, w, 2), "(T, H, W, 2)", img.device)
-    if p_in.ptr == p_out.ptr:
-        raise ValueError("p_in and p_out must be different arrays (the step reads neighbours of p_in)")
+    check_disjoint("p_in", p_in, "p_out", p_out, "the step reads neighbours of p_in")
     launch_rows(rof_dual_step_rows, t * h, [img, p_in, p_out, float(theta), float(delta)], img.device)
 
 

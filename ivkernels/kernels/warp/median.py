@@ -24,48 +24,13 @@ import numpy as np
 import warp as wp
 
 from ivkernels.kernels.cache import cached
+from ivkernels.kernels.host import (KMEANS_ITERATIONS, MIN_SEPARATION, flow_scratch_shape,  # noqa: F401
+                                    median_network, shading_scratch_shape, spatial_weights)
 from ivkernels.kernels.launch import launch_rows
 from ivkernels.kernels.warp._checks import check_array, check_int, check_positive
 from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 
 wp.set_module_options({"enable_backward": False})
-
-#: Lloyd iterations of the 2-means split of a window's flow vectors (surf of Eq. 10).
-KMEANS_ITERATIONS = 8
-#: Final cluster centres closer than this (pixels) mean "no motion boundary in the window".
-MIN_SEPARATION = 0.5
-
-def median_network(n: int = 25) -> list:
-    """Compare-exchange pairs ``(i, j)``, ``i < j``, after which wire ``n // 2``
-    holds the median of ``n`` (odd) inputs.
-
-    Batcher's odd-even merge sort on the next power of two, with the padding
-    wires taken as +inf (their comparators are no-ops and dropped) and every
-    comparator that cannot reach the middle wire pruned: 113 pairs for n = 25.
-    Branch-free, so much faster than a selection loop on random data.
-    """
-    size = 1
-    while size < n:
-        size *= 2
-    pairs = []
-    p = 1
-    while p < size:
-        k = p
-        while k >= 1:
-            for j in range(k % p, size - k, 2 * k):
-                for i in range(min(k, size - j - k)):
-                    if (i + j) // (2 * p) == (i + j + k) // (2 * p) and i + j + k < n:
-                        pairs.append((i + j, i + j + k))
-            k //= 2
-        p *= 2
-    needed = {n // 2}
-    kept = []
-    for i, j in reversed(pairs):
-        if i in needed or j in needed:
-            kept.append((i, j))
-            needed |= {i, j}
-    return kept[::-1]
-
 
 # ----------------------------------------------------------------------------
 # Device helpers
@@ -452,26 +417,10 @@ def weighted_median_flow_rows(row_begin: int, flow: wp.array4d(dtype=float), lab
 # Host functions
 # ----------------------------------------------------------------------------
 
-def shading_scratch_shape(S_shape: tuple, radius: int) -> tuple:
-    """Shape of the float32 scratch of :func:`weighted_median_shading`: ``(T*H, 2*(2r+1)^2)``."""
-    return (S_shape[0] * S_shape[1], 2 * (2 * radius + 1) ** 2)
-
-
-def flow_scratch_shape(flow_shape: tuple, radius: int) -> tuple:
-    """Shape of the float32 scratch of :func:`weighted_median_flow`: ``(T*H, 3*(2r+1)^2)``."""
-    return (flow_shape[0] * flow_shape[1], 3 * (2 * radius + 1) ** 2)
-
-
 def _cached_table(key: tuple, make, dtype, device):
     """A small read-only table (``make()`` as a NumPy array) kept per key and device in the
     bounded table cache (:mod:`ivkernels.kernels.cache`)."""
     return cached((__name__, *key, str(device)), lambda: wp.array(make(), dtype=dtype, device=device))
-
-
-def _spatial_weights(radius: int, sigma: float) -> np.ndarray:
-    """``exp(-|d|^2 / (2 sigma^2))`` over the (2r+1)^2 window offsets, row-major, float32."""
-    d = np.arange(-radius, radius + 1, dtype=np.float64)
-    return np.exp(-(d[:, None] ** 2 + d[None, :] ** 2) / (2.0 * sigma * sigma)).astype(np.float32).ravel()
 
 
 def _scratch(workspace, name: str, shape: tuple, device):
@@ -550,7 +499,7 @@ def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float
         raise ValueError(f"lam must be >= 0, got {lam!r}")
     check_workspace(workspace)
     buf = _scratch(workspace, "shading_window", shading_scratch_shape(S.shape, radius), S.device)
-    spatial = _cached_table(("spatial", radius, sigma_s), lambda: _spatial_weights(radius, sigma_s),
+    spatial = _cached_table(("spatial", radius, sigma_s), lambda: spatial_weights(radius, sigma_s),
                             wp.float32, S.device)
     launch_rows(weighted_median_shading_rows, t * h,
                 [S, flow, w_bnd, out, buf, spatial, radius, lam, KMEANS_ITERATIONS, MIN_SEPARATION],

@@ -17,8 +17,9 @@ import math
 import numpy as np
 import warp as wp
 
+from ivkernels.kernels.host import gaussian_kernel
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array
+from ivkernels.kernels.warp._checks import check_array, check_disjoint
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners
 
 wp.set_module_options({"enable_backward": False})
@@ -102,14 +103,6 @@ def resize_flow_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array
 # Host functions
 # ----------------------------------------------------------------------------
 
-def gaussian_kernel(sigma: float) -> np.ndarray:
-    """Normalised 1-D Gaussian taps ``exp(-k^2 / 2 sigma^2)``, k = -r..r, r = ceil(3 sigma)."""
-    radius = max(1, math.ceil(3.0 * sigma))
-    k = np.arange(-radius, radius + 1, dtype=np.float64)
-    w = np.exp(-0.5 * (k / sigma) ** 2)
-    return (w / w.sum()).astype(np.float32)
-
-
 def gaussian_blur(src, out, scratch, sigma: float) -> None:
     """Separable Gaussian blur, truncated at 3 sigma, replicate border.
 
@@ -129,8 +122,8 @@ def gaussian_blur(src, out, scratch, sigma: float) -> None:
     check_array("src", src, (None, None, None, None), "(T, H, W, C)")
     check_array("out", out, tuple(src.shape), "(T, H, W, C)", src.device)
     check_array("scratch", scratch, tuple(src.shape), "(T, H, W, C)", src.device)
-    if scratch.ptr is not None and scratch.ptr in (src.ptr, out.ptr):
-        raise ValueError("scratch must be a separate buffer from src and out")
+    check_disjoint("scratch", scratch, "src", src, "it holds the x-blurred image")
+    check_disjoint("scratch", scratch, "out", out, "it holds the x-blurred image")
     sigma = float(sigma)
     if not math.isfinite(sigma):
         raise ValueError(f"sigma must be finite, got {sigma}")

@@ -1,0 +1,25 @@
+"""``energy_shading`` on the NumPy backend: :mod:`ivkernels.kernels.reference.energy_shading` into the outputs."""
+from __future__ import annotations
+
+import numpy as np
+
+from ivkernels.kernels.numpy._adapt import add, arrays
+from ivkernels.kernels.reference import energy_shading as ref
+
+
+def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
+    """Add Eq. 9's 3x3 Charbonnier smoothness of S (T, H, W) and its gradient into gS (T, H, W)."""
+    arrays(S=S)
+    arrays(np.float64, energy_rows=energy_rows)
+    rows, grad = ref.shading_smoothness(S, float(lam), float(eps))
+    add("gS", gS, grad)
+    add("energy_rows", energy_rows, rows)
+
+
+def coupling_term(S, S_tilde, w_bnd, gS, energy_rows, lam: float = 10.0) -> None:
+    """Add ``lam w_bnd (S - S~)^2``: S, S_tilde, gS (T, H, W), w_bnd (T', H, W), T' <= T."""
+    arrays(S=S, S_tilde=S_tilde, w_bnd=w_bnd)
+    arrays(np.float64, energy_rows=energy_rows)
+    rows, grad = ref.coupling_term(S, S_tilde, w_bnd, float(lam))
+    add("gS", gS, grad)
+    add("energy_rows", energy_rows, rows)

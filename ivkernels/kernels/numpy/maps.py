@@ -1,0 +1,35 @@
+"""``maps`` on the NumPy backend: :mod:`ivkernels.kernels.reference.maps` written into the outputs."""
+from __future__ import annotations
+
+from ivkernels.kernels.checks import check_int, check_positive
+from ivkernels.kernels.numpy._adapt import arrays, write
+from ivkernels.kernels.reference import maps as ref
+from ivkernels.kernels.workspace import check_workspace
+
+
+def occlusion_soft(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: float = 0.3) -> None:
+    """Eq. 7's likelihood (T, H, W): lab (T+1, H, W, 3), flow (T, H, W, 2), div_neg (T, H, W)."""
+    arrays(lab=lab, flow=flow, div_neg=div_neg)
+    write("out", out, ref.occlusion_soft(lab, flow, div_neg, check_positive("sigma_e", sigma_e),
+                                         check_positive("sigma_d", sigma_d)))
+
+
+def occlusion_binary(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: float = 0.3,
+                     threshold: float = 0.5) -> None:
+    """Eq. 6's ``w_occ`` (0/1), shapes as :func:`occlusion_soft`."""
+    arrays(lab=lab, flow=flow, div_neg=div_neg)
+    write("out", out, ref.occlusion_binary(lab, flow, div_neg, check_positive("sigma_e", sigma_e),
+                                           check_positive("sigma_d", sigma_d), float(threshold)))
+
+
+def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
+    """Clear ``occ`` (T, H, W) in place where the warp of ``log_image`` (T+1, H, W, C) straddles an edge."""
+    arrays(log_image=log_image, flow=flow, occ=occ)
+    write("occ", occ, ref.warp_reliability(log_image, flow, occ, float(max_spread)))
+
+
+def motion_boundary(sobel_mag, out, threshold: float, radius: int, *, workspace=None) -> None:
+    """``w_bnd`` (T, H, W): ``sobel_mag`` above ``threshold``, dilated by ``radius`` pixels."""
+    check_workspace(workspace)
+    arrays(sobel_mag=sobel_mag)
+    write("out", out, ref.motion_boundary(sobel_mag, float(threshold), check_int("radius", radius, 0)))

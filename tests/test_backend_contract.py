@@ -1,0 +1,179 @@
+"""The backend contract: every registered backend against the declared protocols,
+the registry as the one list of backends, and the rules every backend shares."""
+import inspect
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from ivkernels import cli, validation
+from ivkernels.backends import (FAMILIES, FAMILY_PROTOCOLS, BackendProtocol, NumpyBackend, available_backends,
+                                backend_names, backend_spec, get_backend, register_backend)
+from ivkernels.backends import registry
+
+
+def _declared(protocol) -> dict:
+    """Method name -> signature without ``self``, of a Protocol class."""
+    out = {}
+    for name, member in vars(protocol).items():
+        if inspect.isfunction(member) and not name.startswith("_"):
+            sig = inspect.signature(member)
+            out[name] = sig.replace(parameters=list(sig.parameters.values())[1:])
+    return out
+
+
+def _shape(sig) -> list:
+    """What must agree between declaration and implementation: names, kinds, defaults."""
+    return [(p.name, p.kind, p.default) for p in sig.parameters.values()]
+
+
+@pytest.mark.parametrize("name", backend_names())
+@pytest.mark.parametrize("family", sorted(FAMILY_PROTOCOLS))
+def test_every_family_module_implements_its_protocol(name, family):
+    module = getattr(get_backend(name, "cpu"), family)
+    for fn, declared in _declared(FAMILY_PROTOCOLS[family]).items():
+        impl = getattr(module, fn, None)
+        assert callable(impl), f"{name}.{family} lacks {fn}()"
+        assert _shape(inspect.signature(impl)) == _shape(declared), \
+            f"{name}.{family}.{fn}{inspect.signature(impl)} drifts from the protocol's {fn}{declared}"
+
+
+@pytest.mark.parametrize("name", backend_names())
+def test_every_backend_object_implements_the_backend_protocol(name):
+    be = get_backend(name, "cpu")
+    assert be.name == name and be.device == "cpu"
+    for attr in BackendProtocol.__annotations__:
+        assert getattr(be, attr) is not None, f"{name} lacks {attr}"
+    for fn, declared in _declared(BackendProtocol).items():
+        assert _shape(inspect.signature(getattr(be, fn))) == _shape(declared), f"{name}.{fn}"
+
+
+def test_the_protocol_test_catches_a_drift():
+    """A module whose signature differs from the protocol's is told apart."""
+    def resize_flow(src, out, scale=1.0):
+        pass
+
+    declared = _declared(FAMILY_PROTOCOLS["pyramid"])["resize_flow"]
+    assert _shape(inspect.signature(resize_flow)) != _shape(declared)
+
+
+def test_backend_array_round_trip(any_backend):
+    be = any_backend
+    a = np.arange(24, dtype=np.float32).reshape(2, 3, 4)
+    b = be.asarray(a)
+    np.testing.assert_array_equal(be.numpy(b), a)
+    z = be.zeros((2, 3))
+    assert be.numpy(z).shape == (2, 3) and not be.numpy(z).any()
+    e = be.empty(5, np.float64)
+    assert be.numpy(e).shape == (5,) and be.numpy(e).dtype == np.float64
+    be.zero(b)
+    be.synchronize()
+    assert not be.numpy(b).any()
+
+
+def test_registry_lists_the_built_in_backends():
+    assert backend_names()[:3] == ("warp", "taichi", "numpy")
+    assert backend_spec("numpy").oracle and not backend_spec("warp").oracle
+    assert backend_spec("warp").devices == ("cpu", "cuda")
+    names = {b.name for b in available_backends()}
+    assert names == set(backend_names())
+    assert "numpy" not in {b.name for b in available_backends(oracles=False)}
+
+
+def test_unknown_backend_is_a_clear_error():
+    with pytest.raises(ValueError, match=r"backend must be one of \('warp', 'taichi', 'numpy'"):
+        get_backend("torch")
+    with pytest.raises(ValueError, match="numpy backend runs on device='cpu' only"):
+        get_backend("numpy", "cuda")
+    with pytest.raises(ValueError, match="devices must be"):
+        register_backend("x", object, devices=("tpu",))
+    with pytest.raises(ValueError, match="identifier"):
+        register_backend("not a name", object)
+
+
+def test_a_registered_backend_reaches_every_reader(monkeypatch):
+    """get_backend, the CLI's --backend choices and the validation all read the registry."""
+    monkeypatch.setattr(registry, "_specs", dict(registry._specs))
+    monkeypatch.setattr(registry, "_made", {})
+
+    class Echo(NumpyBackend):
+        name = "echo"
+
+    register_backend("echo", Echo)
+    assert isinstance(get_backend("echo"), Echo)
+    validation.check_backend_device("echo", "cpu")
+    with pytest.raises(ValueError, match="echo backend runs on device='cpu' only"):
+        validation.check_backend_device("echo", "cuda")
+    assert cli._parser().parse_args(["decompose", "in", "-o", "out", "--backend", "echo"]).backend == "echo"
+
+
+def _modules_loaded_by(backend: str) -> str:
+    """``sys.modules`` membership of warp and taichi after loading every family of ``backend``,
+    in a fresh interpreter."""
+    code = ("import sys; from ivkernels.backends import get_backend, FAMILIES; "
+            f"be = get_backend({backend!r}); [getattr(be, f) for f in FAMILIES]; "
+            "print('warp' in sys.modules, 'taichi' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    return out.stdout.strip().splitlines()[-1]
+
+
+def test_taichi_backend_does_not_load_warp():
+    assert _modules_loaded_by("taichi") == "False True"
+
+
+def test_numpy_backend_loads_neither_warp_nor_taichi():
+    assert _modules_loaded_by("numpy") == "False False"
+
+
+# ----------------------------------------------------------------------------- rules every backend shares
+
+def test_aliasing_is_refused_alike(any_backend):
+    """One rule (kernels.checks.check_separate): the same array, or a view overlapping it, is refused."""
+    be = any_backend
+    I = be.asarray(np.zeros((2, 4, 5, 3), np.float32))
+    S = be.zeros((2, 4, 5))
+    with pytest.raises(ValueError, match="A must not alias I"):
+        be.energy_data.constrained_albedo(I, S, I)
+    buf = be.zeros(100)                                    # two (2, 4, 5, 2) fields, 10 floats apart
+    with pytest.raises(ValueError, match="p_in must not alias p_out"):
+        be.flow_classic.rof_dual_step(S, buf[:80].reshape((2, 4, 5, 2)), buf[10:90].reshape((2, 4, 5, 2)), 0.25, 0.5)
+    src = be.zeros((1, 6, 7, 1))
+    with pytest.raises(ValueError, match="scratch must not alias src"):
+        be.pyramid.gaussian_blur(src, be.zeros((1, 6, 7, 1)), src, 1.0)
+    # disjoint halves of one buffer are separate
+    be.flow_classic.rof_dual_step(be.zeros((1, 4, 5)), buf[:40].reshape((1, 4, 5, 2)),
+                                  buf[40:80].reshape((1, 4, 5, 2)), 0.25, 0.5)
+
+
+def test_flow_classic_reads_non_contiguous_input_alike(any_backend, rng):
+    """Every backend reads a strided view as its contiguous copy (Taichi copies it, Warp reads the strides)."""
+    from ivkernels.kernels.reference import flow_classic as ref
+
+    be = any_backend
+    rgb = rng.uniform(0.0, 1.0, (2, 5, 14, 3)).astype(np.float32)
+    view = be.asarray(rgb)[:, :, ::2]
+    out = be.empty((2, 5, 7))
+    be.flow_classic.srgb_grey(view, out)
+    np.testing.assert_allclose(be.numpy(out), ref.srgb_grey(rgb[:, :, ::2]), rtol=1e-5, atol=1e-4)
+    flow = rng.normal(size=(2, 5, 14, 2)).astype(np.float32)
+    sobel, energy = be.empty((2, 5, 7, 4)), be.empty((10, 2))
+    be.flow_classic.flow_sobel_components(be.asarray(flow)[:, :, ::2], sobel, energy)
+    want, want_energy = ref.flow_sobel_components(flow[:, :, ::2])
+    np.testing.assert_allclose(be.numpy(sobel), want, rtol=1e-5, atol=1e-5)
+    np.testing.assert_allclose(be.numpy(energy), want_energy, rtol=1e-4, atol=1e-4)
+
+
+def test_median_spatial_table_is_built_once(monkeypatch):
+    """Taichi keeps the shading median's spatial table between calls, as Warp does."""
+    from ivkernels.kernels.taichi import median
+
+    calls = []
+    real = median.spatial_weights
+    monkeypatch.setattr(median, "spatial_weights", lambda r, s: calls.append((r, s)) or real(r, s))
+    be = get_backend("taichi")
+    S = np.zeros((1, 6, 7), np.float32)
+    for _ in range(3):
+        be.median.weighted_median_shading(S, np.zeros((1, 6, 7, 2), np.float32), np.ones((1, 6, 7), np.float32),
+                                          np.empty_like(S), radius=2, sigma_s=3.25)
+    assert calls.count((2, 3.25)) <= 1
