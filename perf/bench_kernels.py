@@ -15,7 +15,9 @@ each launch in up to N row bands on N threads (:mod:`ivkernels.kernels.launch`);
 Taichi fixes its thread count when it is initialised, so the run has one
 phase per thread count: Taichi is initialised with that count and every case
 is timed on Taichi with it, and on Warp with every count, in rotating order
-(so a load change on a shared machine hits every configuration alike).  Each
+(so a load change on a shared machine hits every configuration alike).
+A pure-arithmetic probe at the start and the end measures how much of n
+cores the machine actually gave (its n-thread speedup bounds every kernel's).  Each
 configuration's median over its rounds is printed, with the ratios between
 them, all from this one process.  A configuration stops after 3 rounds once
 the case has used ``--case-budget`` seconds in a phase.
@@ -42,6 +44,41 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+import warp as wp
+
+wp.set_module_options({"enable_backward": False})
+
+
+@wp.kernel
+def spin_rows(row_begin: int, out: wp.array(dtype=float), iterations: int):
+    r = row_begin + wp.tid()
+    a = float(r) * 0.001
+    for i in range(iterations):
+        a = a * 0.999 + 0.001
+    out[r] = a
+
+
+def thread_capacity(counts: list[int], rounds: int = 5) -> dict:
+    """Speedup of n threads over 1 on pure arithmetic, launched in row bands like the kernels.
+
+    Close to n on an idle machine with n free cores, lower when other
+    processes hold them: it bounds the speedup any kernel can show in the same run.
+    """
+    from ivkernels.kernels.launch import launch_rows, threads
+
+    rows = 1 << 20
+    out = wp.empty(rows, dtype=wp.float32, device="cpu")
+    times = {n: [] for n in counts}
+    for n in counts:
+        with threads(n):
+            launch_rows(spin_rows, rows, [out, 32])
+    for r in range(rounds):
+        for n in counts[r % len(counts):] + counts[:r % len(counts)]:
+            with threads(n):
+                t0 = time.perf_counter()
+                launch_rows(spin_rows, rows, [out, 32])
+                times[n].append(time.perf_counter() - t0)
+    return {n: statistics.median(times[1]) / statistics.median(times[n]) for n in counts}
 
 
 @dataclass
@@ -265,8 +302,6 @@ def parse_args(argv=None):
 
 def main(argv=None) -> int:
     args = parse_args(argv)
-    import warp as wp
-
     wp.config.quiet = True
     wp.config.log_level = wp.LOG_WARNING
     from ivkernels.backends import get_backend
@@ -291,8 +326,9 @@ def main(argv=None) -> int:
 
         backends["taichi"] = get_backend("taichi")
         import taichi as ti
-
-        ti.set_logging_level(ti.ERROR)       # compile-time warnings would interleave with the table
+    capacity = thread_capacity(counts)
+    print("thread capacity at the start (pure arithmetic, 1 thread / n threads): "
+          + ", ".join(f"{n}: {capacity[n]:.2f}x" for n in counts if n > 1), flush=True)
     timings = {case.key: Timing(case.key) for case in cases}
     t_total = time.perf_counter()
     for phase, n in enumerate(counts):
@@ -300,6 +336,7 @@ def main(argv=None) -> int:
         if "taichi" in backends:
             t0 = time.perf_counter()
             taichi_init(n)
+            ti.set_logging_level(ti.ERROR)   # compile warnings would interleave with the table
             taichi_n = n
             print(f"phase {phase + 1}/{len(counts)}: Taichi initialised on {n} thread(s) in "
                   f"{time.perf_counter() - t0:.2f} s", flush=True)
@@ -324,6 +361,8 @@ def main(argv=None) -> int:
     print("W<n> / T<n>: Warp / Taichi on n threads (median ms); NumPy: the reference (~ scaled from a "
           "smaller input); ratios > 1 mean the second is faster.")
     print(geometric_means(ordered, counts))
+    capacity = thread_capacity(counts)
+    print("thread capacity at the end: " + ", ".join(f"{n}: {capacity[n]:.2f}x" for n in counts if n > 1))
     print(f"total {time.perf_counter() - t_total:.0f} s; load average at the end "
           f"{' '.join(f'{v:.2f}' for v in os.getloadavg())}")
     if args.json:
