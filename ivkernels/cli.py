@@ -50,6 +50,9 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--backend", default="warp", choices=backend_names(),
                    help="kernel backend (numpy: the slow exact references, for checking)")
     d.add_argument("--device", default="cpu", help="'cpu' or 'cuda' (warp only)")
+    d.add_argument("--threads", type=int, default=None,
+                   help="CPU threads the kernels run on (default: IVKERNELS_THREADS if set, else "
+                        "every core this process may use)")
     d.add_argument("--flow", default=None,
                    help="flow method (classic_nl_fast, classic_nl, dis, farneback) or a folder of "
                         ".flo files, one per consecutive pair")
@@ -114,7 +117,7 @@ def _check_arguments(args):
 
     from ivkernels import Params
     from ivkernels.flow import FLOW_METHODS
-    from ivkernels.validation import check_backend_device
+    from ivkernels.validation import check_backend_device, check_threads
 
     src = Path(args.input)
     if not src.exists():
@@ -135,6 +138,12 @@ def _check_arguments(args):
             raise ValueError(f"--window must be at least 2 frames, got {args.window}")
         params = params.replace(window=args.window, overlap=min(params.overlap, args.window - 1))
     check_backend_device(args.backend, args.device)
+    if args.threads is not None:
+        check_threads(args.threads, name="--threads")
+    else:
+        from ivkernels.kernels.thread_count import default_threads
+
+        default_threads()           # refuses a malformed IVKERNELS_THREADS before any work
     flow_folder = None
     if args.flow is not None and args.flow not in FLOW_METHODS:
         if not Path(args.flow).is_dir():
@@ -176,7 +185,8 @@ def run_decompose(args) -> Path:
         flow = _read_flo_folder(flow_folder, T - 1, args.start, args.step)
     # validates frames, flow, params, backend and device now, before the output is opened
     windows = iter_decompose(frames, flow=flow, temporal=not args.no_temporal, backend=args.backend,
-                             device=args.device, params=params, progress=not args.quiet)
+                             device=args.device, params=params, progress=not args.quiet,
+                             threads=args.threads)
 
     with target as tmp:
         shapes = {"albedo": (T, H, W, 3), "shading": (T, H, W)}

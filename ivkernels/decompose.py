@@ -90,6 +90,14 @@ def window_ranges(n_frames: int, window: int, overlap: int) -> list[tuple[int, i
     return out
 
 
+def _resolved_threads(threads) -> int:
+    """``threads`` checked, or the calling thread's launch thread count when ``None``."""
+    from ivkernels.kernels.thread_count import get_threads
+    from ivkernels.validation import check_threads
+
+    return get_threads() if threads is None else check_threads(threads)
+
+
 def _as_flow(flow, n_frames: int, height: int, width: int) -> np.ndarray:
     """A user flow (T-1, H, W, 2) as float32, checked by :func:`ivkernels.validation.check_flow`."""
     from ivkernels.validation import check_flow
@@ -99,7 +107,7 @@ def _as_flow(flow, n_frames: int, height: int, width: int) -> np.ndarray:
 
 def iter_decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
                    device: str = "cpu", params: Params | None = None,
-                   progress: bool = False) -> Iterator[WindowResult]:
+                   progress: bool = False, threads: int | None = None) -> Iterator[WindowResult]:
     """Decompose window by window; see :func:`decompose` for the arguments.
 
     Yields :class:`WindowResult` objects in order; memory stays bounded by one
@@ -107,15 +115,20 @@ def iter_decompose(frames, flow=None, temporal: bool = True, backend: str = "war
     window to disk as it arrives).  Use :func:`decompose` for diagnostics.
     Every argument is checked when this function is called, before it
     returns the iterator: bad input raises here, not at the first ``next()``.
+    The thread count applies while a window is being solved, not between
+    windows (the caller's own launches keep theirs).
     """
-    return _Decomposer(frames, flow, temporal, backend, device, params, progress,
-                       keep_outputs=False).windows()
+    from ivkernels.kernels.thread_count import iterate_with_threads
+
+    job = _Decomposer(frames, flow, temporal, backend, device, params, progress, threads,
+                      keep_outputs=False)
+    return iterate_with_threads(job.threads, job.windows())
 
 
 class _Decomposer:
     """Host-side schedule of a decomposition: flow, maps, then the window solves."""
 
-    def __init__(self, frames, flow, temporal, backend, device, params, progress, *,
+    def __init__(self, frames, flow, temporal, backend, device, params, progress, threads, *,
                  keep_outputs: bool = True):
         from ivkernels import validation as v
 
@@ -127,6 +140,7 @@ class _Decomposer:
         if not isinstance(temporal, (bool, np.bool_)):
             raise TypeError(f"temporal must be True or False, got {temporal!r}")
         v.check_backend_device(backend, device)
+        threads = _resolved_threads(threads)
         if isinstance(flow, str):
             from ivkernels.flow import FLOW_METHODS
 
@@ -156,6 +170,11 @@ class _Decomposer:
         self.params = params
         self.temporal = bool(temporal)
         self.be = get_backend(backend, device)
+        self.threads = threads
+        if self.be.name == "taichi":
+            from ivkernels.kernels.taichi import init
+
+            init(threads)
         self.prior = load_albedo_prior()
         self.progress = progress
         self.log = SolveLog()
@@ -252,7 +271,8 @@ class _Decomposer:
 
 def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
               device: str = "cpu", params: Params | None = None,
-              progress: bool = False, flow_passes: int = 1) -> IntrinsicVideo:
+              progress: bool = False, flow_passes: int = 1,
+              threads: int | None = None) -> IntrinsicVideo:
     """Decompose a video into albedo, shading, flow, occlusion and boundaries.
 
     Minimises Eq. 2 of Kong, Gehler & Black (ECCV 2014) coarse to fine over
@@ -285,6 +305,12 @@ def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
         raise occlusion IoU, while LMSE moves by at most 7% either way and
         the time doubles; the default stays 1 pass for speed.
         ``diagnostics["joint_passes"]`` records each pass.
+    threads : CPU threads the kernels run on (an integer >= 1).  ``None``
+        (default): the environment variable ``IVKERNELS_THREADS`` if set, else
+        every core this process may use (see :mod:`ivkernels.kernels.launch`).
+        Warp splits each launch into up to this many row bands; Taichi is
+        (re-)initialised with this count (a different count than Taichi's
+        current one re-initialises it, see :func:`ivkernels.kernels.taichi.init`).
 
     Returns
     -------
@@ -300,7 +326,8 @@ def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
         finite, frames of different sizes in a list (the frame is named), a
         flow of the wrong shape, not finite or beyond
         :data:`ivkernels.validation.MAX_FLOW` pixels, an unknown backend, a
-        malformed device or a CUDA device that is not present.
+        malformed device, a CUDA device that is not present, or ``threads``
+        (or ``IVKERNELS_THREADS``) that is not an integer >= 1.
     ivkernels.validation.NotEnoughMemoryError
         (a MemoryError and a ValueError) when the estimated memory of the
         call exceeds the memory available, before anything is allocated.
@@ -315,14 +342,24 @@ def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
     """
     if isinstance(flow_passes, bool) or not isinstance(flow_passes, (int, np.integer)) or flow_passes < 1:
         raise ValueError(f"flow_passes must be an int >= 1, got {flow_passes!r}")
-    if flow_passes > 1:
-        if not (flow is None or isinstance(flow, str)) or not temporal:
-            raise ValueError("flow_passes > 1 needs temporal=True and flow=None or a flow method name")
-        from ivkernels.flow.joint import joint_decompose
+    from ivkernels.kernels.thread_count import threads as launch_threads
 
-        return joint_decompose(frames, passes=int(flow_passes), method=flow or DEFAULT_FLOW_METHOD,
-                               backend=backend, device=device, params=params, progress=progress).video
-    job = _Decomposer(frames, flow, temporal, backend, device, params, progress)
+    n_threads = _resolved_threads(threads)
+    with launch_threads(n_threads):
+        if flow_passes > 1:
+            if not (flow is None or isinstance(flow, str)) or not temporal:
+                raise ValueError("flow_passes > 1 needs temporal=True and flow=None or a flow method name")
+            from ivkernels.flow.joint import joint_decompose
+
+            return joint_decompose(frames, passes=int(flow_passes), method=flow or DEFAULT_FLOW_METHOD,
+                                   backend=backend, device=device, params=params,
+                                   progress=progress).video
+        return _collect(_Decomposer(frames, flow, temporal, backend, device, params, progress,
+                                    n_threads))
+
+
+def _collect(job: _Decomposer) -> IntrinsicVideo:
+    """Run every window of ``job`` and assemble the :class:`IntrinsicVideo`."""
     T, H, W, _ = job.frames.shape
     albedo = np.empty((T, H, W, 3), np.float32)
     shading = np.empty((T, H, W), np.float32)

@@ -19,6 +19,7 @@ everywhere:
   the registry (:func:`ivkernels.backends.backend_names`: ``"warp"`` on
   ``"cpu"`` or ``"cuda[:N]"``, a CUDA device must be present; ``"taichi"``
   and ``"numpy"`` on ``"cpu"``), on a kind of device it declares.
+* **threads** (:func:`check_threads`): an integer >= 1.
 * **memory** (:func:`check_memory`): the bytes a call will hold are estimated
   from the shapes alone and compared with the memory available *before*
   anything is allocated.
@@ -274,6 +275,15 @@ def check_backend_device(backend, device) -> None:
     if index >= count:
         raise ValueError(f"device={device!r}: only {count} CUDA device(s) are available (cuda:0"
                          f"{'' if count == 1 else f' .. cuda:{count - 1}'})")
+
+
+def check_threads(threads, name: str = "threads") -> int:
+    """Refuse a CPU thread count that is not an integer >= 1; return it as an int."""
+    if isinstance(threads, (bool, np.bool_)) or not isinstance(threads, numbers.Integral):
+        raise TypeError(f"{name} must be an integer >= 1 (CPU threads), got {threads!r}")
+    if threads < 1:
+        raise ValueError(f"{name} must be an integer >= 1 (CPU threads), got {threads!r}")
+    return int(threads)
 
 
 def cuda_device_count() -> int:

@@ -17,7 +17,7 @@ def test_bench_kernels_quick_vecops_prints_a_table():
     out = proc.stdout
     assert "| kernel" in out and "W1/W2" in out
     assert "| vecops.dot" in out and "| vecops.fill" in out
-    assert "memory roof" in out
+    assert "geometric mean over kernels" in out
 
 
 def test_accuracy_baselines_on_a_tiny_sequence():

@@ -52,7 +52,7 @@ def as_linear_rgb(frames, backend: str = "warp", device: str = "cpu") -> np.ndar
 
 
 def estimate_flow(frames, method: str = "classic_nl_fast", backend: str = "warp", device: str = "cpu",
-                  **options) -> np.ndarray:
+                  threads: int | None = None, **options) -> np.ndarray:
     """Forward optical flow ``u_t`` from frame ``t`` to frame ``t + 1``.
 
     Parameters
@@ -64,6 +64,10 @@ def estimate_flow(frames, method: str = "classic_nl_fast", backend: str = "warp"
     backend, device : kernels the Classic+NL methods run on ("warp" on "cpu" or
         "cuda[:N]", or "taichi" on "cpu"); the OpenCV methods ignore them
         except to convert uint8 input.
+    threads : CPU threads the Classic+NL kernels run on (an integer >= 1);
+        ``None``: ``IVKERNELS_THREADS`` if set, else every core this process
+        may use, as for :func:`ivkernels.decompose`.  The OpenCV methods run
+        on OpenCV's own threads.
     options : Classic+NL: fields of :class:`ClassicNLSettings` (e.g.
         ``sor_sweeps=40``, ``warps=5``) and ``init``, an initial flow
         (T-1, H, W, 2); "dis": ``preset`` ("medium", "fast", "ultrafast");
@@ -74,8 +78,12 @@ def estimate_flow(frames, method: str = "classic_nl_fast", backend: str = "warp"
     (T-1, H, W, 2) float32 flow in pixels; channel 0 = dx (columns),
     channel 1 = dy (rows); pixel ``x`` of frame ``t`` moves to ``x + u_t(x)``.
     """
+    from ivkernels.kernels.thread_count import get_threads, threads as launch_threads
+    from ivkernels.validation import check_threads
+
     if not isinstance(method, str) or method not in FLOW_METHODS:
         raise ValueError(f"unknown flow method {method!r}; expected one of {FLOW_METHODS}")
+    threads = get_threads() if threads is None else check_threads(threads)
     frames = as_linear_rgb(frames, backend, device)
     if method == "dis":
         from ivkernels.flow.opencv_flow import dis_flow
@@ -93,4 +101,10 @@ def estimate_flow(frames, method: str = "classic_nl_fast", backend: str = "warp"
 
         init = check_flow(init, *frames.shape[:3], name="init")
     settings = settings_for(method, **options)
-    return ClassicNL(get_backend(backend, device), settings)(frames, init)
+    with launch_threads(threads):
+        be = get_backend(backend, device)
+        if be.name == "taichi":
+            from ivkernels.kernels.taichi import init as init_taichi
+
+            init_taichi(threads)
+        return ClassicNL(be, settings)(frames, init)

@@ -54,10 +54,11 @@ Array convention (written down once, used everywhere)
 Threads
 -------
 The thread count is kept in :mod:`ivkernels.kernels.thread_count`, which
-imports no backend.  Warp's CPU backend runs one launch on one thread and releases the GIL.  Warp
-host functions launch through :mod:`ivkernels.kernels.launch`, which splits the
+imports no backend.  Warp's CPU backend runs one launch on one thread and
+releases the GIL.  Warp host functions launch through :mod:`ivkernels.kernels.launch`, which splits the
 row domain (``T * H`` rows, one kernel thread per row looping over ``x``) into
-two bands launched from two Python threads.  Kernels that scatter (bilinear
-splat, histogram splat) split at frame boundaries so that the two halves never
-write the same memory (Warp's CPU atomics are plain read-modify-writes).
+up to N bands launched from N Python threads (N = ``IVKERNELS_THREADS`` or the
+cores available, :func:`ivkernels.kernels.thread_count.set_threads`).  Kernels that
+scatter (bilinear splat, histogram splat) split at frame boundaries so that the
+bands never write the same memory (Warp's CPU atomics are plain read-modify-writes).
 """

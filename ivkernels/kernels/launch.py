@@ -1,59 +1,99 @@
-"""Launching Warp kernels over rows, on one or two CPU threads.
+"""Launching Warp kernels over rows, in row bands on N CPU threads.
 
 Every image kernel in :mod:`ivkernels.kernels.warp` is launched with one Warp
 thread per image row (``T * H`` rows for a frame stack) and loops over ``x``
 inside; its first argument is ``row_begin: int`` and the thread handles row
 ``row_begin + wp.tid()``.  On the CPU a launch runs on a single thread and
-releases the GIL, so :func:`launch_rows` splits the rows into two bands and
-launches them from two Python threads.
+releases the GIL, so :func:`launch_rows` splits the rows into up to N bands
+(:func:`row_bands`) and launches them from N Python threads: the calling
+thread runs the last band, a shared pool the others.
 
 Gather kernels (each output row written by the thread owning it) can be split
-at any row.  Scatter kernels must be split where the halves write disjoint
+at any row.  Scatter kernels must be split where the bands write disjoint
 memory; pass ``align=rows_per_frame`` to split only at frame boundaries.
+A band covers at least :data:`MIN_BAND_ELEMENTS` elements of the launch's
+largest array (:func:`min_band_rows`), so small launches (coarse pyramid
+levels, short vectors) stay on one thread, where handing a band to another
+thread would cost more than it saves.  Rows differ widely in work (an image
+row, a 4096-element chunk of a vector, a whole histogram frame), so the
+minimum is counted in elements rather than rows.
 
-The number of threads is a process-wide setting (:func:`set_threads`,
-:func:`threads`) so that benchmarks can compare 1 and 2 threads on the same
-code path.
+The number of threads N is kept in :mod:`ivkernels.kernels.thread_count`
+(re-exported here).
 """
 from __future__ import annotations
 
-import contextlib
 import threading
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor, wait
 
 import warp as wp
 
-from ivkernels.kernels.thread_count import _state, get_threads  # noqa: F401  (get_threads re-exported)
+from ivkernels.kernels.thread_count import (THREADS_ENV, available_cores, default_threads,  # noqa: F401
+                                            get_threads, iterate_with_threads, set_threads, threads,
+                                            threads_from_environment)
+
+#: Fewest array elements a band must cover (rows times the elements per row
+#: of the launch's largest array argument) for a launch to be split.
+MIN_BAND_ELEMENTS = 16384
 
 _pool: ThreadPoolExecutor | None = None
+_pool_workers = 0
 _pool_lock = threading.Lock()
 _warm: set = set()
 _warm_lock = threading.Lock()
 
 
-def set_threads(n: int) -> None:
-    """Set the number of CPU launch threads for the calling thread (1 or 2)."""
-    if n not in (1, 2):
-        raise ValueError(f"threads must be 1 or 2, got {n!r}")
-    _state.threads = n
+def min_band_rows(n_rows: int, inputs: list, min_elements: int | None = None) -> int:
+    """Fewest rows a band of this launch may have: ``min_elements`` (default
+    :data:`MIN_BAND_ELEMENTS`) divided by the elements per row of the largest
+    Warp array in ``inputs`` (its size over ``n_rows``); 1 if there is none."""
+    min_elements = MIN_BAND_ELEMENTS if min_elements is None else min_elements
+    largest = max((a.size for a in inputs if isinstance(a, wp.array)), default=0)
+    if largest <= 0 or n_rows <= 0:
+        return 1
+    return max(1, -(-min_elements * n_rows // largest))
 
 
-@contextlib.contextmanager
-def threads(n: int):
-    """Context manager: launch on ``n`` CPU threads inside the block."""
-    old = get_threads()
-    set_threads(n)
-    try:
-        yield
-    finally:
-        set_threads(old)
+def row_bands(n_rows: int, n_bands: int, align: int = 1, min_rows: int = 1) -> list[tuple[int, int]]:
+    """Split rows ``[0, n_rows)`` into at most ``n_bands`` contiguous bands.
+
+    Bands start at multiples of ``align`` and hold as equal a number of
+    ``align``-row units as possible (the first ones one unit more); the last
+    band also takes the ``n_rows % align`` rows past the last whole unit.
+    Every band but possibly a lone one has at least ``min_rows`` rows.
+
+    Returns ``[(row_begin, row_count), ...]`` in row order, covering every row
+    exactly once (empty for ``n_rows <= 0``).
+    """
+    if n_rows <= 0:
+        return []
+    if align < 1 or min_rows < 1 or n_bands < 1:
+        raise ValueError(f"align, min_rows and n_bands must be >= 1, got {align}, {min_rows}, {n_bands}")
+    units = n_rows // align
+    units_per_band = -(-min_rows // align)          # fewest whole units holding min_rows rows
+    k = max(1, min(n_bands, units // units_per_band))
+    if k == 1:
+        return [(0, n_rows)]
+    base, extra = divmod(units, k)
+    bands, begin = [], 0
+    for i in range(k):
+        count = (base + (i < extra)) * align
+        bands.append((begin, count))
+        begin += count
+    last_begin, last_count = bands[-1]
+    bands[-1] = (last_begin, n_rows - last_begin)
+    return bands
 
 
-def _executor() -> ThreadPoolExecutor:
-    global _pool
+def _executor(workers: int) -> ThreadPoolExecutor:
+    """The shared launch pool, grown to at least ``workers`` threads."""
+    global _pool, _pool_workers
     with _pool_lock:
-        if _pool is None:
-            _pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="ivkernels-launch")
+        if _pool is None or _pool_workers < workers:
+            # A replaced pool is not shut down: a caller may still be submitting to it;
+            # its idle threads exit once it is collected.
+            _pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="ivkernels-launch")
+            _pool_workers = workers
         return _pool
 
 
@@ -69,16 +109,18 @@ def launch_rows(kernel, n_rows: int, inputs: list, device="cpu", *, align: int =
     align : split only at multiples of ``align`` rows (use the frame height
         for kernels that scatter into other rows).  If no aligned split
         exists the launch runs on one thread.
+
+    The rows are split by :func:`row_bands` into at most :func:`get_threads`
+    bands of at least :func:`min_band_rows` rows each.
     """
     if n_rows <= 0:
         return
     dev = wp.get_device(device)
-    split = 0
-    if dev.is_cpu and get_threads() == 2 and n_rows >= 2:
-        units = n_rows // align
-        if units >= 2:
-            split = (units // 2) * align
-    if split == 0:
+    n_threads = get_threads() if dev.is_cpu else 1
+    bands = [(0, n_rows)]
+    if n_threads > 1:
+        bands = row_bands(n_rows, n_threads, align, min_band_rows(n_rows, inputs))
+    if len(bands) == 1:
         wp.launch(kernel, dim=n_rows, inputs=[0, *inputs], device=dev)
         return
     key = (kernel.key, kernel.module.name)
@@ -86,10 +128,17 @@ def launch_rows(kernel, n_rows: int, inputs: list, device="cpu", *, align: int =
         first = key not in _warm
         _warm.add(key)
     if first:
-        # Compile and load the module on this thread before two threads race to do it.
-        wp.launch(kernel, dim=split, inputs=[0, *inputs], device=dev)
-        wp.launch(kernel, dim=n_rows - split, inputs=[split, *inputs], device=dev)
+        # Compile and load the module on this thread before several threads race to do it.
+        for begin, count in bands:
+            wp.launch(kernel, dim=count, inputs=[begin, *inputs], device=dev)
         return
-    other = _executor().submit(wp.launch, kernel, dim=split, inputs=[0, *inputs], device=dev)
-    wp.launch(kernel, dim=n_rows - split, inputs=[split, *inputs], device=dev)
-    other.result()
+    pool = _executor(len(bands) - 1)
+    others = [pool.submit(wp.launch, kernel, dim=count, inputs=[begin, *inputs], device=dev)
+              for begin, count in bands[:-1]]
+    begin, count = bands[-1]
+    try:
+        wp.launch(kernel, dim=count, inputs=[begin, *inputs], device=dev)
+    finally:
+        wait(others)
+    for other in others:
+        other.result()

@@ -1,0 +1,85 @@
+"""Cases of :mod:`ivkernels.kernels.warp.maps` (occlusion, warp reliability, motion boundaries)."""
+from __future__ import annotations
+
+import numpy as np
+
+from ivkernels.kernels.cases import EXACT, Case, Tol
+from ivkernels.kernels.cases.inputs import F32, flow, lab_frames, mask, nans, normal, pairs, uniform
+from ivkernels.kernels.reference import derivatives as ref_derivatives
+from ivkernels.kernels.reference import maps as ref
+
+
+def _occlusion_inputs(rng, T, H, W):
+    """Lab frames (T), a flow partly leaving the image (T-1) and its one-sided divergence."""
+    f = flow(rng, pairs(T), H, W)
+    return {"lab": lab_frames(rng, T, H, W), "flow": f,
+            "div_neg": ref_derivatives.divergence_negative(f).astype(F32), "out": nans((pairs(T), H, W))}
+
+
+def _occlusion_soft(sigma_e, sigma_d):
+    def make(rng, T, H, W):
+        return {**_occlusion_inputs(rng, T, H, W), "sigma_e": sigma_e, "sigma_d": sigma_d}
+
+    return Case("maps", "occlusion_soft", make, ("lab", "flow", "div_neg", "out", "sigma_e", "sigma_d"), ("out",),
+                lambda v: {"out": ref.occlusion_soft(v["lab"], v["flow"], v["div_neg"], v["sigma_e"], v["sigma_d"])},
+                variant=f"sigma_e={sigma_e:g},sigma_d={sigma_d:g}", tol=Tol(0.0, 2e-5))
+
+
+def _occlusion_binary(sigma_e, sigma_d):
+    def make(rng, T, H, W):
+        return {**_occlusion_inputs(rng, T, H, W), "sigma_e": sigma_e, "sigma_d": sigma_d, "threshold": 0.5}
+
+    def reference(v):
+        return {"out": ref.occlusion_binary(v["lab"], v["flow"], v["div_neg"], v["sigma_e"], v["sigma_d"],
+                                            v["threshold"])}
+
+    def undecided(v):
+        """float32 rounding of ``o`` may fall either side of the threshold."""
+        o = ref.occlusion_soft(v["lab"], v["flow"], v["div_neg"], v["sigma_e"], v["sigma_d"])
+        return {"out": np.abs(o - v["threshold"]) < 1e-4}
+
+    return Case("maps", "occlusion_binary", make,
+                ("lab", "flow", "div_neg", "out", "sigma_e", "sigma_d", "threshold"), ("out",), reference,
+                variant=f"sigma_e={sigma_e:g},sigma_d={sigma_d:g}", tol=EXACT, ignore=undecided)
+
+
+def _reliability(max_spread):
+    def make(rng, T, H, W):
+        img = normal(rng, (T, H, W, 3), 0.0, 0.5)
+        img[:, H // 4: H // 2 + 1, W // 4: W // 2 + 1] = -1.0          # a flat patch
+        return {"log_image": img, "flow": flow(rng, pairs(T), H, W),
+                "occ": mask(rng, (pairs(T), H, W), 0.8), "max_spread": max_spread}
+
+    def reference(v):
+        return {"occ": ref.warp_reliability(v["log_image"], v["flow"], v["occ"], v["max_spread"])}
+
+    def tied(v):
+        """Spreads within float32 rounding of ``max_spread``."""
+        return {"occ": np.abs(ref.corner_spread(v["log_image"], v["flow"]) - v["max_spread"]) <= 1e-4}
+
+    return Case("maps", "warp_reliability", make, ("log_image", "flow", "occ", "max_spread"), ("occ",), reference,
+                variant=f"max_spread={max_spread:g}", updates=("occ",), tol=EXACT, ignore=tied)
+
+
+def _boundary(radius):
+    def make(rng, T, H, W):
+        P = pairs(T)
+        return {"sobel_mag": uniform(rng, (P, H, W)) ** 8, "out": nans((P, H, W)), "threshold": 0.8,
+                "radius": radius}
+
+    return Case("maps", "motion_boundary", make, ("sobel_mag", "out", "threshold", "radius"), ("out",),
+                lambda v: {"out": ref.motion_boundary(v["sobel_mag"], v["threshold"], v["radius"])},
+                variant=f"radius={radius}", tol=EXACT, no_alias=(("sobel_mag", "out"),) if radius else ())
+
+
+CASES = (
+    _occlusion_soft(20.0, 0.3),
+    _occlusion_soft(40.0, 1.0),
+    _occlusion_binary(20.0, 0.3),
+    _occlusion_binary(40.0, 1.0),
+    _reliability(0.05),
+    _reliability(0.3),
+    _boundary(0),
+    _boundary(1),
+    _boundary(3),
+)

@@ -1,0 +1,109 @@
+#!/usr/bin/env python
+"""Where splitting a Warp launch into row bands stops paying: 1 thread against N bands, by size.
+
+For a few kernels of the case table (:mod:`ivkernels.kernels.cases`), from
+the lightest per element to the heaviest, and a ladder of image sizes (2
+frames each), this times in one process, in rotating order:
+
+* ``W1``: Warp on 1 thread;
+* ``WN``: Warp on N threads with the minimum band size of
+  :data:`ivkernels.kernels.launch.MIN_BAND_ELEMENTS` (what the library does);
+* ``WN split``: Warp on N threads with every launch split into N bands
+  whatever its size (the minimum set to 1 element);
+
+and prints the medians, ``W1/WN`` and ``W1/WN split``, and the elements of
+the largest array per band of the split launch.  Where ``W1/WN split`` is
+below 1 the hand-off to other threads costs more than it saves, and the
+minimum should keep that size on one thread.  N defaults to the resolved
+thread count (``IVKERNELS_THREADS`` or the cores available).
+
+    python perf/bench_launch.py
+    python perf/bench_launch.py --threads 4 --repeat 30
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import time
+
+import numpy as np
+
+KERNELS = ("vecops.axpy", "colour.luminance", "energy_shading.shading_smoothness", "median.median5x5")
+SIZES = ((15, 20), (30, 40), (60, 80), (120, 160), (240, 320), (480, 640))
+
+
+def largest_input_elements(values: dict) -> int:
+    """Elements of the largest array among a case's values."""
+    return max((v.size for v in values.values() if isinstance(v, np.ndarray)), default=0)
+
+
+def time_configs(call, be, configs: dict, repeat: int, budget_s: float) -> dict:
+    """Median seconds of ``call`` under each ``{name: (threads, min_band_elements)}`` configuration."""
+    from ivkernels.kernels import launch
+
+    default_min = launch.MIN_BAND_ELEMENTS
+    times = {name: [] for name in configs}
+    names = list(configs)
+    t_start = time.perf_counter()
+    try:
+        for r in range(-1, repeat):                      # round -1 warms every configuration
+            for name in names[r % len(names):] + names[:r % len(names)]:
+                n, min_elements = configs[name]
+                launch.MIN_BAND_ELEMENTS = min_elements
+                with launch.threads(n):
+                    t0 = time.perf_counter()
+                    call()
+                    be.synchronize()
+                    if r >= 0:
+                        times[name].append(time.perf_counter() - t0)
+            if r >= 4 and time.perf_counter() - t_start > budget_s:
+                break
+    finally:
+        launch.MIN_BAND_ELEMENTS = default_min
+    return {name: statistics.median(v) for name, v in times.items()}
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--threads", type=int, default=None, help="N (default: the resolved thread count)")
+    p.add_argument("--repeat", type=int, default=20, help="timed rounds per size (default 20)")
+    p.add_argument("--budget", type=float, default=3.0, help="seconds per kernel and size (at least 5 rounds)")
+    p.add_argument("--only", nargs="+", default=None, choices=KERNELS, help="kernels to time")
+    args = p.parse_args(argv)
+    import warp as wp
+
+    wp.config.quiet = True
+    from ivkernels.backends import get_backend
+    from ivkernels.kernels import launch
+    from ivkernels.kernels.cases import all_cases, bind
+    from ivkernels.validation import check_threads
+
+    n = launch.default_threads() if args.threads is None else check_threads(args.threads, "--threads")
+    if n < 2:
+        p.error("needs at least 2 threads (--threads or IVKERNELS_THREADS)")
+    be = get_backend("warp")
+    cases = {c.key: c for c in all_cases()}
+    configs = {"W1": (1, launch.MIN_BAND_ELEMENTS), f"W{n}": (n, launch.MIN_BAND_ELEMENTS),
+               f"W{n} split": (n, 1)}
+    print(f"# row bands: 1 thread against {n}; MIN_BAND_ELEMENTS = {launch.MIN_BAND_ELEMENTS}; "
+          f"load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}", flush=True)
+    print(f"| kernel | T x H x W | elements per band | W1 ms | W{n} ms | W{n} split ms | "
+          f"W1/W{n} | W1/W{n} split |")
+    print("|---|---|--:|--:|--:|--:|--:|--:|")
+    for key in args.only or KERNELS:
+        case = cases[key]
+        for H, W in SIZES:
+            values = case.make(np.random.default_rng(0), 2, H, W)
+            call, _ = bind(case, be, values)
+            med = time_configs(call, be, configs, args.repeat, args.budget)
+            w1, wn, ws = med["W1"], med[f"W{n}"], med[f"W{n} split"]
+            print(f"| {key} | 2x{H}x{W} | {largest_input_elements(values) // n} | {w1 * 1e3:.3f} | "
+                  f"{wn * 1e3:.3f} | {ws * 1e3:.3f} | {w1 / wn:.2f} | {w1 / ws:.2f} |", flush=True)
+    print(f"load average at the end {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
