@@ -82,7 +82,7 @@ def main(argv=None) -> int:
     ap.add_argument("--synthetic-size", type=int, nargs=2, default=(240, 320), metavar=("H", "W"))
     ap.add_argument("--backend", default="warp")
     ap.add_argument("--device", default="cpu")
-    ap.add_argument("--threads", type=int, default=2, choices=(1, 2))
+    ap.add_argument("--threads", type=int, default=None, help="launch threads (default: all the cores available)")
     ap.add_argument("--set", nargs="+", default=[], metavar="FIELD=VALUE",
                     help="ClassicNLSettings fields for the Classic+NL methods")
     args = ap.parse_args(argv)
@@ -118,7 +118,7 @@ def main(argv=None) -> int:
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     if options:
         print(f"Classic+NL settings changed: {options}")
-    print(f"backend={args.backend} device={args.device} threads={args.threads} "
+    print(f"backend={args.backend} device={args.device} threads={args.threads or 'all'} "
           f"cores={os.cpu_count()} load average at the end={load:.2f}")
     print("s/pair: wall-clock seconds per frame pair; cpu: CPU seconds of this process per pair")
     header = f"{'sequence':24s}" + "".join(f" | {m:>29s}" for m in args.methods)

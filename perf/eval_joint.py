@@ -31,7 +31,7 @@ def main(argv=None) -> int:
     ap.add_argument("--method", default="classic_nl_fast")
     ap.add_argument("--source", default="albedo", choices=FLOW_SOURCES)
     ap.add_argument("--cold", action="store_true", help="do not warm-start each pass's flow")
-    ap.add_argument("--threads", type=int, default=2, choices=(1, 2))
+    ap.add_argument("--threads", type=int, default=None, help="launch threads (default: all the cores available)")
     args = ap.parse_args(argv)
     set_threads(args.threads)
 
