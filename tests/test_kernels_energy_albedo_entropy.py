@@ -1,13 +1,15 @@
-"""Albedo global sparsity (Eq. 12) by histogram: each step vs the NumPy
-reference, the energy vs the direct O(N^2) double sum as the bins shrink,
-gradients vs finite differences, threads, backends, bad input."""
+"""Albedo global sparsity (Eq. 12) by histogram: the generic contract from the case table (each
+step and the whole term vs the NumPy reference, gradient vs finite differences), plus the
+energy vs the direct O(N^2) double sum as the bins shrink, the exact gradient of the
+discrete energy, lattice shifts, clamping outside the cube, bad input."""
 import numpy as np
 import pytest
 
-from ivkernels.backends import get_backend
-from ivkernels.kernels.launch import threads
 from ivkernels.kernels.reference import energy_albedo_entropy as ref
 from ivkernels.priors import entropy_blur_weights, load_albedo_prior
+from kernel_harness import contract, finite_differences, pytest_generate_tests  # noqa: F401  (fixture)
+
+TestContract = contract("energy_albedo_entropy")
 
 LO, H_BIN = -4.0, 0.06
 
@@ -38,33 +40,18 @@ def tight_cube(A, whiten, h_bin, margin=3):
     return float(lo), int(np.ceil((u.max() - lo) / h_bin + margin)) + 1
 
 
-def run_term(backend, A, prior, lo=LO, h_bin=H_BIN, bins=None, lam=0.7, gA0=None, e0=None):
+def run_term(be, A, prior, lo=LO, h_bin=H_BIN, bins=None, lam=0.7, gA0=None, e0=None):
     t, h, w, _ = A.shape
     bins = bins or bins_for(h_bin, lo)
-    m = backend.energy_albedo_entropy
-    scratch = m.allocate_entropy_scratch(t, bins, device=backend.device)
-    gA = backend.asarray(np.zeros(A.shape, np.float32) if gA0 is None else gA0.copy())
-    er = backend.asarray(np.zeros(t * h) if e0 is None else e0.copy())
+    m = be.energy_albedo_entropy
+    scratch = m.allocate_entropy_scratch(t, bins, device=be.device)
+    gA = be.asarray(np.zeros(A.shape, np.float32) if gA0 is None else gA0.copy())
+    er = be.asarray(np.zeros(t * h) if e0 is None else e0.copy())
     taps = entropy_blur_weights(prior.sigma_p, h_bin)
-    m.entropy_term(backend.asarray(A), backend.asarray(prior.whiten.astype(np.float32)), lo, h_bin,
-                   backend.asarray(taps), prior.sigma_p, scratch, gA, er, lam=lam)
-    out = {k: backend.numpy(v).copy() for k, v in scratch._asdict().items()}
-    return backend.numpy(er).copy(), backend.numpy(gA).copy(), out
-
-
-def test_histogram_and_blur_match_reference(backend, rng, prior):
-    A = make_albedo(rng, 2, 37, 53)
-    W = prior.whiten.astype(np.float32)
-    B = bins_for(H_BIN)
-    _, _, s = run_term(backend, A, prior)
-    hist = ref.entropy_histogram(A, W, LO, H_BIN, B)
-    np.testing.assert_allclose(s["hist"], hist, rtol=1e-5, atol=1e-4)
-    np.testing.assert_allclose(s["hist"].sum(axis=(1, 2, 3)), 37 * 53, rtol=1e-5)
-    occupied = hist.sum(axis=3) > 0
-    assert np.all(s["row_flags"][0][occupied] == 1)
-    blurred = ref.entropy_blur(hist, entropy_blur_weights(prior.sigma_p, H_BIN))
-    np.testing.assert_allclose(s["blurred"], blurred, atol=1e-5 * blurred.max())
-    np.testing.assert_allclose(s["dots"], np.einsum("tijk,tijk->t", hist, blurred), rtol=1e-5)
+    m.entropy_term(be.asarray(A), be.asarray(prior.whiten.astype(np.float32)), lo, h_bin,
+                   be.asarray(taps), prior.sigma_p, scratch, gA, er, lam=lam)
+    out = {k: be.numpy(v).copy() for k, v in scratch._asdict().items()}
+    return be.numpy(er).copy(), be.numpy(gA).copy(), out
 
 
 def test_reference_blur_is_the_3d_convolution(rng):
@@ -80,19 +67,6 @@ def test_reference_blur_is_the_3d_convolution(rng):
                     if 0 <= i + a < 9 and 0 <= j + b < 9 and 0 <= k + c < 9:
                         direct[0, i + a, j + b, k + c] += taps[a + 2] * taps[b + 2] * taps[c + 2]
     np.testing.assert_allclose(out, direct)
-
-
-def test_term_matches_reference_and_accumulates(backend, rng, prior):
-    A = make_albedo(rng, 2, 37, 53)
-    gA0 = rng.normal(size=A.shape).astype(np.float32)
-    e0 = rng.normal(size=2 * 37)
-    er, gA, _ = run_term(backend, A, prior, gA0=gA0, e0=e0)
-    taps = entropy_blur_weights(prior.sigma_p, H_BIN)
-    r_er, r_gA = ref.entropy_term(A, prior.whiten.astype(np.float32), LO, H_BIN, taps, prior.sigma_p,
-                                  0.7, bins_for(H_BIN))
-    np.testing.assert_allclose(er, e0 + r_er, rtol=1e-6, atol=1e-6)
-    assert np.all(r_er.reshape(2, 37)[:, 1:] == 0), "the energy of frame t lives in row t*H"
-    np.testing.assert_allclose(gA - gA0, r_gA, rtol=1e-3, atol=1e-4 * np.abs(r_gA).max())
 
 
 @pytest.mark.parametrize("spread", [0.02, 0.1])
@@ -113,9 +87,9 @@ def test_histogram_energy_converges_to_the_direct_sum(rng, prior, spread):
     assert errors[0.03, False] < errors[0.06, False] < errors[0.12, False]
 
 
-def test_kernel_energy_matches_the_direct_sum(backend, rng, prior):
+def test_kernel_energy_matches_the_direct_sum(kernel_backend, rng, prior):
     A = make_albedo(rng, 2, 13, 17)
-    er, _, _ = run_term(backend, A, prior, h_bin=0.04, lam=1.0)
+    er, _, _ = run_term(kernel_backend, A, prior, h_bin=0.04, lam=1.0)
     e_direct, _ = ref.entropy_direct(A, prior.whiten, prior.sigma_p, 1.0)
     np.testing.assert_allclose(er, e_direct, atol=0.05 * (0.04 / prior.sigma_p) ** 2)
 
@@ -127,31 +101,8 @@ def test_gradient_is_exact_for_the_discrete_energy(rng, prior):
     lo, bins = tight_cube(A, prior.whiten, H_BIN)
     args = (prior.whiten, lo, H_BIN, taps, prior.sigma_p, 1.0, bins)
     _, gA = ref.entropy_term(A, *args)
-    eps = 1e-7
-    fd = np.zeros_like(A)
-    for idx in np.ndindex(A.shape):
-        ap, am = A.copy(), A.copy()
-        ap[idx] += eps
-        am[idx] -= eps
-        fd[idx] = (ref.entropy_term(ap, *args)[0].sum() - ref.entropy_term(am, *args)[0].sum()) / (2 * eps)
+    fd = finite_differences(lambda a: ref.entropy_term(a, *args)[0].sum(), A, h=1e-7)
     np.testing.assert_allclose(gA, fd, rtol=1e-4, atol=1e-5 * np.abs(fd).max())
-
-
-def test_kernel_gradient_matches_finite_differences(backend, rng, prior):
-    """Kernel gradient (float32) vs central differences of the float64 reference energy."""
-    A = make_albedo(rng, 2, 3, 4, spread=0.1, n_colours=2)
-    _, gA, _ = run_term(backend, A, prior, lam=1.0)
-    taps = entropy_blur_weights(prior.sigma_p, H_BIN)
-    lo, bins = tight_cube(A, prior.whiten, H_BIN)
-    args = (prior.whiten.astype(np.float32), lo, H_BIN, taps, prior.sigma_p, 1.0, bins)
-    A64, eps = A.astype(np.float64), 1e-6
-    fd = np.zeros_like(A64)
-    for idx in np.ndindex(A.shape):
-        ap, am = A64.copy(), A64.copy()
-        ap[idx] += eps
-        am[idx] -= eps
-        fd[idx] = (ref.entropy_term(ap, *args)[0].sum() - ref.entropy_term(am, *args)[0].sum()) / (2 * eps)
-    np.testing.assert_allclose(gA, fd, rtol=1e-3, atol=1e-3 * np.abs(fd).max())
 
 
 def test_descent_slope_matches_the_direct_sum(rng, prior):
@@ -166,22 +117,22 @@ def test_descent_slope_matches_the_direct_sum(rng, prior):
         assert abs(np.sum(g_hist * d) - np.sum(g_direct * d)) < tol * np.linalg.norm(g_direct)
 
 
-def test_lattice_shift_leaves_the_energy_unchanged(backend, rng, prior):
+def test_lattice_shift_leaves_the_energy_unchanged(kernel_backend, rng, prior):
     """Translating the whitened cloud by whole bins (inside the cube) changes nothing."""
     A = make_albedo(rng, 1, 11, 13)
     shift = np.linalg.solve(prior.whiten, H_BIN * np.array([3.0, -2.0, 5.0]))
-    er0, gA0, _ = run_term(backend, A, prior, lam=1.0)
-    er1, gA1, _ = run_term(backend, (A.astype(np.float64) + shift).astype(np.float32), prior, lam=1.0)
+    er0, gA0, _ = run_term(kernel_backend, A, prior, lam=1.0)
+    er1, gA1, _ = run_term(kernel_backend, (A.astype(np.float64) + shift).astype(np.float32), prior, lam=1.0)
     np.testing.assert_allclose(er1, er0, rtol=1e-4, atol=1e-6)
     np.testing.assert_allclose(gA1, gA0, rtol=1e-2, atol=1e-3 * np.abs(gA0).max())
 
 
-def test_outside_the_cube_is_clamped(backend, rng, prior):
+def test_outside_the_cube_is_clamped(kernel_backend, rng, prior):
     A = make_albedo(rng, 1, 6, 7)
     A[0, 0, 0] = np.linalg.solve(prior.whiten, [20.0, -20.0, 20.0])   # outside on every axis
     A[0, 0, 1] = np.linalg.solve(prior.whiten, [-20.0, 20.0, -20.0])
     A[0, 0, 2] = np.linalg.solve(prior.whiten, [30.0, 25.0, -30.0])
-    er, gA, s = run_term(backend, A, prior, lam=1.0)
+    er, gA, s = run_term(kernel_backend, A, prior, lam=1.0)
     assert np.isfinite(er).all() and np.isfinite(gA).all()
     np.testing.assert_array_equal(gA[0, 0, :3], 0.0)
     taps = entropy_blur_weights(prior.sigma_p, H_BIN)
@@ -191,71 +142,49 @@ def test_outside_the_cube_is_clamped(backend, rng, prior):
     np.testing.assert_allclose(gA, r_gA, rtol=1e-3, atol=1e-4 * np.abs(r_gA).max())
 
 
-def test_one_and_two_threads_identical(rng, prior):
-    be = get_backend("warp", "cpu")
-    A = make_albedo(rng, 3, 37, 53)
-    with threads(1):
-        one = run_term(be, A, prior)
-    with threads(2):
-        two = run_term(be, A, prior)
-    np.testing.assert_array_equal(one[0], two[0])
-    np.testing.assert_array_equal(one[1], two[1])
-    for key in ("hist", "blurred", "dots"):
-        np.testing.assert_array_equal(one[2][key], two[2][key])
-
-
-def test_warp_and_taichi_agree(rng, prior):
-    A = make_albedo(rng, 2, 37, 53)
-    w = run_term(get_backend("warp", "cpu"), A, prior)
-    t = run_term(get_backend("taichi", "cpu"), A, prior)
-    np.testing.assert_allclose(w[0], t[0], rtol=1e-6, atol=1e-6)
-    np.testing.assert_allclose(w[1], t[1], rtol=1e-3, atol=1e-4 * np.abs(w[1]).max())
-    np.testing.assert_allclose(w[2]["blurred"], t[2]["blurred"], atol=1e-5 * w[2]["blurred"].max())
-
-
-def test_bad_input_raises(backend, prior):
-    m = backend.energy_albedo_entropy
+def test_bad_input_raises(kernel_backend, prior):
+    m = kernel_backend.energy_albedo_entropy
     T, H, W, B = 1, 4, 5, 8
-    A = backend.asarray(np.zeros((T, H, W, 3), np.float32))
-    Wm = backend.asarray(prior.whiten.astype(np.float32))
-    taps = backend.asarray(entropy_blur_weights(prior.sigma_p, H_BIN))
-    s = m.allocate_entropy_scratch(T, B, device=backend.device)
-    gA = backend.zeros((T, H, W, 3))
-    er = backend.zeros((T * H,), np.float64)
+    A = kernel_backend.asarray(np.zeros((T, H, W, 3), np.float32))
+    Wm = kernel_backend.asarray(prior.whiten.astype(np.float32))
+    taps = kernel_backend.asarray(entropy_blur_weights(prior.sigma_p, H_BIN))
+    s = m.allocate_entropy_scratch(T, B, device=kernel_backend.device)
+    gA = kernel_backend.zeros((T, H, W, 3))
+    er = kernel_backend.zeros((T * H,), np.float64)
     with pytest.raises(ValueError, match="bins"):
-        m.allocate_entropy_scratch(T, 1, device=backend.device)
+        m.allocate_entropy_scratch(T, 1, device=kernel_backend.device)
     with pytest.raises(ValueError, match="n_frames"):
-        m.allocate_entropy_scratch(0, B, device=backend.device)
+        m.allocate_entropy_scratch(0, B, device=kernel_backend.device)
     with pytest.raises(TypeError, match="scratch must be an EntropyScratch"):
         m.entropy_term(A, Wm, LO, H_BIN, taps, prior.sigma_p, tuple(s), gA, er, lam=1.0)
     with pytest.raises(ValueError, match=r"A must have shape \(T, H, W, 3\)"):
-        m.entropy_histogram(backend.asarray(np.zeros((T, H, W, 4), np.float32)), Wm, LO, H_BIN,
+        m.entropy_histogram(kernel_backend.asarray(np.zeros((T, H, W, 4), np.float32)), Wm, LO, H_BIN,
                             s.hist, s.row_flags)
     with pytest.raises(TypeError, match="whiten must have dtype float32"):
-        m.entropy_histogram(A, backend.asarray(prior.whiten), LO, H_BIN, s.hist, s.row_flags)
+        m.entropy_histogram(A, kernel_backend.asarray(prior.whiten), LO, H_BIN, s.hist, s.row_flags)
     with pytest.raises(ValueError, match=r"\(T, B, B, B\)"):
-        m.entropy_histogram(A, Wm, LO, H_BIN, backend.zeros((T, B, B, B + 1)), s.row_flags)
+        m.entropy_histogram(A, Wm, LO, H_BIN, kernel_backend.zeros((T, B, B, B + 1)), s.row_flags)
     with pytest.raises(TypeError, match="row_flags must have dtype int32"):
-        m.entropy_histogram(A, Wm, LO, H_BIN, s.hist, backend.zeros((2, T, B, B)))
+        m.entropy_histogram(A, Wm, LO, H_BIN, s.hist, kernel_backend.zeros((2, T, B, B)))
     for bad in (0.0, -0.1, float("nan")):
         with pytest.raises(ValueError, match="h must be"):
             m.entropy_histogram(A, Wm, LO, bad, s.hist, s.row_flags)
     with pytest.raises(ValueError, match="lo must be"):
         m.entropy_histogram(A, Wm, float("inf"), H_BIN, s.hist, s.row_flags)
     with pytest.raises(ValueError, match="odd length"):
-        m.entropy_blur(s.hist, backend.asarray(np.ones(4, np.float32)), s.row_flags, s.tmp, s.blurred)
+        m.entropy_blur(s.hist, kernel_backend.asarray(np.ones(4, np.float32)), s.row_flags, s.tmp, s.blurred)
     with pytest.raises(TypeError, match="dots must have dtype float64"):
-        m.entropy_dot(s.hist, s.blurred, backend.zeros((T,)))
+        m.entropy_dot(s.hist, s.blurred, kernel_backend.zeros((T,)))
     with pytest.raises(ValueError, match="gA must have shape"):
-        m.entropy_slice_gradient(A, Wm, LO, H_BIN, s.blurred, s.dots, backend.zeros((T, H, W + 1, 3)), 1.0)
+        m.entropy_slice_gradient(A, Wm, LO, H_BIN, s.blurred, s.dots, kernel_backend.zeros((T, H, W + 1, 3)), 1.0)
     with pytest.raises(ValueError, match="not a multiple"):
-        m.entropy_energy(backend.zeros((2,), np.float64), prior.sigma_p, 20, er[:3], 1.0)
+        m.entropy_energy(kernel_backend.zeros((2,), np.float64), prior.sigma_p, 20, er[:3], 1.0)
     with pytest.raises(ValueError, match="n_pixels"):
         m.entropy_energy(s.dots, prior.sigma_p, 0, er, 1.0)
     with pytest.raises(ValueError, match="sigma_p"):
         m.entropy_energy(s.dots, 0.0, 20, er, 1.0)
     with pytest.raises(ValueError, match="energy_rows must have shape"):
-        m.entropy_term(A, Wm, LO, H_BIN, taps, prior.sigma_p, s, gA, backend.zeros((T * H + 1,), np.float64),
+        m.entropy_term(A, Wm, LO, H_BIN, taps, prior.sigma_p, s, gA, kernel_backend.zeros((T * H + 1,), np.float64),
                        lam=1.0)
     with pytest.raises(ValueError, match="lam"):
         m.entropy_term(A, Wm, LO, H_BIN, taps, prior.sigma_p, s, gA, er, lam=float("nan"))

@@ -1,13 +1,15 @@
-"""Albedo GSM smoothness (Eq. 11): value and gradient vs the NumPy reference,
-finite differences, borders, table extrapolation, threads, backends, bad input."""
+"""Albedo GSM smoothness (Eq. 11): the generic contract from the case table (value and gradient
+vs the NumPy reference, finite differences), plus window radii at tiny borders, each pair
+counted twice, table look-up and extrapolation, the shipped table's consistency, bad input."""
 import numpy as np
 import pytest
 
-from ivkernels.backends import get_backend
-from ivkernels.kernels.launch import threads
 from ivkernels.kernels.reference import energy_albedo_gsm as ref
 from ivkernels.kernels.workspace import Workspace
 from ivkernels.priors import load_albedo_prior, tabulate_gsm
+from kernel_harness import contract, pytest_generate_tests  # noqa: F401  (the kernel_backend fixture)
+
+TestContract = contract("energy_albedo_gsm")
 
 
 @pytest.fixture(scope="module")
@@ -36,31 +38,20 @@ def make_albedo(rng, t, h, w, patch=6, outliers=True):
     return A.astype(np.float32)
 
 
-def run(backend, A, arrays, r2_max, gA0=None, e0=None, **kw):
+def run(be, A, arrays, r2_max, gA0=None, e0=None, **kw):
     t, h, w, _ = A.shape
-    gA = backend.asarray(np.zeros(A.shape, np.float32) if gA0 is None else gA0.copy())
-    er = backend.asarray(np.zeros(t * h, np.float64) if e0 is None else e0.copy())
-    backend.energy_albedo_gsm.gsm_smoothness(backend.asarray(A), *(backend.asarray(a) for a in arrays),
+    gA = be.asarray(np.zeros(A.shape, np.float32) if gA0 is None else gA0.copy())
+    er = be.asarray(np.zeros(t * h, np.float64) if e0 is None else e0.copy())
+    be.energy_albedo_gsm.gsm_smoothness(be.asarray(A), *(be.asarray(a) for a in arrays),
                                              r2_max, gA, er, **kw)
-    return backend.numpy(er).copy(), backend.numpy(gA).copy()
-
-
-def test_matches_reference_and_accumulates(backend, rng, prior):
-    A = make_albedo(rng, 2, 37, 53)
-    arrays, r2_max = tables(prior)
-    gA0 = rng.normal(size=A.shape).astype(np.float32)
-    e0 = rng.normal(size=2 * 37)
-    er, gA = run(backend, A, arrays, r2_max, gA0, e0, lam=0.7)
-    r_er, r_gA = ref.gsm_smoothness(A, *arrays, r2_max, lam=0.7)
-    np.testing.assert_allclose(er, e0 + r_er, rtol=2e-5)
-    np.testing.assert_allclose(gA, gA0 + r_gA, rtol=1e-4, atol=1e-4 * np.abs(r_gA).max())
+    return be.numpy(er).copy(), be.numpy(gA).copy()
 
 
 @pytest.mark.parametrize("radius, shape", [(1, (1, 3, 4)), (2, (2, 1, 7)), (3, (1, 5, 2)), (2, (1, 1, 1))])
-def test_window_radius_and_borders(backend, rng, prior, radius, shape):
+def test_window_radius_and_borders(kernel_backend, rng, prior, radius, shape):
     A = make_albedo(rng, *shape, patch=1, outliers=False)
     arrays, r2_max = tables(prior)
-    er, gA = run(backend, A, arrays, r2_max, lam=1.3, radius=radius)
+    er, gA = run(kernel_backend, A, arrays, r2_max, lam=1.3, radius=radius)
     r_er, r_gA = ref.gsm_smoothness(A, *arrays, r2_max, lam=1.3, radius=radius)
     np.testing.assert_allclose(er, r_er, rtol=2e-5)
     np.testing.assert_allclose(gA, r_gA, rtol=1e-4, atol=1e-5 * max(1.0, np.abs(r_gA).max()))
@@ -81,10 +72,10 @@ def test_reference_counts_each_pair_twice(prior):
     np.testing.assert_allclose(g, prior.gsm_cost(r2)[0], rtol=1e-3)
 
 
-def test_constant_albedo_costs_nothing(backend, prior):
+def test_constant_albedo_costs_nothing(kernel_backend, prior):
     A = np.full((2, 5, 7, 3), -0.7, np.float32)
     arrays, r2_max = tables(prior)
-    er, gA = run(backend, A, arrays, r2_max, lam=3.0)
+    er, gA = run(kernel_backend, A, arrays, r2_max, lam=3.0)
     assert not er.any() and not gA.any()
 
 
@@ -111,23 +102,6 @@ def test_lookup_interpolates_linearly_in_r2(prior):
     np.testing.assert_allclose(dg, 3.0)
 
 
-def test_kernel_gradient_matches_finite_differences(backend, rng, prior):
-    """Kernel gradient vs central differences of the float64 reference energy (dense table)."""
-    A = make_albedo(rng, 1, 5, 6, patch=3, outliers=False)
-    arrays, r2_max = tables(prior, n=2 ** 17)
-    lam = 0.5
-    _, gA = run(backend, A, arrays, r2_max, lam=lam)
-    A64, h = A.astype(np.float64), 1e-6
-    fd = np.zeros_like(A64)
-    for idx in np.ndindex(A.shape):
-        ap, am = A64.copy(), A64.copy()
-        ap[idx] += h
-        am[idx] -= h
-        fd[idx] = (ref.gsm_smoothness(ap, *arrays, r2_max, lam)[0].sum()
-                   - ref.gsm_smoothness(am, *arrays, r2_max, lam)[0].sum()) / (2 * h)
-    np.testing.assert_allclose(gA, fd, rtol=2e-3, atol=2e-3 * np.abs(fd).max())
-
-
 def test_shipped_table_gradient_is_consistent(rng, prior):
     """With the shipped 8192-point table, the directional derivative of the
     interpolated energy matches the interpolated g' within 1%."""
@@ -142,86 +116,32 @@ def test_shipped_table_gradient_is_consistent(rng, prior):
         assert abs(fd - np.sum(gA * d)) <= 1e-2 * np.linalg.norm(gA) * np.linalg.norm(d)
 
 
-def test_one_and_two_threads_identical(rng, prior):
-    be = get_backend("warp", "cpu")
-    A = make_albedo(rng, 3, 37, 53)
+def test_bad_input_raises(kernel_backend, prior):
     arrays, r2_max = tables(prior)
-    with threads(1):
-        one = run(be, A, arrays, r2_max, lam=1.0)
-    with threads(2):
-        two = run(be, A, arrays, r2_max, lam=1.0)
-    for a, b in zip(one, two):
-        np.testing.assert_array_equal(a, b)
-
-
-def test_warp_and_taichi_agree(rng, prior):
-    A = make_albedo(rng, 2, 37, 53)
-    arrays, r2_max = tables(prior)
-    w = run(get_backend("warp", "cpu"), A, arrays, r2_max, lam=1.0)
-    t = run(get_backend("taichi", "cpu"), A, arrays, r2_max, lam=1.0)
-    np.testing.assert_allclose(w[0], t[0], rtol=1e-5)
-    np.testing.assert_allclose(w[1], t[1], rtol=1e-4, atol=1e-5 * np.abs(w[1]).max())
-
-
-def test_strided_input(rng, prior):
-    """A non-contiguous view: Warp reads it through its strides, Taichi refuses it clearly."""
-    big = make_albedo(rng, 1, 9, 13)
-    A = big[:, :, 2:-2]
-    arrays, r2_max = tables(prior)
-    r_er, r_gA = ref.gsm_smoothness(A, *arrays, r2_max, lam=1.0)
-    be = get_backend("warp", "cpu")
-    view = be.asarray(big)[:, :, 2:-2]
-    gA = be.zeros(A.shape)
-    er = be.zeros((9,), np.float64)
-    be.energy_albedo_gsm.gsm_smoothness(view, *(be.asarray(a) for a in arrays), r2_max, gA, er, lam=1.0)
-    np.testing.assert_allclose(be.numpy(er), r_er, rtol=2e-5)
-    tb = get_backend("taichi", "cpu")
-    with pytest.raises(ValueError, match="C-contiguous"):
-        tb.energy_albedo_gsm.gsm_smoothness(A, *arrays, r2_max, np.zeros(A.shape, np.float32),
-                                            np.zeros(9), lam=1.0)
-
-
-def test_workspace_reused_across_shapes_gives_the_same_result(backend, rng, prior):
-    arrays, r2_max = tables(prior)
-    a, b = make_albedo(rng, 2, 13, 17), make_albedo(rng, 1, 9, 20)
-    fresh = [run(backend, x, arrays, r2_max, lam=0.7) for x in (a, b)]
-    ws = Workspace()
-    for _ in range(2):          # the second round finds the buffers left by the first
-        for x, want in zip((a, b), fresh):
-            for got, w in zip(run(backend, x, arrays, r2_max, lam=0.7, workspace=ws), want):
-                np.testing.assert_array_equal(got, w)
-    # whitened, pairs, forward sums per image shape; the cell coefficients once
-    assert len(ws) == 7
-    ws.clear()
-    assert ws.nbytes == 0
-
-
-def test_bad_input_raises(backend, prior):
-    arrays, r2_max = tables(prior)
-    P, tg, tdg = (backend.asarray(a) for a in arrays)
-    A = backend.asarray(np.zeros((1, 4, 5, 3), np.float32))
-    gA = backend.zeros((1, 4, 5, 3))
-    er = backend.zeros((4,), np.float64)
-    f = backend.energy_albedo_gsm.gsm_smoothness
+    P, tg, tdg = (kernel_backend.asarray(a) for a in arrays)
+    A = kernel_backend.asarray(np.zeros((1, 4, 5, 3), np.float32))
+    gA = kernel_backend.zeros((1, 4, 5, 3))
+    er = kernel_backend.zeros((4,), np.float64)
+    f = kernel_backend.energy_albedo_gsm.gsm_smoothness
     with pytest.raises(TypeError, match="A must have dtype float32"):
-        f(backend.asarray(np.zeros((1, 4, 5, 3))), P, tg, tdg, r2_max, gA, er, lam=1.0)
+        f(kernel_backend.asarray(np.zeros((1, 4, 5, 3))), P, tg, tdg, r2_max, gA, er, lam=1.0)
     with pytest.raises(TypeError, match="A must be"):
         f(np.zeros((1, 4, 5, 3)).tolist(), P, tg, tdg, r2_max, gA, er, lam=1.0)
     with pytest.raises(ValueError, match=r"A must have shape \(T, H, W, 3\)"):
-        f(backend.asarray(np.zeros((1, 4, 5, 2), np.float32)), P, tg, tdg, r2_max, gA, er, lam=1.0)
+        f(kernel_backend.asarray(np.zeros((1, 4, 5, 2), np.float32)), P, tg, tdg, r2_max, gA, er, lam=1.0)
     with pytest.raises(ValueError, match="sigma_inv must have shape"):
-        f(A, backend.asarray(np.eye(2, dtype=np.float32)), tg, tdg, r2_max, gA, er, lam=1.0)
+        f(A, kernel_backend.asarray(np.eye(2, dtype=np.float32)), tg, tdg, r2_max, gA, er, lam=1.0)
     with pytest.raises(ValueError, match="table_dg must have shape"):
-        f(A, P, tg, backend.asarray(arrays[2][:-1].copy()), r2_max, gA, er, lam=1.0)
+        f(A, P, tg, kernel_backend.asarray(arrays[2][:-1].copy()), r2_max, gA, er, lam=1.0)
     with pytest.raises(ValueError, match="at least 2 entries"):
-        one = backend.asarray(np.zeros(1, np.float32))
+        one = kernel_backend.asarray(np.zeros(1, np.float32))
         f(A, P, one, one, r2_max, gA, er, lam=1.0)
     with pytest.raises(ValueError, match="gA must have shape"):
-        f(A, P, tg, tdg, r2_max, backend.zeros((1, 4, 6, 3)), er, lam=1.0)
+        f(A, P, tg, tdg, r2_max, kernel_backend.zeros((1, 4, 6, 3)), er, lam=1.0)
     with pytest.raises(TypeError, match="energy_rows must have dtype float64"):
-        f(A, P, tg, tdg, r2_max, gA, backend.zeros((4,)), lam=1.0)
+        f(A, P, tg, tdg, r2_max, gA, kernel_backend.zeros((4,)), lam=1.0)
     with pytest.raises(ValueError, match="energy_rows must have shape"):
-        f(A, P, tg, tdg, r2_max, gA, backend.zeros((5,), np.float64), lam=1.0)
+        f(A, P, tg, tdg, r2_max, gA, kernel_backend.zeros((5,), np.float64), lam=1.0)
     for bad in (0.0, -1.0, float("nan"), float("inf")):
         with pytest.raises(ValueError, match="r2_max"):
             f(A, P, tg, tdg, bad, gA, er, lam=1.0)
@@ -230,3 +150,18 @@ def test_bad_input_raises(backend, prior):
     for bad in (0, -2, 2.0, True):
         with pytest.raises(ValueError, match="radius"):
             f(A, P, tg, tdg, r2_max, gA, er, lam=1.0, radius=bad)
+
+
+def test_workspace_reused_across_shapes_gives_the_same_result(kernel_backend, rng, prior):
+    arrays, r2_max = tables(prior)
+    a, b = make_albedo(rng, 2, 13, 17), make_albedo(rng, 1, 9, 20)
+    fresh = [run(kernel_backend, x, arrays, r2_max, lam=0.7) for x in (a, b)]
+    ws = Workspace()
+    for _ in range(2):          # the second round finds the buffers left by the first
+        for x, want in zip((a, b), fresh):
+            for got, w in zip(run(kernel_backend, x, arrays, r2_max, lam=0.7, workspace=ws), want):
+                np.testing.assert_array_equal(got, w)
+    # whitened, pairs, forward sums per image shape; the cell coefficients once
+    assert len(ws) == 7
+    ws.clear()
+    assert ws.nbytes == 0

@@ -1,31 +1,33 @@
-"""Median filters: 5x5 median, Classic+NL's weighted flow median and the
-shading S~ update (Eq. 9, 10, 13) vs brute-force NumPy, Li & Osher's formula
-vs a grid search, surf at a motion boundary, threads, backends, bad input."""
+"""Median filters: the generic contract from the case table (5x5 median, Classic+NL's weighted
+flow median and the shading S~ update of Eq. 9, 10, 13 against brute-force NumPy), plus the
+sorting network, Li & Osher's formula vs a grid search, surf at a motion boundary, untouched
+pixels, a workspace reused across shapes, bad input."""
 import numpy as np
 import pytest
 
-from ivkernels.backends import get_backend
-from ivkernels.kernels.launch import threads
 from ivkernels.kernels.reference import median as ref
 from ivkernels.kernels.workspace import Workspace
+from kernel_harness import contract, pytest_generate_tests  # noqa: F401  (the kernel_backend fixture)
+
+TestContract = contract("median")
 
 
-def median5x5(backend, src):
-    out = backend.empty(src.shape)
-    backend.median.median5x5(backend.asarray(src), out)
-    return backend.numpy(out).copy()
+def median5x5(be, src):
+    out = be.empty(src.shape)
+    be.median.median5x5(be.asarray(src), out)
+    return be.numpy(out).copy()
 
 
-def wmedian_shading(backend, S, flow, w_bnd, **kw):
-    out = backend.empty(S.shape)
-    backend.median.weighted_median_shading(*(backend.asarray(a) for a in (S, flow, w_bnd)), out, **kw)
-    return backend.numpy(out).copy()
+def wmedian_shading(be, S, flow, w_bnd, **kw):
+    out = be.empty(S.shape)
+    be.median.weighted_median_shading(*(be.asarray(a) for a in (S, flow, w_bnd)), out, **kw)
+    return be.numpy(out).copy()
 
 
-def wmedian_flow(backend, flow, lab, occ, mask, **kw):
-    out = backend.empty(flow.shape)
-    backend.median.weighted_median_flow(*(backend.asarray(a) for a in (flow, lab, occ, mask)), out, **kw)
-    return backend.numpy(out).copy()
+def wmedian_flow(be, flow, lab, occ, mask, **kw):
+    out = be.empty(flow.shape)
+    be.median.weighted_median_flow(*(be.asarray(a) for a in (flow, lab, occ, mask)), out, **kw)
+    return be.numpy(out).copy()
 
 
 def two_region_flow(rng, t, h, w, noise=0.05, radius=None):
@@ -55,14 +57,6 @@ def flow_inputs(rng, t, h, w):
     return flow, lab, occ, mask
 
 
-# ----------------------------------------------------------------------------- 5x5 median
-
-def test_median5x5_matches_reference(backend, rng):
-    src = rng.normal(size=(2, 37, 53, 2)).astype(np.float32)
-    src[1] = np.round(src[1])  # many ties
-    np.testing.assert_array_equal(median5x5(backend, src), ref.median5x5(src).astype(np.float32))
-
-
 @pytest.mark.parametrize("n", [1, 3, 9, 25, 49])
 def test_median_network_selects_the_median(rng, n):
     from ivkernels.kernels.warp.median import median_network
@@ -77,10 +71,10 @@ def test_median_network_selects_the_median(rng, n):
         assert w[n // 2] == np.median(v)
 
 
-def test_median5x5_tiny_images(backend, rng):
+def test_median5x5_tiny_images(kernel_backend, rng):
     for h, w in ((1, 1), (2, 3), (4, 1)):
         src = rng.normal(size=(1, h, w, 1)).astype(np.float32)
-        np.testing.assert_array_equal(median5x5(backend, src), ref.median5x5(src).astype(np.float32))
+        np.testing.assert_array_equal(median5x5(kernel_backend, src), ref.median5x5(src).astype(np.float32))
 
 
 # ----------------------------------------------------------------------------- selection / Li & Osher
@@ -111,7 +105,7 @@ def test_li_osher_reference_matches_grid_search(rng, lam):
 
 
 @pytest.mark.parametrize("lam", [0.05, 5.0, 50.0])
-def test_shading_li_osher_kernel_matches_grid_search(backend, rng, lam):
+def test_shading_li_osher_kernel_matches_grid_search(kernel_backend, rng, lam):
     """Constant flow (surf = 1 everywhere): every masked pixel is the exact minimiser."""
     S = rng.uniform(0, 1, (1, 9, 11)).astype(np.float32)
     flow = np.zeros((1, 9, 11, 2), np.float32)
@@ -119,7 +113,7 @@ def test_shading_li_osher_kernel_matches_grid_search(backend, rng, lam):
     pix = [(0, 0), (4, 5), (8, 3), (2, 10)]
     for y, x in pix:
         w_bnd[0, y, x] = 1
-    out = wmedian_shading(backend, S, flow, w_bnd, radius=3, sigma_s=2.0, lam=lam)
+    out = wmedian_shading(kernel_backend, S, flow, w_bnd, radius=3, sigma_s=2.0, lam=lam)
     for y, x in pix:
         wts = ref.shading_weights(flow[0], y, x, 3, 2.0).ravel()
         vals = ref._window(S[0], y, x, 3).ravel()
@@ -131,26 +125,14 @@ def test_shading_li_osher_kernel_matches_grid_search(backend, rng, lam):
     np.testing.assert_array_equal(out[untouched], S[untouched])
 
 
-# ----------------------------------------------------------------------------- shading median
-
-@pytest.mark.parametrize("radius,lam", [(3, 0.0), (3, 0.001), (7, 0.001), (7, 2.0)])
-def test_shading_matches_reference(backend, rng, radius, lam):
-    S, flow, w_bnd = shading_inputs(rng, 3, 13, 17, 2)  # radius 7: every window cut by the border
-    out = wmedian_shading(backend, S, flow, w_bnd, radius=radius, lam=lam)
-    expected = ref.weighted_median_shading(S, flow, w_bnd, radius=radius, lam=lam)
-    np.testing.assert_allclose(out, expected, rtol=0, atol=1e-5)
-    np.testing.assert_array_equal(out[2], S[2])  # no flow for the last frame
-    np.testing.assert_array_equal(out[:2][w_bnd == 0], S[:2][w_bnd == 0])
-
-
 @pytest.mark.parametrize("lam", [0.0, 0.001, 3.0])
-def test_shading_only_centre_weight_keeps_value(backend, rng, lam):
+def test_shading_only_centre_weight_keeps_value(kernel_backend, rng, lam):
     S, flow, _ = shading_inputs(rng, 2, 9, 11, 2)
-    out = wmedian_shading(backend, S, flow, np.ones((2, 9, 11), np.float32), radius=4, sigma_s=1e-3, lam=lam)
+    out = wmedian_shading(kernel_backend, S, flow, np.ones((2, 9, 11), np.float32), radius=4, sigma_s=1e-3, lam=lam)
     np.testing.assert_array_equal(out, S)
 
 
-def test_shading_surf_stops_at_motion_boundary(backend, rng):
+def test_shading_surf_stops_at_motion_boundary(kernel_backend, rng):
     """A bright disc moving over a static dark background, w_bnd = 1 everywhere.
 
     With surf the window of every pixel keeps only its own surface, so the
@@ -164,9 +146,9 @@ def test_shading_surf_stops_at_motion_boundary(backend, rng):
     flow, disc = two_region_flow(rng, 1, h, w, noise=0.1, radius=5.5)
     S = np.where(disc, 1.0, 0.0)[None].astype(np.float32)
     w_bnd = np.ones((1, h, w), np.float32)
-    kept = wmedian_shading(backend, S, flow, w_bnd, lam=0.0)
+    kept = wmedian_shading(kernel_backend, S, flow, w_bnd, lam=0.0)
     np.testing.assert_array_equal(kept, S)
-    eroded = wmedian_shading(backend, S, np.zeros_like(flow), w_bnd, lam=0.0)
+    eroded = wmedian_shading(kernel_backend, S, np.zeros_like(flow), w_bnd, lam=0.0)
     assert (eroded[0][disc] == 0).all()
     # the weights of a background pixel next to the disc vanish on the disc side
     ys, xs = np.nonzero(disc)
@@ -176,80 +158,42 @@ def test_shading_surf_stops_at_motion_boundary(backend, rng):
     assert wts[win_disc].max() == 0 and wts[~win_disc].min() > 0
 
 
-def test_workspace_reused_across_shapes_gives_the_same_result(backend, rng):
+def test_workspace_reused_across_shapes_gives_the_same_result(kernel_backend, rng):
     shading = [shading_inputs(rng, 2, 9, 11, 1), shading_inputs(rng, 1, 7, 13, 1)]
     flows = [flow_inputs(rng, 2, 9, 11), flow_inputs(rng, 1, 7, 13)]
-    fresh = [(wmedian_shading(backend, *s, radius=2, lam=0.1), wmedian_flow(backend, *f, radius=3))
+    fresh = [(wmedian_shading(kernel_backend, *s, radius=2, lam=0.1), wmedian_flow(kernel_backend, *f, radius=3))
              for s, f in zip(shading, flows)]
     ws = Workspace()
     for _ in range(2):          # the second round finds the window rows left by the first
         for s, f, (want_s, want_f) in zip(shading, flows, fresh):
-            np.testing.assert_array_equal(wmedian_shading(backend, *s, radius=2, lam=0.1, workspace=ws), want_s)
-            np.testing.assert_array_equal(wmedian_flow(backend, *f, radius=3, workspace=ws), want_f)
-    m = backend.median
+            np.testing.assert_array_equal(wmedian_shading(kernel_backend, *s, radius=2, lam=0.1, workspace=ws),
+                                          want_s)
+            np.testing.assert_array_equal(wmedian_flow(kernel_backend, *f, radius=3, workspace=ws), want_f)
+    m = kernel_backend.median
     shapes = [m.shading_scratch_shape((2, 9, 11), 2), m.shading_scratch_shape((1, 7, 13), 2),
               m.flow_scratch_shape((2, 9, 11, 2), 3), m.flow_scratch_shape((1, 7, 13, 2), 3)]
     assert len(ws) == 4 and ws.nbytes == 4 * sum(int(np.prod(shape)) for shape in shapes)
 
 
-# ----------------------------------------------------------------------------- flow median
-
-@pytest.mark.parametrize("radius", [2, 7])
-def test_flow_matches_reference(backend, rng, radius):
-    flow, lab, occ, mask = flow_inputs(rng, 2, 13, 17)
-    out = wmedian_flow(backend, flow, lab, occ, mask, radius=radius, sigma_i=10.0)
-    expected = ref.weighted_median_flow(flow, lab, occ, mask, radius=radius, sigma_i=10.0)
-    np.testing.assert_array_equal(out, expected.astype(np.float32))
-    assert (out != flow).any()
-
-
-def test_flow_only_centre_weight_keeps_flow(backend, rng):
+def test_flow_only_centre_weight_keeps_flow(kernel_backend, rng):
     flow, lab, occ, _ = flow_inputs(rng, 1, 9, 11)
     ones = np.ones((1, 9, 11), np.float32)
     # colour weights underflow to 0 except at the centre (lab distance 0)
-    np.testing.assert_array_equal(wmedian_flow(backend, flow, lab, ones, ones, radius=3, sigma_i=1e-3), flow)
+    np.testing.assert_array_equal(wmedian_flow(kernel_backend, flow, lab, ones, ones, radius=3, sigma_i=1e-3), flow)
     # no weight at all (occ = 0 everywhere, centre included): the flow is kept
-    np.testing.assert_array_equal(wmedian_flow(backend, flow, lab, 0 * ones, ones, radius=3), flow)
+    np.testing.assert_array_equal(wmedian_flow(kernel_backend, flow, lab, 0 * ones, ones, radius=3), flow)
 
 
-# ----------------------------------------------------------------------------- threads, backends, errors
-
-def test_one_and_two_threads_identical(rng):
-    be = get_backend("warp", "cpu")
-    S, flow, w_bnd = shading_inputs(rng, 3, 23, 29, 2)
-    fl, lab, occ, mask = flow_inputs(rng, 2, 23, 29)
-    src = rng.normal(size=(2, 23, 29, 2)).astype(np.float32)
-    results = []
-    for n in (1, 2):
-        with threads(n):
-            results.append((median5x5(be, src), wmedian_shading(be, S, flow, w_bnd, lam=0.01),
-                            wmedian_flow(be, fl, lab, occ, mask)))
-    for a, b in zip(*results):
-        np.testing.assert_array_equal(a, b)
-
-
-def test_warp_matches_taichi(rng):
-    S, flow, w_bnd = shading_inputs(rng, 2, 15, 19, 1)
-    fl, lab, occ, mask = flow_inputs(rng, 1, 15, 19)
-    src = rng.normal(size=(2, 15, 19, 2)).astype(np.float32)
-    res = []
-    for be in (get_backend("warp"), get_backend("taichi")):
-        res.append((median5x5(be, src), wmedian_shading(be, S, flow, w_bnd, radius=4, lam=0.5),
-                    wmedian_flow(be, fl, lab, occ, mask, radius=4)))
-    for a, b in zip(*res):
-        np.testing.assert_allclose(a, b, rtol=0, atol=1e-5)
-
-
-def test_bad_input_raises(backend, rng):
-    S, flow, w_bnd = (backend.asarray(a) for a in shading_inputs(rng, 2, 5, 6, 1))
-    out = backend.empty((2, 5, 6))
-    m = backend.median
+def test_bad_input_raises(kernel_backend, rng):
+    S, flow, w_bnd = (kernel_backend.asarray(a) for a in shading_inputs(rng, 2, 5, 6, 1))
+    out = kernel_backend.empty((2, 5, 6))
+    m = kernel_backend.median
     with pytest.raises(ValueError, match="out must have shape"):
-        m.median5x5(backend.asarray(np.zeros((1, 5, 6, 2), np.float32)), backend.empty((1, 5, 6, 1)))
+        m.median5x5(kernel_backend.asarray(np.zeros((1, 5, 6, 2), np.float32)), kernel_backend.empty((1, 5, 6, 1)))
     with pytest.raises(ValueError, match="expected T' <= T"):
-        m.weighted_median_shading(S, backend.zeros((3, 5, 6, 2)), backend.zeros((3, 5, 6)), out)
+        m.weighted_median_shading(S, kernel_backend.zeros((3, 5, 6, 2)), kernel_backend.zeros((3, 5, 6)), out)
     with pytest.raises(ValueError, match="w_bnd must have shape"):
-        m.weighted_median_shading(S, flow, backend.zeros((2, 5, 6)), out)
+        m.weighted_median_shading(S, flow, kernel_backend.zeros((2, 5, 6)), out)
     with pytest.raises(ValueError, match="radius"):
         m.weighted_median_shading(S, flow, w_bnd, out, radius=-1)
     with pytest.raises(ValueError, match="sigma_s"):
@@ -257,12 +201,12 @@ def test_bad_input_raises(backend, rng):
     with pytest.raises(ValueError, match="lam"):
         m.weighted_median_shading(S, flow, w_bnd, out, lam=-1.0)
     with pytest.raises(TypeError, match="workspace must be"):
-        m.weighted_median_shading(S, flow, w_bnd, out, workspace=backend.empty((10, 3)))
+        m.weighted_median_shading(S, flow, w_bnd, out, workspace=kernel_backend.empty((10, 3)))
     with pytest.raises(TypeError, match="S must have dtype float32"):
-        m.weighted_median_shading(backend.zeros((2, 5, 6), np.float64), flow, w_bnd, out)
-    fl = backend.zeros((1, 5, 6, 2))
+        m.weighted_median_shading(kernel_backend.zeros((2, 5, 6), np.float64), flow, w_bnd, out)
+    fl = kernel_backend.zeros((1, 5, 6, 2))
     with pytest.raises(ValueError, match="lab must have shape"):
-        m.weighted_median_flow(fl, backend.zeros((1, 5, 6, 1)), w_bnd, w_bnd, backend.empty((1, 5, 6, 2)))
+        m.weighted_median_flow(fl, kernel_backend.zeros((1, 5, 6, 1)), w_bnd, w_bnd, kernel_backend.empty((1, 5, 6, 2)))
     with pytest.raises(ValueError, match="sigma_i"):
-        m.weighted_median_flow(fl, backend.zeros((1, 5, 6, 3)), w_bnd, w_bnd, backend.empty((1, 5, 6, 2)),
+        m.weighted_median_flow(fl, kernel_backend.zeros((1, 5, 6, 3)), w_bnd, w_bnd, kernel_backend.empty((1, 5, 6, 2)),
                                sigma_i=-1.0)

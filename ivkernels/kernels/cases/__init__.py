@@ -132,6 +132,7 @@ class Case:
     gradients : :class:`Gradient` checks of an energy's gradient.
     contiguous : inputs every backend requires C-contiguous (refused otherwise);
         any other array input may be a strided view.
+    min_frames : the fewest frames ``T`` the function takes (fewer: a ValueError).
     """
 
     family: str
@@ -151,6 +152,7 @@ class Case:
     in_place: tuple = ()
     gradients: tuple = ()
     contiguous: tuple = ()
+    min_frames: int = 1
 
     @property
     def key(self) -> str:

@@ -57,9 +57,12 @@ def _setting(rng, T, H, W, spread=0.05, n_colours=4):
 
 def _with_reference_cube(v):
     """``v`` plus the reference histogram, its row flags, blur and per-frame dots (float32 / float64)."""
-    hist = ref.entropy_histogram(v["A"], v["whiten"], v["lo"], v["h"], v["bins"])
-    blurred = ref.entropy_blur(hist.astype(F32), v["taps"])
-    T, B = hist.shape[:2]
+    T, B = v["A"].shape[0], v["bins"]
+    if v["A"].size:
+        hist = ref.entropy_histogram(v["A"], v["whiten"], v["lo"], v["h"], B)
+        blurred = ref.entropy_blur(hist.astype(F32), v["taps"])
+    else:
+        hist = blurred = np.zeros((T, B, B, B))
     flags = np.zeros((2, T, B, B), np.int32)
     flags[0] = hist.sum(axis=3) > 0
     return {**v, "hist": hist.astype(F32), "row_flags": flags, "blurred": blurred.astype(F32),

@@ -122,8 +122,8 @@ def _smoothness_weights(quad_frac):
     def make(rng, T, H, W):
         s = brightness_system(rng, T, H, W)
         flow, du = s["flow"], s["du"]
-        flow[0, H // 2, W // 4: W // 4 + 4] = 1.25               # exact zero differences reach the eps floor
-        du[0, H // 2, W // 4: W // 4 + 4] = 0.0
+        flow[:1, H // 2: H // 2 + 1, W // 4: W // 4 + 4] = 1.25    # exact zero differences reach the eps floor
+        du[:1, H // 2: H // 2 + 1, W // 4: W // 4 + 4] = 0.0
         return {"flow": flow, "du": du, "out": nans((T, H, W, 4)), "a": 0.45, "eps": 1e-3,
                 "quad_frac": quad_frac, "quad_weight": 2.0}
 
@@ -170,7 +170,8 @@ def _sobel_components(rng, T, H, W):
 
 
 def _thin_edges(rng, T, H, W):
-    sobel, energy = ref.flow_sobel_components(normal(rng, (T, H, W, 2)))
+    f = normal(rng, (T, H, W, 2))
+    sobel, energy = ref.flow_sobel_components(f) if f.size else (np.zeros((T, H, W, 4)), np.zeros((T * H, 2)))
     cutoff = (energy.reshape(T, H, 2).sum(1) / max(H * W, 1)).astype(F32)
     return {"sobel": sobel.astype(F32), "cutoff": cutoff, "out": nans((T, H, W))}
 

@@ -10,7 +10,7 @@ def sampling_flow(rng, T, H, W):
     """Fractional flow (T, H, W, 2), 5% of vectors far outside, the top row sampling above
     the image and the right column beyond the border."""
     f = flow(rng, T, H, W, scale=4.0, far=0.05)
-    f[:, 0, :, 1] = -0.5
+    f[:, :1, :, 1] = -0.5
     f[:, :, -1:, 0] = 0.75
     return f
 

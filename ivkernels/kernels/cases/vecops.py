@@ -76,11 +76,13 @@ CASES = (
          tol=EXACT),
     Case("vecops", "dots", _basis(ROWS), ("basis", "x", "rows"), (),
          lambda v: {"return": ref.dots(v["basis"], v["x"], v["rows"])}, variant="rows", returns=True,
-         tol=Tol(1e-12, 1e-9)),
+         tol=Tol(1e-12, 1e-9), contiguous=("basis",)),
     Case("vecops", "dots", _basis(None), ("basis", "x"), (),
-         lambda v: {"return": ref.dots(v["basis"], v["x"])}, variant="all", returns=True, tol=Tol(1e-12, 1e-9)),
+         lambda v: {"return": ref.dots(v["basis"], v["x"])}, variant="all", returns=True, tol=Tol(1e-12, 1e-9),
+         contiguous=("basis",)),
     Case("vecops", "combine", _combine, ("out", "basis", "rows", "coeffs"), ("out",),
-         lambda v: {"out": ref.combine(v["basis"], v["rows"], v["coeffs"])}, tol=Tol(1e-5, 1e-5)),
+         lambda v: {"out": ref.combine(v["basis"], v["rows"], v["coeffs"])}, tol=Tol(1e-5, 1e-5),
+         contiguous=("basis",)),
 )
 
 
