@@ -56,6 +56,9 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--flow", default=None,
                    help="flow method (classic_nl_fast, classic_nl, dis, farneback) or a folder of "
                         ".flo files, one per consecutive pair")
+    d.add_argument("--flow-passes", type=int, default=None,
+                   help="passes of flow and intrinsic video estimated together when the flow is "
+                        "estimated (default 2; 1: flow on the input only)")
     d.add_argument("--no-temporal", action="store_true",
                    help="drop the temporal terms and motion weights (the 'IV w/o flow' ablation)")
     d.add_argument("--start", type=int, default=0, help="first frame index")
@@ -161,6 +164,7 @@ def run_decompose(args) -> Path:
     import imageio.v2 as imageio
 
     from ivkernels import iter_decompose
+    from ivkernels.decompose import DEFAULT_FLOW_PASSES
     from ivkernels.io import OutputFolder, probe_frames, read_frames, write_png_sequence
     from ivkernels.validation import check_memory, decompose_nbytes
     from ivkernels.viz import albedo_to_srgb8, contact_sheet, flow_to_color, gray_to_rgb8, \
@@ -186,7 +190,8 @@ def run_decompose(args) -> Path:
     # validates frames, flow, params, backend and device now, before the output is opened
     windows = iter_decompose(frames, flow=flow, temporal=not args.no_temporal, backend=args.backend,
                              device=args.device, params=params, progress=not args.quiet,
-                             threads=args.threads)
+                             threads=args.threads,
+                             flow_passes=DEFAULT_FLOW_PASSES if args.flow_passes is None else args.flow_passes)
 
     with target as tmp:
         shapes = {"albedo": (T, H, W, 3), "shading": (T, H, W)}

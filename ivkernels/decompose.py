@@ -18,6 +18,9 @@ from ivkernels.params import Params
 
 #: Flow method used when ``flow=None``.
 DEFAULT_FLOW_METHOD = "classic_nl_fast"
+#: Passes of flow and intrinsic video estimated together when the flow is
+#: estimated (``flow=None`` or a method name); see :func:`decompose`.
+DEFAULT_FLOW_PASSES = 2
 #: Frame pairs given to the flow method per call (bounds its working memory).
 FLOW_PAIRS_PER_CALL = 7
 
@@ -107,7 +110,8 @@ def _as_flow(flow, n_frames: int, height: int, width: int) -> np.ndarray:
 
 def iter_decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
                    device: str = "cpu", params: Params | None = None,
-                   progress: bool = False, threads: int | None = None) -> Iterator[WindowResult]:
+                   progress: bool = False, threads: int | None = None,
+                   flow_passes: int = DEFAULT_FLOW_PASSES) -> Iterator[WindowResult]:
     """Decompose window by window; see :func:`decompose` for the arguments.
 
     Yields :class:`WindowResult` objects in order; memory stays bounded by one
@@ -121,7 +125,7 @@ def iter_decompose(frames, flow=None, temporal: bool = True, backend: str = "war
     from ivkernels.kernels.thread_count import iterate_with_threads
 
     job = _Decomposer(frames, flow, temporal, backend, device, params, progress, threads,
-                      keep_outputs=False)
+                      keep_outputs=False, flow_passes=flow_passes)
     return iterate_with_threads(job.threads, job.windows())
 
 
@@ -129,7 +133,7 @@ class _Decomposer:
     """Host-side schedule of a decomposition: flow, maps, then the window solves."""
 
     def __init__(self, frames, flow, temporal, backend, device, params, progress, threads, *,
-                 keep_outputs: bool = True):
+                 keep_outputs: bool = True, flow_passes: int = 1):
         from ivkernels import validation as v
 
         # cheap checks first, then shapes, then memory, and only then values and allocations
@@ -141,6 +145,9 @@ class _Decomposer:
             raise TypeError(f"temporal must be True or False, got {temporal!r}")
         v.check_backend_device(backend, device)
         threads = _resolved_threads(threads)
+        if isinstance(flow_passes, (bool, np.bool_)) or not isinstance(flow_passes, (int, np.integer)) \
+                or flow_passes < 1:
+            raise ValueError(f"flow_passes must be an int >= 1, got {flow_passes!r}")
         if isinstance(flow, str):
             from ivkernels.flow import FLOW_METHODS
 
@@ -179,6 +186,7 @@ class _Decomposer:
         self.progress = progress
         self.log = SolveLog()
         self.flow_method = None
+        self.flow_passes = int(flow_passes)
         self.flow = given_flow
         if isinstance(flow, str):
             self.flow_method = flow
@@ -217,6 +225,32 @@ class _Decomposer:
             del cached[t]
         return np.stack([cached[t] for t in range(start, stop - 1)])
 
+    @property
+    def joint(self) -> bool:
+        """Whether the flow is re-estimated on the albedo (estimated flow, temporal terms on)."""
+        return self.flow is None and self.flow_method is not None and self.flow_passes > 1
+
+    def _joint_flow(self, frames_be, flow_np: np.ndarray) -> np.ndarray:
+        """Passes 2..N of flow and intrinsic video together, for one window.
+
+        Each pass re-estimates the window's flow on the albedo of a guide
+        solve (:func:`ivkernels.flow.joint.guide_albedo`), which obeys
+        brightness constancy where the input does not (paper Sec. 5.1, 6);
+        Classic+NL starts from the previous pass's flow.
+        """
+        from ivkernels.flow import estimate_flow
+        from ivkernels.flow.joint import guide_albedo
+
+        classic = self.flow_method.startswith("classic_nl")
+        for _ in range(self.flow_passes - 1):
+            albedo = guide_albedo(self.be, frames_be, flow_np, self.params, self.prior, log=self.log)
+            t0 = time.perf_counter()
+            extra = {"init": flow_np} if classic else {}
+            flow_np = estimate_flow(albedo, method=self.flow_method, backend=self.be.name,
+                                    device=self.be.device, **extra)
+            self.log.add_time("flow", time.perf_counter() - t0)
+        return flow_np
+
     def windows(self) -> Iterator[WindowResult]:
         from ivkernels.solver.motion_maps import motion_maps
         from ivkernels.solver.pyramid import level_shapes
@@ -238,8 +272,10 @@ class _Decomposer:
                 frames_np = self.frames[start:stop]
                 flow_np = self._flow_for(start, stop, cached_flow)
                 occ_np = bnd_np = None
-                t0 = time.perf_counter()
                 frames_be = be.asarray(frames_np)
+                if flow_np is not None and self.joint:
+                    flow_np = self._joint_flow(frames_be, flow_np)
+                t0 = time.perf_counter()
                 flow_be = occ_be = bnd_be = None
                 if flow_np is not None:
                     flow_be = be.asarray(flow_np)
@@ -271,7 +307,7 @@ class _Decomposer:
 
 def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
               device: str = "cpu", params: Params | None = None,
-              progress: bool = False, flow_passes: int = 1,
+              progress: bool = False, flow_passes: int = DEFAULT_FLOW_PASSES,
               threads: int | None = None) -> IntrinsicVideo:
     """Decompose a video into albedo, shading, flow, occlusion and boundaries.
 
@@ -293,18 +329,20 @@ def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
         they measured well and weights chosen on training sequences elsewhere
         (each documented in ``Params``).
     progress : show a progress bar per stage.
-    flow_passes : outer passes of flow and decomposition estimated together
-        (:func:`ivkernels.flow.joint.joint_decompose`): pass 1 estimates the
-        flow on the input, each later pass re-estimates it on the previous
-        pass's albedo, which obeys brightness constancy where the input does
-        not (paper Sec. 5.1 and 6), and solves again.  Needs ``flow`` to be
-        ``None`` or a method name.  Measured at seed 0, 8 frames at 320x240
-        (perf/RESULTS.md, "Flow and intrinsic video together"): 2 passes
-        bring the flow's EPE on a static scene under a moving light from
-        0.78 to 0.005 px and on a moving camera from 2.31 to 1.80 px and
-        raise occlusion IoU, while LMSE moves by at most 7% either way and
-        the time doubles; the default stays 1 pass for speed.
-        ``diagnostics["joint_passes"]`` records each pass.
+    flow_passes : passes of flow and intrinsic video estimated together,
+        per window, when the flow is estimated (``flow=None`` or a method
+        name; ignored for a given flow array and with ``temporal=False``).
+        Pass 1 estimates the flow on the input; each later pass solves the
+        window at ``Params.flow_guide_scale`` of its size, re-estimates the
+        flow on that solve's albedo, which obeys brightness constancy where
+        the input does not (paper Sec. 5.1 and 6), starting from the previous
+        flow, and the last solve uses the final flow
+        (:func:`ivkernels.flow.joint.guide_albedo`).  Default 2, measured on
+        training seed 1 (perf/RESULTS.md, "Flow and intrinsic video
+        together"): the second pass lowers flow EPE on a static scene under
+        a moving light from 0.168 to 0.053 px, under rotating shadows from
+        0.527 to 0.186 px, and LMSE on every kind, for about 1.4x the time
+        of one pass; 1 estimates the flow on the input only.
     threads : CPU threads the kernels run on (an integer >= 1).  ``None``
         (default): the environment variable ``IVKERNELS_THREADS`` if set, else
         every core this process may use (see :mod:`ivkernels.kernels.launch`).
@@ -340,22 +378,21 @@ def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
     >>> video.albedo.shape, video.shading.shape
     ((3, 48, 64, 3), (3, 48, 64))
     """
-    if isinstance(flow_passes, bool) or not isinstance(flow_passes, (int, np.integer)) or flow_passes < 1:
-        raise ValueError(f"flow_passes must be an int >= 1, got {flow_passes!r}")
     from ivkernels.kernels.thread_count import threads as launch_threads
 
     n_threads = _resolved_threads(threads)
     with launch_threads(n_threads):
-        if flow_passes > 1:
-            if not (flow is None or isinstance(flow, str)) or not temporal:
-                raise ValueError("flow_passes > 1 needs temporal=True and flow=None or a flow method name")
-            from ivkernels.flow.joint import joint_decompose
-
-            return joint_decompose(frames, passes=int(flow_passes), method=flow or DEFAULT_FLOW_METHOD,
-                                   backend=backend, device=device, params=params,
-                                   progress=progress).video
         return _collect(_Decomposer(frames, flow, temporal, backend, device, params, progress,
-                                    n_threads))
+                                    n_threads, flow_passes=flow_passes))
+
+
+def _flow_label(job: _Decomposer) -> str | None:
+    """How the flow of ``job`` was made, for ``diagnostics["flow_method"]``."""
+    if job.flow is not None:
+        return "given"
+    if job.joint:
+        return f"{job.flow_method}, {job.flow_passes} passes with the intrinsic video"
+    return job.flow_method
 
 
 def _collect(job: _Decomposer) -> IntrinsicVideo:
@@ -379,6 +416,6 @@ def _collect(job: _Decomposer) -> IntrinsicVideo:
         windows.append((res.start, res.stop))
     diagnostics = {"energy": job.log.energy, "terms": job.log.terms, "levels": job.log.levels,
                    "seconds": dict(job.log.seconds), "windows": windows,
-                   "flow_method": job.flow_method if job.flow is None else "given",
+                   "flow_method": _flow_label(job),
                    "albedo_scale": job.scale}
     return IntrinsicVideo(albedo, shading, flow_out, occ_out, bnd_out, diagnostics)

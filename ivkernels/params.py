@@ -117,6 +117,20 @@ class Params:
     log_floor
         Floor of the linear input before the log (avoids log 0 on black pixels).
 
+    Flow and intrinsic video together
+    ---------------------------------
+    flow_guide_scale
+        With ``flow_passes`` > 1 (:func:`ivkernels.decompose`), each pass
+        before the last solves the window at this fraction of its size; its
+        shading, up-sampled, divides the input into the albedo the next
+        flow is estimated on (:func:`ivkernels.flow.joint.guide_albedo`).
+        Chosen on training seed 1 (8 frames at 320x240, perf/RESULTS.md,
+        "Flow and intrinsic video together"): at 0.5 the second pass keeps
+        most of what a full-size first pass gives (flow EPE on the four
+        kinds 1.085 / 1.303 / 0.053 / 0.186 against 1.085 / 1.249 / 0.001 /
+        0.170, from 1.173 / 1.295 / 0.168 / 0.527 with one pass) for a
+        quarter of its cost.
+
     Long videos
     -----------
     window, overlap
@@ -161,6 +175,8 @@ class Params:
     lbfgs_memory: int = 4
     init_blur: float = 0.02
     log_floor: float = 1e-4
+    # flow and intrinsic video together
+    flow_guide_scale: float = 0.5
     # long videos
     window: int = 8
     overlap: int = 2
@@ -207,6 +223,8 @@ _RULES = {
     "lbfgs_memory": Range(int, 1),
     "log_floor": Range(float, 0.0, 1.0, low_open=True, high_open=True,
                        why="the floor of the linear input before the log"),
+    "flow_guide_scale": Range(float, 0.0, 1.0, low_open=True,
+                              why="the size of the guide solve relative to the frames"),
     "window": Range(int, 2, why="frames per solved window"),
     "overlap": Range(int, 0),
     "boundary_threshold": Range(float, 0.0),

@@ -47,3 +47,18 @@ def test_failure_leaves_no_output(image_folder, tmp_path, capsys):
     rc = cli.main(["decompose", str(image_folder), "-o", str(out), "--flow", "not_a_method"])
     assert rc == 2 and "unknown flow method" in capsys.readouterr().err
     assert not out.exists() and not list(tmp_path.glob("*.partial"))
+
+
+def test_flow_passes_is_checked_before_any_output(image_folder, tmp_path, capsys):
+    out = tmp_path / "out"
+    rc = cli.main(["decompose", str(image_folder), "-o", str(out), "--flow-passes", "0"])
+    assert rc == 2 and "flow_passes must be an int >= 1" in capsys.readouterr().err
+    assert not out.exists() and not list(tmp_path.glob("*.partial"))
+
+
+@pytest.mark.slow
+def test_flow_passes_one_estimates_the_flow_on_the_input_only(image_folder, tmp_path):
+    out = tmp_path / "one"
+    rc = cli.main(["decompose", str(image_folder), "-o", str(out), "--flow", "dis", "--flow-passes", "1",
+                   "--quiet"])
+    assert rc == 0 and np.load(out / "intrinsics.npz")["flow"].shape == (2, 36, 52, 2)

@@ -91,16 +91,33 @@ def test_taichi_backend_gives_the_same_decomposition(seq):
     assert la["mean"] < 0.02
 
 
-@pytest.mark.slow
-def test_flow_passes_estimate_flow_and_decomposition_together(seq):
-    video = iv.decompose(seq.frames, flow="dis", params=FAST, flow_passes=2)
-    assert video.diagnostics["flow_method"] == "dis, 2 joint passes on the albedo"
-    assert len(video.diagnostics["joint_passes"]) == 2
-    assert video.flow.shape == seq.flow.shape
-    with pytest.raises(ValueError, match="flow_passes > 1"):
-        iv.decompose(seq.frames, flow=seq.flow, params=FAST, flow_passes=2)
-    with pytest.raises(ValueError, match="flow_passes must be"):
-        iv.decompose(seq.frames, flow=seq.flow, params=FAST, flow_passes=0)
+def test_flow_passes_reestimate_the_flow_on_the_guide_albedo(seq, monkeypatch):
+    import ivkernels.flow as flow_module
+
+    calls = []
+    original = flow_module.estimate_flow
+
+    def spy(frames, method="classic_nl_fast", **options):
+        calls.append((method, "init" in options, np.asarray(frames).dtype))
+        return original(frames, method=method, **options)
+
+    monkeypatch.setattr(flow_module, "estimate_flow", spy)
+    one = iv.decompose(seq.frames, flow="dis", params=FAST, flow_passes=1)
+    assert len(calls) == 1 and one.diagnostics["flow_method"] == "dis"
+    calls.clear()
+    two = iv.decompose(seq.frames, flow="dis", params=FAST, flow_passes=3)
+    # pass 1 on the input, passes 2 and 3 on guide albedos (float32 in [0, 1]); DIS takes no init
+    assert [c[0] for c in calls] == ["dis"] * 3 and not any(c[1] for c in calls)
+    assert two.diagnostics["flow_method"] == "dis, 3 passes with the intrinsic video"
+    assert "guide" in two.diagnostics["seconds"] and "guide" not in one.diagnostics["seconds"]
+    assert two.flow.shape == seq.flow.shape and not np.array_equal(two.flow, one.flow)
+    # a given flow, or no temporal terms: nothing to re-estimate
+    calls.clear()
+    given = iv.decompose(seq.frames, flow=seq.flow, params=FAST, flow_passes=2)
+    assert not calls and given.diagnostics["flow_method"] == "given"
+    for bad in (0, 1.5, True, "2"):
+        with pytest.raises(ValueError, match="flow_passes must be"):
+            iv.decompose(seq.frames, flow=seq.flow, params=FAST, flow_passes=bad)
 
 
 def test_iteration_budget_per_level():

@@ -31,7 +31,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["JointPass", "JointResult", "joint_decompose", "occlusion_iou", "FLOW_SOURCES", "DEFAULT_PASSES"]
+__all__ = ["JointPass", "JointResult", "joint_decompose", "guide_albedo", "occlusion_iou", "FLOW_SOURCES",
+           "DEFAULT_PASSES"]
+
+#: The guide solve never goes below this many pixels on its shorter side.
+MIN_GUIDE_SIZE = 16
 
 #: What the flow of passes after the first is computed on.
 FLOW_SOURCES = ("albedo", "relit", "input")
@@ -91,6 +95,60 @@ def occlusion_iou(occlusion, visibility) -> float:
     if union == 0:
         return 1.0
     return float(np.logical_and(est, gt).sum() / union)
+
+
+def guide_albedo(be, frames, flow, params, prior, *, log=None) -> np.ndarray:
+    """The albedo a window's next flow pass is estimated on, from a solve at reduced size.
+
+    The window's frames and flow are resized to ``params.flow_guide_scale``
+    times their size (antialiased; the shorter side kept at
+    :data:`MIN_GUIDE_SIZE` pixels or the frames' own, if smaller), the motion
+    maps are made there and Eq. 2 is minimised there
+    (:func:`ivkernels.solver.window_solver.solve_window`).  The guide's log
+    shading is up-sampled bilinearly to full size, and the albedo is
+    ``I - S`` at full size: shading is smooth and survives the resampling,
+    while the albedo keeps the input's finest texture, which the flow needs.
+    The albedo is scaled so that its 99th percentile is 1 and clipped to
+    [0, 1], as the flow expects.
+
+    Parameters
+    ----------
+    be : backend.
+    frames : (T, H, W, 3) backend array, linear RGB in [0, 1].
+    flow : (T-1, H, W, 2) float32 NumPy array, the current flow.
+    params : :class:`ivkernels.Params`; prior : the albedo prior.
+    log : optional :class:`ivkernels.solver.window_solver.SolveLog`; the
+        guide's seconds are added to it as ``"guide"``.
+
+    Returns
+    -------
+    (T, H, W, 3) float32 NumPy array in [0, 1].
+    """
+    from ivkernels.solver.motion_maps import motion_maps
+    from ivkernels.solver.pyramid import downsample, resize, resize_flow
+    from ivkernels.solver.window_solver import SolveLog, solve_window
+
+    t0 = time.perf_counter()
+    T, H, W, _ = frames.shape
+    scale = float(params.flow_guide_scale)
+    floor = min(MIN_GUIDE_SIZE, H, W)
+    scale = max(scale, floor / min(H, W))
+    shape = (max(1, int(round(H * scale))), max(1, int(round(W * scale))))
+    if shape == (H, W):
+        small, small_flow = frames, be.asarray(np.ascontiguousarray(flow, np.float32))
+    else:
+        small = downsample(be, frames, shape)
+        small_flow = resize_flow(be, be.asarray(np.ascontiguousarray(flow, np.float32)), shape)
+    occlusion, boundary = motion_maps(be, small, small_flow, params)
+    _, S = solve_window(be, small, small_flow, occlusion, boundary, params, prior, log=SolveLog())
+    if shape != (H, W):
+        S = be.numpy(resize(be, be.asarray(np.ascontiguousarray(S[..., None])), (H, W)))[..., 0]
+    log_image = np.log(np.maximum(be.numpy(frames), params.log_floor))
+    albedo = np.exp(log_image - S[..., None])
+    albedo /= float(np.percentile(albedo, 99.0)) or 1.0
+    if log is not None:
+        log.add_time("guide", time.perf_counter() - t0)
+    return np.ascontiguousarray(np.clip(albedo, 0.0, 1.0), np.float32)
 
 
 def _flow_input(video, source: str, frames) -> np.ndarray:

@@ -1,0 +1,55 @@
+"""decompose() with 1, 2, ... passes of flow and intrinsic video together: flow, maps and LMSE.
+
+For every synthetic kind, ``decompose(frames, flow_passes=N)`` with the
+estimated flow (the default method), against the renderer's ground truth:
+flow end-point error (all pixels, and pixels visible in the next frame),
+occlusion IoU against the visibility (:func:`ivkernels.flow.joint.occlusion_iou`),
+LMSE of albedo / shading / mean, and the seconds of the flow, the guide
+solves and the final solve, with the process's CPU seconds.  Choose on
+training seeds (not 0); report on seed 0.
+
+    python perf/eval_flow_passes.py --seed 1 --passes 1 2
+    python perf/eval_flow_passes.py --seed 0 --passes 1 2
+"""
+from __future__ import annotations
+
+import argparse
+import time
+
+import ivkernels as iv
+from ivkernels import metrics, synthetic
+from ivkernels.flow.joint import occlusion_iou
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--kinds", nargs="+", default=list(synthetic.KINDS))
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--frames", type=int, default=8)
+    ap.add_argument("--size", type=int, nargs=2, default=(240, 320), metavar=("H", "W"))
+    ap.add_argument("--passes", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--guide-scale", type=float, default=None, help="Params.flow_guide_scale")
+    args = ap.parse_args(argv)
+    params = iv.Params() if args.guide_scale is None else iv.Params(flow_guide_scale=args.guide_scale)
+    print(f"{args.frames} frames at {args.size[1]}x{args.size[0]}, seed {args.seed}, "
+          f"guide scale {params.flow_guide_scale}")
+    print(f"{'kind':20s} {'passes':>6s} {'EPE':>6s} {'EPE vis':>7s} {'occ IoU':>7s} {'LMSE A':>7s} "
+          f"{'LMSE S':>7s} {'LMSE':>7s} {'flow s':>6s} {'guide s':>7s} {'solve s':>7s} {'CPU s':>6s}")
+    for kind in args.kinds:
+        seq = synthetic.render_sequence(kind, n_frames=args.frames, size=tuple(args.size), seed=args.seed)
+        for passes in args.passes:
+            cpu = time.process_time()
+            video = iv.decompose(seq.frames, params=params, flow_passes=passes)
+            cpu = time.process_time() - cpu
+            s = video.diagnostics["seconds"]
+            lmse = metrics.intrinsic_lmse(video.albedo, video.shading, seq.albedo, seq.shading)
+            print(f"{kind:20s} {passes:6d} {metrics.endpoint_error(video.flow, seq.flow):6.3f} "
+                  f"{metrics.endpoint_error(video.flow, seq.flow, mask=seq.visibility > 0.5):7.3f} "
+                  f"{occlusion_iou(video.occlusion, seq.visibility):7.3f} {lmse['albedo']:7.4f} "
+                  f"{lmse['shading']:7.4f} {lmse['mean']:7.4f} {s.get('flow', 0.0):6.1f} "
+                  f"{s.get('guide', 0.0):7.1f} {s.get('solve', 0.0):7.1f} {cpu:6.1f}", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
