@@ -44,7 +44,7 @@ def run_one(args) -> dict:
                                     size=(args.height, args.width), seed=1)
     rss_before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     t0 = time.perf_counter()
-    video = iv.decompose(seq.frames, flow=args.flow, backend=args.backend)
+    video = iv.decompose(seq.frames, flow=args.flow, backend=args.backend, flow_passes=args.flow_passes)
     total = time.perf_counter() - t0
     assert np.isfinite(video.albedo).all()
     peak_kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
@@ -79,9 +79,10 @@ def run_stream(args) -> dict:
 
 
 def spawn(backend: str, threads: int, frames: int, height: int, width: int, flow: str,
-          stream: bool = False) -> dict:
+          stream: bool = False, flow_passes: int = 2) -> dict:
     cmd = [sys.executable, __file__, "--one", "--backend", backend, "--threads", str(threads),
-           "--frames", str(frames), "--height", str(height), "--width", str(width), "--flow", flow]
+           "--frames", str(frames), "--height", str(height), "--width", str(width), "--flow", flow,
+           "--flow-passes", str(flow_passes)]
     if stream:
         cmd.append("--stream")
     out = subprocess.run(cmd, capture_output=True, text=True)
@@ -100,6 +101,8 @@ def main(argv=None) -> int:
     parser.add_argument("--width", type=int, default=320)
     parser.add_argument("--flow", default="classic_nl_fast",
                         help="flow method for every configuration")
+    parser.add_argument("--flow-passes", type=int, default=2,
+                        help="passes of flow and intrinsic video together (decompose's flow_passes)")
     parser.add_argument("--quick", action="store_true", help="small sizes (a smoke run)")
     parser.add_argument("--sizes", type=int, nargs="+", default=None, metavar="H W",
                         help="sizes (H W pairs) of section 1; default 240 320 480 640")
@@ -125,7 +128,7 @@ def main(argv=None) -> int:
     for h, w in sizes:
         results = {}
         for backend, threads in configs:
-            r = spawn(backend, threads, 8, h, w, args.flow)
+            r = spawn(backend, threads, 8, h, w, args.flow, flow_passes=args.flow_passes)
             results[(backend, threads)] = r
             s = r["stages"]
             print(f"{w}x{h:<5} {backend:>8} {threads:>3} {s.get('flow', 0):6.2f} {s.get('maps', 0):6.2f} "
@@ -143,7 +146,7 @@ def main(argv=None) -> int:
     print(f"{'frames':>6} {'total s':>8} {'s/frame':>8} {'peak MiB':>9}")
     base = None
     for n in counts:
-        r = spawn("warp", 2, n, h, w, args.flow)
+        r = spawn("warp", 2, n, h, w, args.flow, flow_passes=args.flow_passes)
         per = r["total"] / n
         base = base or per
         print(f"{n:6d} {r['total']:8.2f} {per:8.3f} {r['peak_mib']:9.0f}   (s/frame vs first: {per / base:.2f})")
