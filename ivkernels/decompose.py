@@ -14,13 +14,14 @@ from typing import Iterator
 
 import numpy as np
 
+from ivkernels.flow.joint import DEFAULT_PASSES
 from ivkernels.params import Params
 
 #: Flow method used when ``flow=None``.
 DEFAULT_FLOW_METHOD = "classic_nl_fast"
 #: Passes of flow and intrinsic video estimated together when the flow is
 #: estimated (``flow=None`` or a method name); see :func:`decompose`.
-DEFAULT_FLOW_PASSES = 2
+DEFAULT_FLOW_PASSES = DEFAULT_PASSES
 #: Frame pairs given to the flow method per call (bounds its working memory).
 FLOW_PAIRS_PER_CALL = 7
 

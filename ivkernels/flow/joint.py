@@ -3,7 +3,14 @@
 Kong, Gehler & Black (ECCV 2014) pre-compute the flow on the input video and
 note (Sec. 5.1, 6) that the recovered albedo obeys brightness constancy where
 the input does not, so that estimating flow and intrinsic video together is
-the way forward.  :func:`joint_decompose` alternates the two:
+the way forward.
+
+:func:`ivkernels.decompose` does it by default inside every window
+(``flow_passes``): the passes before the last solve the window at reduced
+size, and :func:`guide_albedo` turns that solve into the full-size albedo
+the next flow is estimated on.  :func:`joint_decompose` is the whole-video
+form used to measure the passes: it alternates full decompositions and
+flows,
 
     pass 1:   u_1 = flow(I);                  (A_1, S_1) = decompose(I, u_1)
     pass k:   u_k = flow(J_{k-1}, init u_{k-1}); (A_k, S_k) = decompose(I, u_k)
@@ -40,10 +47,11 @@ MIN_GUIDE_SIZE = 16
 #: What the flow of passes after the first is computed on.
 FLOW_SOURCES = ("albedo", "relit", "input")
 
-#: Measured default number of passes (perf/eval_joint.py, training seed 1, 8
-#: frames at 320x240): the second pass on the albedo lowers flow EPE, false
-#: occlusions and LMSE on every synthetic kind; a third changes the flow by
-#: under 0.07 px.
+#: Measured default number of passes (perf/eval_joint.py and
+#: perf/eval_flow_passes.py, training seed 1, 8 frames at 320x240): the second
+#: pass on the albedo lowers flow EPE, false occlusions and LMSE on every
+#: synthetic kind; a third changes the flow by under 0.07 px.  Also the
+#: default of :func:`ivkernels.decompose`'s ``flow_passes``.
 DEFAULT_PASSES = 2
 
 
