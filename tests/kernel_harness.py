@@ -51,8 +51,6 @@ EMPTY_SIZES = {"no-frames": (0, 7, 11), "no-rows": (2, 0, 11)}
 
 _NO_ALIAS_CHECK = ("no aliasing check: the kernel reads neighbours of the input (or scatters into the output) "
                    "while writing, so an aliased output gives a wrong result instead of an error")
-_TAICHI_REFUSES_STRIDED = ("Taichi refuses a non-contiguous input ('must be C-contiguous') that Warp reads "
-                           "through its strides")
 
 # (check, backend name pattern, case key pattern) -> why the kernel does not meet the contract yet.
 # Each runs as a strict xfail: when the kernel is fixed, its entry must go.
@@ -62,8 +60,6 @@ KNOWN_GAPS: dict = {
         "energy_temporal.temporal_term*", "energy_shading.shading_smoothness", "energy_albedo_gsm.gsm_smoothness*",
         "energy_albedo_entropy.entropy_blur", "energy_albedo_entropy.entropy_slice_gradient",
         "energy_albedo_entropy.entropy_term")},
-    ("strided", "taichi", "energy_albedo_gsm.*"): _TAICHI_REFUSES_STRIDED,
-    ("strided", "taichi", "energy_albedo_entropy.*"): _TAICHI_REFUSES_STRIDED,
     ("strided", "warp", "energy_temporal.temporal_term[HW]"): (
         "Warp reshapes a strided (T, H, W) X to (T, H, W, 1) and fails with RuntimeError "
         "('Reshaping non-contiguous arrays is unsupported') instead of reading it or refusing it clearly"),
