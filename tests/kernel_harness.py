@@ -60,11 +60,6 @@ KNOWN_GAPS: dict = {
         "energy_temporal.temporal_term*", "energy_shading.shading_smoothness", "energy_albedo_gsm.gsm_smoothness*",
         "energy_albedo_entropy.entropy_blur", "energy_albedo_entropy.entropy_slice_gradient",
         "energy_albedo_entropy.entropy_term")},
-    ("strided", "warp", "energy_temporal.temporal_term[HW]"): (
-        "Warp reshapes a strided (T, H, W) X to (T, H, W, 1) and fails with RuntimeError "
-        "('Reshaping non-contiguous arrays is unsupported') instead of reading it or refusing it clearly"),
-    ("empty", "*", "energy_temporal.temporal_term[HW]"): (
-        "Warp fails with RuntimeError reshaping an empty (T, H, W) X to (T, H, W, 1); Taichi runs"),
 }
 
 
