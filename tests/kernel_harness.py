@@ -49,18 +49,9 @@ PAIR_SIZE = (2, 19, 23)          # backends against each other
 THREAD_SIZE = (3, 23, 37)        # 69 rows, split in two bands
 EMPTY_SIZES = {"no-frames": (0, 7, 11), "no-rows": (2, 0, 11)}
 
-_NO_ALIAS_CHECK = ("no aliasing check: the kernel reads neighbours of the input (or scatters into the output) "
-                   "while writing, so an aliased output gives a wrong result instead of an error")
-
 # (check, backend name pattern, case key pattern) -> why the kernel does not meet the contract yet.
 # Each runs as a strict xfail: when the kernel is fixed, its entry must go.
-KNOWN_GAPS: dict = {
-    **{("alias", "*", key): _NO_ALIAS_CHECK for key in (
-        "sampling.*", "derivatives.image_gradient*", "maps.motion_boundary*", "median.*",
-        "energy_temporal.temporal_term*", "energy_shading.shading_smoothness", "energy_albedo_gsm.gsm_smoothness*",
-        "energy_albedo_entropy.entropy_blur", "energy_albedo_entropy.entropy_slice_gradient",
-        "energy_albedo_entropy.entropy_term")},
-}
+KNOWN_GAPS: dict = {}
 
 
 # ----------------------------------------------------------------------------- backends

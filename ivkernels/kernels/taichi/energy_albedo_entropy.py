@@ -14,7 +14,7 @@ import numpy as np
 import taichi as ti
 
 from ivkernels.kernels.host import EntropyScratch, allocate_entropy_scratch_with, run_entropy_steps
-from ivkernels.kernels.taichi._checks import check_array, check_float, check_int
+from ivkernels.kernels.taichi._checks import check_array, check_disjoint, check_float, check_int
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
 nd2 = ti.types.ndarray(dtype=ti.f32, ndim=2)
@@ -205,6 +205,8 @@ def entropy_blur(hist, taps, row_flags, tmp, blurred) -> None:
     check_array("row_flags", row_flags, (2, T, B, B), "(2, T, B, B)", dtype=np.int32, output=True)
     check_array("tmp", tmp, hist.shape, "(T, B, B, B) like hist", output=True)
     check_array("blurred", blurred, hist.shape, "(T, B, B, B) like hist", output=True)
+    check_disjoint("tmp", tmp, "hist", hist, "the blur reads neighbours of hist while writing tmp")
+    check_disjoint("blurred", blurred, "hist", hist, "the blur reads neighbours of hist while writing blurred")
     _blur_along_rows(hist, taps, row_flags, blurred)
     _blur_across_rows(blurred, taps, 2, 0, 1, row_flags, tmp)
     _blur_across_rows(tmp, taps, 1, 1, -1, row_flags, blurred)
@@ -228,6 +230,7 @@ def entropy_slice_gradient(A, whiten, lo: float, h: float, blurred, dots, gA, la
     blurred, _ = _check_hist("blurred", blurred, T)
     dots = check_array("dots", dots, (T,), "(T,)", dtype=np.float64)
     check_array("gA", gA, (T, H, W, 3), "(T, H, W, 3)", output=True)
+    check_disjoint("gA", gA, "A", A, "the gradient is scattered into gA while A is read")
     lo, h = check_float("lo", lo), check_float("h", h, positive=True)
     lam = check_float("lam", lam)
     if T * H and W:
@@ -256,4 +259,5 @@ def entropy_term(A, whiten, lo: float, h: float, taps, sigma_p: float, scratch: 
     T, H, W, _ = A.shape
     check_array("gA", gA, (T, H, W, 3), "(T, H, W, 3)", output=True)
     check_array("energy_rows", energy_rows, (T * H,), "(T*H,)", dtype=np.float64, output=True)
+    check_disjoint("gA", gA, "A", A, "the gradient is scattered into gA while A is read")
     run_entropy_steps(sys.modules[__name__], A, whiten, lo, h, taps, sigma_p, scratch, gA, energy_rows, lam)

@@ -41,7 +41,7 @@ import math
 import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.taichi._checks import check_array, check_float, check_int
+from ivkernels.kernels.taichi._checks import check_array, check_disjoint, check_float, check_int
 from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
@@ -214,7 +214,7 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
 
     ``A`` (T, H, W, 3) float32 log albedo; ``sigma_inv`` (3, 3) float32;
     ``table_g``, ``table_dg`` (n,) float32 (inputs copied if not C-contiguous);
-    ``gA`` (T, H, W, 3) float32 and ``energy_rows``
+    ``gA`` (T, H, W, 3) float32 (not overlapping ``A``) and ``energy_rows``
     (T*H,) float64 accumulated (C-contiguous); ``workspace`` an optional
     :class:`ivkernels.kernels.workspace.Workspace` keeping the scratch buffers.
     """
@@ -228,6 +228,7 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
     table_dg = check_array("table_dg", table_dg, (n,), "(n,) like table_g")
     check_array("gA", gA, (T, H, W, 3), "(T, H, W, 3)", output=True)
     check_array("energy_rows", energy_rows, (T * H,), "(T*H,)", dtype=np.float64, output=True)
+    check_disjoint("gA", gA, "A", A, "the gradient is scattered into gA while A is read")
     r2_max = check_float("r2_max", r2_max, positive=True)
     lam = check_float("lam", lam)
     radius = check_int("radius", radius, 1, " (2 for the paper's 5x5 window)")

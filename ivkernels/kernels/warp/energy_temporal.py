@@ -27,7 +27,7 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array
+from ivkernels.kernels.warp._checks import check_array, check_disjoint
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners
 from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 
@@ -135,6 +135,7 @@ def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0,
     flow : wp.array float32 (T-1, H, W, 2), forward flow u_t (pixels).
     occ : wp.array float32 (T-1, H, W), w_occ (1 visible in t+1, 0 occluded).
     gX : wp.array float32, same shape as ``X``, accumulated: ``gX += dE/dX``.
+        Must not overlap ``X`` (ValueError).
     energy_rows : wp.array float64 (T*H,), accumulated; the pair (t, t+1)
         adds to the rows of frame t, the last frame's rows get nothing.
     lam : lambda_TA (10) or lambda_TS (1).  alpha : Tukey scale (log units).
@@ -156,6 +157,7 @@ def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0,
     check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)", dev)
     check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", dev)
     check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dev, dtype=wp.float64)
+    check_disjoint("gX", gX, "X", X, "the gradient is scattered into gX while X is read")
     check_workspace(workspace)
     if t < 2 or h * w * c == 0:
         return
