@@ -49,38 +49,9 @@ PAIR_SIZE = (2, 19, 23)          # backends against each other
 THREAD_SIZE = (3, 23, 37)        # 69 rows, split in two bands
 EMPTY_SIZES = {"no-frames": (0, 7, 11), "no-rows": (2, 0, 11)}
 
-_NO_ALIAS_CHECK = ("no aliasing check: the kernel reads neighbours of the input (or scatters into the output) "
-                   "while writing, so an aliased output gives a wrong result instead of an error")
-_TAICHI_REFUSES_STRIDED = ("Taichi refuses a non-contiguous input ('must be C-contiguous') that Warp reads "
-                           "through its strides")
-_TAICHI_COPIES_STRIDED = ("Taichi copies a non-contiguous input that Warp refuses ('must be C-contiguous'); "
-                          "the backends disagree on the contract")
-
 # (check, backend name pattern, case key pattern) -> why the kernel does not meet the contract yet.
 # Each runs as a strict xfail: when the kernel is fixed, its entry must go.
-KNOWN_GAPS: dict = {
-    **{("alias", "*", key): _NO_ALIAS_CHECK for key in (
-        "sampling.*", "derivatives.image_gradient*", "maps.motion_boundary*", "median.*",
-        "energy_temporal.temporal_term*", "energy_shading.shading_smoothness", "energy_albedo_gsm.gsm_smoothness*",
-        "energy_albedo_entropy.entropy_blur", "energy_albedo_entropy.entropy_slice_gradient",
-        "energy_albedo_entropy.entropy_term")},
-    ("strided", "taichi", "energy_albedo_gsm.*"): _TAICHI_REFUSES_STRIDED,
-    ("strided", "taichi", "energy_albedo_entropy.*"): _TAICHI_REFUSES_STRIDED,
-    ("strided", "taichi", "colour.srgb_to_linear"): _TAICHI_COPIES_STRIDED,
-    ("strided", "taichi", "colour.linear_to_srgb"): _TAICHI_COPIES_STRIDED,
-    ("strided", "taichi", "colour.log_floor"): _TAICHI_COPIES_STRIDED,
-    ("strided", "taichi", "vecops.dots*"): _TAICHI_COPIES_STRIDED,
-    ("strided", "taichi", "vecops.combine"): _TAICHI_COPIES_STRIDED,
-    ("strided", "warp", "energy_temporal.temporal_term[HW]"): (
-        "Warp reshapes a strided (T, H, W) X to (T, H, W, 1) and fails with RuntimeError "
-        "('Reshaping non-contiguous arrays is unsupported') instead of reading it or refusing it clearly"),
-    ("empty", "*", "energy_temporal.temporal_term[HW]"): (
-        "Warp fails with RuntimeError reshaping an empty (T, H, W) X to (T, H, W, 1); Taichi runs"),
-    **{("empty", "*", f"colour.{name}"): (
-        "Warp's element-wise colour kernels call an empty array non-contiguous and raise "
-        "'must be C-contiguous' (a misleading message); Taichi runs")
-       for name in ("srgb_to_linear", "linear_to_srgb", "log_floor")},
-}
+KNOWN_GAPS: dict = {}
 
 
 # ----------------------------------------------------------------------------- backends

@@ -141,6 +141,13 @@ def test_aliasing_is_refused_alike(any_backend):
     src = be.zeros((1, 6, 7, 1))
     with pytest.raises(ValueError, match="scratch must not alias src"):
         be.pyramid.gaussian_blur(src, be.zeros((1, 6, 7, 1)), src, 1.0)
+    flow = be.zeros((1, 6, 7, 2))
+    with pytest.raises(ValueError, match="out must not alias src"):
+        be.median.median5x5(flow, flow)
+    X = be.zeros((2, 4, 5))                                # (T, H, W): viewed as (T, H, W, 1) on Warp
+    with pytest.raises(ValueError, match="gX must not alias X"):
+        be.energy_temporal.temporal_term(X, be.zeros((1, 4, 5, 2)), be.zeros((1, 4, 5)), X,
+                                         be.zeros(8, np.float64), 1.0)
     # disjoint halves of one buffer are separate
     be.flow_classic.rof_dual_step(be.zeros((1, 4, 5)), buf[:40].reshape((1, 4, 5, 2)),
                                   buf[40:80].reshape((1, 4, 5, 2)), 0.25, 0.5)

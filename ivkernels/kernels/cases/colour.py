@@ -26,7 +26,7 @@ def _elementwise(function, tol, extra=None, src=_rgb):
         return {"out": getattr(ref, function)(v["src"], *(v[k] for k in extra))}
 
     return Case("colour", function, make, ("src", "out", *extra), ("out",), reference, tol=tol,
-                in_place=(("src", "out"),), contiguous=("src",))
+                in_place=(("src", "out"),))
 
 
 def _lab(rng, T, H, W):

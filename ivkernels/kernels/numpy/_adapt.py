@@ -8,13 +8,23 @@ from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.kernels.ndarray_checks import check_array, check_disjoint  # noqa: F401  (re-exported)
+from ivkernels.kernels import ndarray_checks
+from ivkernels.kernels.ndarray_checks import check_array
 
 
 def arrays(dtype=np.float32, **named) -> None:
     """Raise TypeError unless every keyword argument is a ``numpy.ndarray`` of ``dtype``."""
     for name, a in named.items():
         check_array(name, a, None, "array", dtype=dtype, copy=True)
+
+
+def check_disjoint(name_a: str, a, name_b: str, b, why: str) -> None:
+    """Raise ValueError if arrays ``a`` and ``b`` share memory: the aliasing rule of every backend
+    (:func:`ivkernels.kernels.checks.check_separate`); TypeError if either is not a ``numpy.ndarray``."""
+    for name, x in ((name_a, a), (name_b, b)):
+        if not isinstance(x, np.ndarray):
+            raise TypeError(f"{name} must be a numpy.ndarray, got {type(x).__name__}")
+    ndarray_checks.check_disjoint(name_a, a, name_b, b, why)
 
 
 def write(name: str, out, value) -> None:

@@ -12,7 +12,7 @@ import numpy as np
 
 from ivkernels.kernels.checks import check_float, check_int
 from ivkernels.kernels.host import EntropyScratch, allocate_entropy_scratch_with, run_entropy_steps
-from ivkernels.kernels.numpy._adapt import add, arrays, write
+from ivkernels.kernels.numpy._adapt import add, arrays, check_disjoint, write
 from ivkernels.kernels.reference import energy_albedo_entropy as ref
 
 
@@ -44,6 +44,8 @@ def entropy_blur(hist, taps, row_flags, tmp, blurred) -> None:
     """``blurred = G * hist`` per frame (T, B, B, B), ``G`` separable with the odd-length ``taps``."""
     _cube("hist", hist)
     arrays(taps=taps, tmp=tmp)
+    check_disjoint("tmp", tmp, "hist", hist, "the blur reads neighbours of hist while writing tmp")
+    check_disjoint("blurred", blurred, "hist", hist, "the blur reads neighbours of hist while writing blurred")
     if taps.ndim != 1 or taps.shape[0] % 2 != 1:
         raise ValueError(f"taps must have an odd length 2r+1, got shape {taps.shape}")
     arrays(np.int32, row_flags=row_flags)
@@ -64,6 +66,7 @@ def entropy_slice_gradient(A, whiten, lo: float, h: float, blurred, dots, gA, la
     arrays(A=A, whiten=whiten)
     _cube("blurred", blurred)
     arrays(np.float64, dots=dots)
+    check_disjoint("gA", gA, "A", A, "the gradient is scattered into gA while A is read")
     add("gA", gA, ref.entropy_slice_gradient(A, whiten, check_float("lo", lo), check_float("h", h, positive=True),
                                              blurred, dots, check_float("lam", lam)))
 
@@ -85,6 +88,7 @@ def entropy_term(A, whiten, lo: float, h: float, taps, sigma_p: float, scratch: 
     arrays(A=A)
     if A.ndim != 4:
         raise ValueError(f"A must have shape (T, H, W, 3), got {A.shape}")
+    check_disjoint("gA", gA, "A", A, "the gradient is scattered into gA while A is read")
     run_entropy_steps(sys.modules[__name__], A, whiten, lo, h, taps, sigma_p, scratch, gA, energy_rows, lam)
 
 

@@ -3,13 +3,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.kernels.numpy._adapt import add, arrays
+from ivkernels.kernels.numpy._adapt import add, arrays, check_disjoint
 from ivkernels.kernels.reference import energy_shading as ref
 
 
 def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
     """Add Eq. 9's 3x3 Charbonnier smoothness of S (T, H, W) and its gradient into gS (T, H, W)."""
     arrays(S=S)
+    check_disjoint("gS", gS, "S", S, "the gradient is scattered into gS while S is read")
     arrays(np.float64, energy_rows=energy_rows)
     rows, grad = ref.shading_smoothness(S, float(lam), float(eps))
     add("gS", gS, grad)

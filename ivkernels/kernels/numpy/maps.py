@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from ivkernels.kernels.checks import check_int, check_positive
-from ivkernels.kernels.numpy._adapt import arrays, write
+from ivkernels.kernels.numpy._adapt import arrays, check_disjoint, write
 from ivkernels.kernels.reference import maps as ref
 from ivkernels.kernels.workspace import check_workspace
 
@@ -31,5 +31,8 @@ def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
 def motion_boundary(sobel_mag, out, threshold: float, radius: int, *, workspace=None) -> None:
     """``w_bnd`` (T, H, W): ``sobel_mag`` above ``threshold``, dilated by ``radius`` pixels."""
     check_workspace(workspace)
+    radius = check_int("radius", radius, 0)
     arrays(sobel_mag=sobel_mag)
-    write("out", out, ref.motion_boundary(sobel_mag, float(threshold), check_int("radius", radius, 0)))
+    if radius:
+        check_disjoint("out", out, "sobel_mag", sobel_mag, "the dilation reads neighbours of sobel_mag")
+    write("out", out, ref.motion_boundary(sobel_mag, float(threshold), radius))

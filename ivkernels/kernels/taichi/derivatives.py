@@ -6,7 +6,7 @@ Parallel over the ``T * H`` rows; neighbour indices clamped (replicate border).
 """
 import taichi as ti
 
-from ivkernels.kernels.taichi._checks import check_array
+from ivkernels.kernels.taichi._checks import check_array, check_disjoint
 
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
@@ -81,6 +81,8 @@ def image_gradient(src, gx, gy) -> None:
     src = check_array("src", src, (None, None, None, None), "(T, H, W, C)")
     check_array("gx", gx, src.shape, "(T, H, W, C)", output=True)
     check_array("gy", gy, src.shape, "(T, H, W, C)", output=True)
+    check_disjoint("gx", gx, "src", src, "the stencil reads neighbours of src while writing gx")
+    check_disjoint("gy", gy, "src", src, "the stencil reads neighbours of src while writing gy")
     if src.size:
         five_point_gradient_rows(src, gx, gy)
 

@@ -41,7 +41,7 @@ import math
 import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.taichi._checks import check_array, check_float, check_int
+from ivkernels.kernels.taichi._checks import check_array, check_disjoint, check_float, check_int
 from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
@@ -213,20 +213,22 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
     """Add Eq. 11's GSM smoothness energy and gradient (see the Warp module).
 
     ``A`` (T, H, W, 3) float32 log albedo; ``sigma_inv`` (3, 3) float32;
-    ``table_g``, ``table_dg`` (n,) float32; ``gA`` (T, H, W, 3) float32 and
-    ``energy_rows`` (T*H,) float64 accumulated; ``workspace`` an optional
+    ``table_g``, ``table_dg`` (n,) float32 (inputs copied if not C-contiguous);
+    ``gA`` (T, H, W, 3) float32 (not overlapping ``A``) and ``energy_rows``
+    (T*H,) float64 accumulated (C-contiguous); ``workspace`` an optional
     :class:`ivkernels.kernels.workspace.Workspace` keeping the scratch buffers.
     """
-    check_array("A", A, (None, None, None, 3), "(T, H, W, 3)", copy=False)
+    A = check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
     T, H, W, _ = A.shape
-    check_array("sigma_inv", sigma_inv, (3, 3), "(3, 3)", copy=False)
-    check_array("table_g", table_g, (None,), "(n,)", copy=False)
+    sigma_inv = check_array("sigma_inv", sigma_inv, (3, 3), "(3, 3)")
+    table_g = check_array("table_g", table_g, (None,), "(n,)")
     n = table_g.shape[0]
     if n < 2:
         raise ValueError(f"table_g must hold at least 2 entries, got {n}")
-    check_array("table_dg", table_dg, (n,), "(n,) like table_g", copy=False)
-    check_array("gA", gA, (T, H, W, 3), "(T, H, W, 3)", copy=False)
-    check_array("energy_rows", energy_rows, (T * H,), "(T*H,)", dtype=np.float64, copy=False)
+    table_dg = check_array("table_dg", table_dg, (n,), "(n,) like table_g")
+    check_array("gA", gA, (T, H, W, 3), "(T, H, W, 3)", output=True)
+    check_array("energy_rows", energy_rows, (T * H,), "(T*H,)", dtype=np.float64, output=True)
+    check_disjoint("gA", gA, "A", A, "the gradient is scattered into gA while A is read")
     r2_max = check_float("r2_max", r2_max, positive=True)
     lam = check_float("lam", lam)
     radius = check_int("radius", radius, 1, " (2 for the paper's 5x5 window)")

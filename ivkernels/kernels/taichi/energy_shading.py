@@ -7,7 +7,7 @@ The local term's Charbonnier penalty is the data term's (:mod:`ivkernels.kernels
 import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.taichi._checks import check_array
+from ivkernels.kernels.taichi._checks import check_array, check_disjoint
 from ivkernels.kernels.taichi.energy_data import charbonnier
 
 nd1_f64 = ti.types.ndarray(dtype=ti.f64, ndim=1)
@@ -63,6 +63,7 @@ def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001)
     t, h, w = S.shape
     check_array("gS", gS, (t, h, w), "(T, H, W)", output=True)
     check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dtype=np.float64, output=True)
+    check_disjoint("gS", gS, "S", S, "the gradient is scattered into gS while S is read")
     if t * h * w == 0:
         return
     shading_smoothness_rows(S, gS, energy_rows, float(lam), float(eps))

@@ -11,7 +11,7 @@ position, as :mod:`ivkernels.kernels.warp.sampling` does.
 import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.taichi._checks import check_array
+from ivkernels.kernels.taichi._checks import check_array, check_disjoint
 from ivkernels.kernels.workspace import check_workspace
 
 nd1_f64 = ti.types.ndarray(dtype=ti.f64, ndim=1)
@@ -99,6 +99,7 @@ def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0,
     flow = check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)")
     occ = check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)")
     check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dtype=np.float64, output=True)
+    check_disjoint("gX", gX, "X", X, "the gradient is scattered into gX while X is read")
     check_workspace(workspace)
     if t < 2 or h * w * c == 0:
         return

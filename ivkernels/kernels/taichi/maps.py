@@ -8,7 +8,7 @@ of :mod:`ivkernels.kernels.taichi.sampling`.  Parallel over the ``T * H`` rows.
 import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.taichi._checks import check_array, check_int, check_positive
+from ivkernels.kernels.taichi._checks import check_array, check_disjoint, check_int, check_positive
 from ivkernels.kernels.taichi.sampling import bilinear_at, clamped_corners, inside_image
 from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 
@@ -182,6 +182,8 @@ def motion_boundary(sobel_mag, out, threshold: float, radius: int, *, workspace=
     sobel_mag = check_array("sobel_mag", sobel_mag, (None, None, None), "(T, H, W)")
     check_array("out", out, sobel_mag.shape, "(T, H, W)", output=True)
     radius = check_int("radius", radius, 0)
+    if radius:
+        check_disjoint("out", out, "sobel_mag", sobel_mag, "the dilation reads neighbours of sobel_mag")
     check_workspace(workspace)
     if out.size:
         shape = tuple(sobel_mag.shape)

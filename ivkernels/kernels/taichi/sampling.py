@@ -8,7 +8,7 @@ which Taichi makes atomic inside the parallel loop.
 """
 import taichi as ti
 
-from ivkernels.kernels.taichi._checks import check_array
+from ivkernels.kernels.taichi._checks import check_array, check_disjoint
 
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
@@ -154,6 +154,7 @@ def _check_warp_args(src, flow, out, inside):
     flow = check_array("flow", flow, (t, h, w, 2), "(T, H, W, 2)")
     check_array("out", out, (t, h, w, c), "(T, H, W, C)", output=True)
     check_array("inside", inside, (t, h, w), "(T, H, W)", output=True)
+    check_disjoint("out", out, "src", src, "the warp reads neighbours of src while writing out")
     return src, flow
 
 
@@ -172,6 +173,7 @@ def splat_bilinear(values, flow, out) -> None:
     t, h, w, c = values.shape
     flow = check_array("flow", flow, (t, h, w, 2), "(T, H, W, 2)")
     check_array("out", out, (t, h, w, c), "(T, H, W, C)", output=True)
+    check_disjoint("out", out, "values", values, "the splat scatters into out while reading values")
     if values.size:
         bilinear_splat_rows(values, flow, out)
 

@@ -9,10 +9,10 @@
   ``w_lum = lum(i) + 0.001``, Eq. 3).
 * :func:`log_floor`: ``log(max(i, floor))``, the log domain the energy lives in.
 
-Element-wise functions on arrays of any shape need C-contiguous arrays (they
-run over the flat buffer in chunks of :data:`CHUNK` elements, one kernel
-thread per chunk); the image functions take frame stacks and run one thread
-per image row.
+Element-wise functions on arrays of any shape run over the flat buffer in
+chunks of :data:`CHUNK` elements, one kernel thread per chunk: their output
+must be C-contiguous, and an input that is not is copied first.  The image
+functions take frame stacks of any strides and run one thread per image row.
 """
 from __future__ import annotations
 
@@ -131,18 +131,17 @@ def luminance_rows(row_begin: int, rgb: wp.array4d(dtype=float), out: wp.array3d
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _flat_pair(src, out):
-    """Flat views of two C-contiguous float32 arrays of the same (any) shape."""
+def _launch_chunks(kernel, src, out, *extra) -> None:
+    """Run an element-wise ``kernel`` on the flat buffers of ``src`` and ``out``, float32 arrays of
+    the same (any) shape: ``out`` C-contiguous, ``src`` copied first if it is not; empty: nothing to do."""
     check_array("src", src, None, "(any shape)")
     check_array("out", out, tuple(src.shape), "(same shape as src)", src.device)
-    for name, a in (("src", src), ("out", out)):
-        if not a.is_contiguous:
-            raise ValueError(f"{name} must be C-contiguous (element-wise kernels run on the flat buffer)")
-    return src.flatten(), out.flatten()
-
-
-def _launch_chunks(kernel, src, out, *extra) -> None:
-    flat_src, flat_out = _flat_pair(src, out)
+    if src.size == 0:
+        return
+    if not out.is_contiguous:
+        raise ValueError("out is written in place and must be C-contiguous "
+                         "(element-wise kernels run on the flat buffer)")
+    flat_src, flat_out = src.contiguous().flatten(), out.flatten()
     n = flat_src.shape[0]
     launch_rows(kernel, (n + CHUNK - 1) // CHUNK, [flat_src, flat_out, CHUNK, *extra], device=src.device)
 
@@ -151,8 +150,8 @@ def srgb_to_linear(src, out) -> None:
     """sRGB-encoded values in [0, 1] -> linear (IEC 61966-2-1 piecewise curve).
 
     ``out = src / 12.92`` for ``src <= 0.04045``, else ``((src + 0.055) / 1.055) ** 2.4``.
-    ``src``, ``out``: C-contiguous float32 wp.arrays of the same, any shape
-    (``out`` may be ``src``).
+    ``src``, ``out``: float32 wp.arrays of the same, any shape, ``out``
+    C-contiguous (``out`` may be ``src``).
     """
     _launch_chunks(srgb_to_linear_chunks, src, out)
 
@@ -161,7 +160,7 @@ def linear_to_srgb(src, out) -> None:
     """Linear values in [0, 1] -> sRGB-encoded (inverse of :func:`srgb_to_linear`).
 
     ``out = 12.92 src`` for ``src <= 0.0031308``, else ``1.055 src ** (1/2.4) - 0.055``.
-    Any shape, C-contiguous, ``out`` may be ``src``.
+    Any shape, ``out`` C-contiguous and may be ``src``.
     """
     _launch_chunks(linear_to_srgb_chunks, src, out)
 
@@ -170,7 +169,7 @@ def log_floor(src, out, floor: float) -> None:
     """``out = log(max(src, floor))`` element-wise (linear -> log domain), any shape.
 
     ``floor`` must be > 0 (it bounds the log from below: ``log(floor)``).
-    C-contiguous float32, ``out`` may be ``src``.
+    float32, ``out`` C-contiguous and may be ``src``.
     """
     floor = check_positive("floor", floor)
     _launch_chunks(log_floor_chunks, src, out, floor)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array
+from ivkernels.kernels.warp._checks import check_array, check_disjoint
 
 wp.set_module_options({"enable_backward": False})
 
@@ -107,6 +107,8 @@ def image_gradient(src, gx, gy) -> None:
     check_array("src", src, (None, None, None, None), "(T, H, W, C)")
     check_array("gx", gx, tuple(src.shape), "(T, H, W, C)", src.device)
     check_array("gy", gy, tuple(src.shape), "(T, H, W, C)", src.device)
+    check_disjoint("gx", gx, "src", src, "the stencil reads neighbours of src while writing gx")
+    check_disjoint("gy", gy, "src", src, "the stencil reads neighbours of src while writing gy")
     launch_rows(five_point_gradient_rows, src.shape[0] * src.shape[1], [src, gx, gy], device=src.device)
 
 

@@ -49,7 +49,7 @@ import warp as wp
 
 from ivkernels.kernels.host import EntropyScratch, allocate_entropy_scratch_with, run_entropy_steps
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array, check_float, check_int
+from ivkernels.kernels.warp._checks import check_array, check_disjoint, check_float, check_int
 
 wp.set_module_options({"enable_backward": False})
 
@@ -299,8 +299,8 @@ def entropy_blur(hist, taps, row_flags, tmp, blurred) -> None:
         (:func:`ivkernels.priors.entropy_blur_weights`).
     row_flags : wp.array int32 (2, T, B, B): plane 0 from
         :func:`entropy_histogram` (read), plane 1 scratch (written).
-    tmp : wp.array float32 (T, B, B, B), scratch.
-    blurred : wp.array float32 (T, B, B, B), written.
+    tmp : wp.array float32 (T, B, B, B), scratch.  Must not overlap ``hist``.
+    blurred : wp.array float32 (T, B, B, B), written.  Must not overlap ``hist``.
 
     Three passes (along k, j, i); rows whose sources are all empty cost only
     a flag check, so the cost follows the occupied part of the cube.
@@ -314,6 +314,8 @@ def entropy_blur(hist, taps, row_flags, tmp, blurred) -> None:
     check_array("row_flags", row_flags, (2, T, B, B), "(2, T, B, B)", dev, dtype=wp.int32)
     check_array("tmp", tmp, tuple(hist.shape), "(T, B, B, B) like hist", dev)
     check_array("blurred", blurred, tuple(hist.shape), "(T, B, B, B) like hist", dev)
+    check_disjoint("tmp", tmp, "hist", hist, "the blur reads neighbours of hist while writing tmp")
+    check_disjoint("blurred", blurred, "hist", hist, "the blur reads neighbours of hist while writing blurred")
     n = T * B * B
     launch_rows(blur_along_rows, n, [hist, taps, row_flags, blurred], device=dev)
     launch_rows(blur_across_rows, n, [blurred, taps, 2, 0, 1, row_flags, tmp], device=dev)
@@ -336,7 +338,7 @@ def entropy_slice_gradient(A, whiten, lo: float, h: float, blurred, dots, gA, la
 
     ``V`` is the trilinear interpolant of ``blurred`` (same ``lo``, ``h`` as
     the histogram), ``dots`` from :func:`entropy_dot`.  ``gA`` float32
-    (T, H, W, 3) is accumulated.
+    (T, H, W, 3) is accumulated; it must not overlap ``A``.
     """
     check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
     T, H, W, _ = A.shape
@@ -345,6 +347,7 @@ def entropy_slice_gradient(A, whiten, lo: float, h: float, blurred, dots, gA, la
     _check_hist("blurred", blurred, T, dev)
     check_array("dots", dots, (T,), "(T,)", dev, dtype=wp.float64)
     check_array("gA", gA, (T, H, W, 3), "(T, H, W, 3)", dev)
+    check_disjoint("gA", gA, "A", A, "the gradient is scattered into gA while A is read")
     lo, h = check_float("lo", lo), check_float("h", h, positive=True)
     lam = check_float("lam", lam)
     launch_rows(slice_gradient_rows, T * H, [A, whiten, lo, h, blurred, dots, lam, gA], device=dev)
@@ -383,11 +386,13 @@ def entropy_term(A, whiten, lo: float, h: float, taps, sigma_p: float, scratch: 
     scratch : :class:`EntropyScratch` for T frames (overwritten; afterwards
         ``hist``, ``blurred`` and ``dots`` hold the histogram, its blur and
         ``<hist, blurred>``).
-    gA : wp.array float32 (T, H, W, 3), accumulated ``+= dE/dA``.
+    gA : wp.array float32 (T, H, W, 3), accumulated ``+= dE/dA``.  Must not overlap ``A``.
     energy_rows : wp.array float64 (T*H,), row ``t*H`` accumulates ``E_t``.
     lam : Eq. 12's ``lambda_Ap``.
     """
     check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
     T, H, W, _ = A.shape
+    check_array("gA", gA, (T, H, W, 3), "(T, H, W, 3)", A.device)
     check_array("energy_rows", energy_rows, (T * H,), "(T*H,)", A.device, dtype=wp.float64)
+    check_disjoint("gA", gA, "A", A, "the gradient is scattered into gA while A is read")
     run_entropy_steps(sys.modules[__name__], A, whiten, lo, h, taps, sigma_p, scratch, gA, energy_rows, lam)

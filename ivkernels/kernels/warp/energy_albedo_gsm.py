@@ -44,7 +44,7 @@ import math
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array, check_float, check_int
+from ivkernels.kernels.warp._checks import check_array, check_disjoint, check_float, check_int
 from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 
 wp.set_module_options({"enable_backward": False})
@@ -239,6 +239,7 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
     check_array("table_dg", table_dg, (n,), "(n,) like table_g", dev)
     check_array("gA", gA, (T, H, W, 3), "(T, H, W, 3)", dev)
     check_array("energy_rows", energy_rows, (T * H,), "(T*H,)", dev, dtype=wp.float64)
+    check_disjoint("gA", gA, "A", A, "the gradient is scattered into gA while A is read")
     r2_max = check_float("r2_max", r2_max, positive=True)
     lam = check_float("lam", lam)
     radius = check_int("radius", radius, 1, " (2 for the paper's 5x5 window)")

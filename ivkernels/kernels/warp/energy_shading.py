@@ -12,7 +12,7 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array
+from ivkernels.kernels.warp._checks import check_array, check_disjoint
 from ivkernels.kernels.warp.energy_data import charbonnier
 
 wp.set_module_options({"enable_backward": False})
@@ -73,7 +73,7 @@ def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001)
     Parameters
     ----------
     S : wp.array float32 (T, H, W), log shading.
-    gS : wp.array float32 (T, H, W), accumulated.
+    gS : wp.array float32 (T, H, W), accumulated.  Must not overlap ``S``.
     energy_rows : wp.array float64 (T*H,), accumulated.
     lam : lambda_Ss.  eps : Charbonnier epsilon.
     """
@@ -81,6 +81,7 @@ def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001)
     t, h, w = S.shape
     check_array("gS", gS, (t, h, w), "(T, H, W)", S.device)
     check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", S.device, dtype=wp.float64)
+    check_disjoint("gS", gS, "S", S, "the gradient is scattered into gS while S is read")
     launch_rows(shading_smoothness_rows, t * h, [S, gS, energy_rows, float(lam), float(eps)], device=S.device)
 
 

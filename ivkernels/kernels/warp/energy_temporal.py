@@ -27,7 +27,7 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array
+from ivkernels.kernels.warp._checks import check_array, check_disjoint
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners
 from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 
@@ -106,6 +106,20 @@ def temporal_splat_rows(row_begin: int, flow: wp.array4d(dtype=float), occ: wp.a
                 wp.atomic_add(gX, t + 1, y1, x1, c, fx * fy * g)
 
 
+def with_channel_axis(a):
+    """A (T, H, W, 1) view of a (T, H, W) ``wp.array``, sharing its memory and strides.
+
+    Unlike ``reshape`` it takes strided arrays too; an empty ``a`` gives a new empty array.
+    """
+    shape = (*a.shape, 1)
+    if a.size == 0:
+        return wp.empty(shape, dtype=a.dtype, device=a.device)
+    view = wp.array(ptr=a.ptr, dtype=a.dtype, shape=shape, strides=(*a.strides, a.strides[-1]),
+                    device=a.device, copy=False)
+    view._ref = a               # keep the memory alive as long as the view
+    return view
+
+
 def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0, *,
                   workspace=None) -> None:
     """Add the temporal term of Eq. 4 (albedo) or Eq. 8 (shading) and its gradient.
@@ -117,10 +131,11 @@ def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0,
     ----------
     X : wp.array float32 (T, H, W, C) log albedo (C = 3) or log shading
         (C = 1, a ``reshape((T, H, W, 1))`` view); a (T, H, W) array is
-        accepted too and viewed that way.
+        accepted too and viewed that way.  Any strides.
     flow : wp.array float32 (T-1, H, W, 2), forward flow u_t (pixels).
     occ : wp.array float32 (T-1, H, W), w_occ (1 visible in t+1, 0 occluded).
     gX : wp.array float32, same shape as ``X``, accumulated: ``gX += dE/dX``.
+        Must not overlap ``X`` (ValueError).
     energy_rows : wp.array float64 (T*H,), accumulated; the pair (t, t+1)
         adds to the rows of frame t, the last frame's rows get nothing.
     lam : lambda_TA (10) or lambda_TS (1).  alpha : Tukey scale (log units).
@@ -128,13 +143,13 @@ def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0,
         keeps the (T-1, H, W, C) float32 splat weights between calls; without
         one they are allocated for this call.
 
-    With T = 1 there is no pair and nothing is added.
+    With T = 1, or no pixels, there is nothing to add.
     """
     if isinstance(X, wp.array) and len(X.shape) == 3:
         check_array("X", X, (None, None, None), "(T, H, W)")
         check_array("gX", gX, tuple(X.shape), "(T, H, W) like X", X.device)
-        X = X.reshape((*X.shape, 1))
-        gX = gX.reshape((*gX.shape, 1))
+        X = with_channel_axis(X)
+        gX = with_channel_axis(gX)
     check_array("X", X, (None, None, None, None), "(T, H, W, C) or (T, H, W)")
     t, h, w, c = X.shape
     dev = X.device
@@ -142,8 +157,9 @@ def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0,
     check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)", dev)
     check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", dev)
     check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dev, dtype=wp.float64)
+    check_disjoint("gX", gX, "X", X, "the gradient is scattered into gX while X is read")
     check_workspace(workspace)
-    if t < 2:
+    if t < 2 or h * w * c == 0:
         return
     shape = (t - 1, h, w, c)
     weight = scratch_buffer(workspace, f"{__name__}.splat_weight", shape, float,

@@ -16,7 +16,7 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array, check_int, check_positive
+from ivkernels.kernels.warp._checks import check_array, check_disjoint, check_int, check_positive
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners, inside_image
 from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 
@@ -259,7 +259,8 @@ def motion_boundary(sobel_mag, out, threshold: float, radius: int, *, workspace=
     ----------
     sobel_mag : wp.array float32 (T, H, W), flow edge magnitude
         (:func:`ivkernels.kernels.warp.derivatives.flow_sobel_magnitude`).
-    out : wp.array float32 (T, H, W), written, 0 or 1.  Must not overlap sobel_mag.
+    out : wp.array float32 (T, H, W), written, 0 or 1.  Must not overlap sobel_mag
+        when ``radius > 0`` (ValueError).
     threshold : edge magnitude, pixels per pixel.
     radius : dilation radius in pixels, int >= 0 (0 = threshold only).
     workspace : optional :class:`ivkernels.kernels.workspace.Workspace` that
@@ -269,6 +270,8 @@ def motion_boundary(sobel_mag, out, threshold: float, radius: int, *, workspace=
     check_array("sobel_mag", sobel_mag, (None, None, None), "(T, H, W)")
     check_array("out", out, tuple(sobel_mag.shape), "(T, H, W)", sobel_mag.device)
     radius = check_int("radius", radius, 0)
+    if radius:
+        check_disjoint("out", out, "sobel_mag", sobel_mag, "the dilation reads neighbours of sobel_mag")
     check_workspace(workspace)
     rows = sobel_mag.shape[0] * sobel_mag.shape[1]
     shape, dev = tuple(sobel_mag.shape), sobel_mag.device

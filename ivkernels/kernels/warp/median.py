@@ -27,7 +27,7 @@ from ivkernels.kernels.cache import cached
 from ivkernels.kernels.host import (KMEANS_ITERATIONS, MIN_SEPARATION, flow_scratch_shape,  # noqa: F401
                                     median_network, shading_scratch_shape, spatial_weights)
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array, check_int, check_positive
+from ivkernels.kernels.warp._checks import check_array, check_disjoint, check_int, check_positive
 from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 
 wp.set_module_options({"enable_backward": False})
@@ -440,6 +440,7 @@ def median5x5(src, out) -> None:
     check_array("src", src, (None, None, None, None), "(T, H, W, C)")
     t, h, w, c = src.shape
     check_array("out", out, (t, h, w, c), "(T, H, W, C)", src.device)
+    check_disjoint("out", out, "src", src, "the median reads a window of src around each pixel")
     launch_rows(median5x5_rows, t * h, [src, out], device=src.device)
 
 
@@ -492,6 +493,7 @@ def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float
         raise ValueError(f"flow has {tp} frames but S only {t}; expected T' <= T")
     check_array("w_bnd", w_bnd, (tp, h, w), "(T', H, W)", S.device)
     check_array("out", out, (t, h, w), "(T, H, W)", S.device)
+    check_disjoint("out", out, "S", S, "the median reads a window of S around each pixel")
     radius = check_int("radius", radius, 0)
     sigma_s = check_positive("sigma_s", sigma_s)
     lam = float(lam)
@@ -533,6 +535,7 @@ def weighted_median_flow(flow, lab, occ, mask, out, radius: int = 7, sigma_x: fl
     check_array("occ", occ, (t, h, w), "(T, H, W)", flow.device)
     check_array("mask", mask, (t, h, w), "(T, H, W)", flow.device)
     check_array("out", out, (t, h, w, 2), "(T, H, W, 2)", flow.device)
+    check_disjoint("out", out, "flow", flow, "the median reads a window of flow around each pixel")
     radius = check_int("radius", radius, 0)
     sigma_x = check_positive("sigma_x", sigma_x)
     sigma_i = check_positive("sigma_i", sigma_i)

@@ -21,7 +21,7 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array
+from ivkernels.kernels.warp._checks import check_array, check_disjoint
 
 wp.set_module_options({"enable_backward": False})
 
@@ -178,6 +178,7 @@ def _check_warp_args(src, flow, out, inside) -> None:
     check_array("flow", flow, (t, h, w, 2), "(T, H, W, 2)", src.device)
     check_array("out", out, (t, h, w, c), "(T, H, W, C)", src.device)
     check_array("inside", inside, (t, h, w), "(T, H, W)", src.device)
+    check_disjoint("out", out, "src", src, "the warp reads neighbours of src while writing out")
 
 
 def warp_bilinear(src, flow, out, inside) -> None:
@@ -224,6 +225,7 @@ def splat_bilinear(values, flow, out) -> None:
     t, h, w, c = values.shape
     check_array("flow", flow, (t, h, w, 2), "(T, H, W, 2)", values.device)
     check_array("out", out, (t, h, w, c), "(T, H, W, C)", values.device)
+    check_disjoint("out", out, "values", values, "the splat scatters into out while reading values")
     launch_rows(bilinear_splat_rows, t * h, [values, flow, out], device=values.device, align=h)
 
 

@@ -330,12 +330,15 @@ def _basis_vec4(basis, n4: int):
 
 
 def _basis_rows(basis, rows, coeffs=None):
-    """Check a (k, n) float32 basis, row indices and coefficients; return wp.arrays of them."""
+    """Check a (k, n) float32 basis, row indices and coefficients.
+
+    Returns the basis (a contiguous copy if it is not contiguous: the kernels
+    read its rows as ``wp.vec4``), the rows as an int32 wp.array and, when
+    given, the coefficients as a float32 wp.array.
+    """
     check_array("basis", basis, (None, None), "(k, n)")
-    if not basis.is_contiguous:
-        raise ValueError("basis must be contiguous")
     rows, coeffs = check_basis_rows(basis.shape[0], rows, coeffs)
-    out = [wp.array(rows, dtype=wp.int32, device=basis.device)]
+    out = [basis.contiguous(), wp.array(rows, dtype=wp.int32, device=basis.device)]
     if coeffs is not None:
         out.append(wp.array(coeffs, dtype=wp.float32, device=basis.device))
     return out
@@ -344,14 +347,14 @@ def _basis_rows(basis, rows, coeffs=None):
 def dots(basis, x, rows=None) -> np.ndarray:
     """Dot products of ``x`` with rows of ``basis`` in one pass over memory.
 
-    basis : (k, n) contiguous float32 wp.array, the vectors as rows.
+    basis : (k, n) float32 wp.array, the vectors as rows (copied first if not contiguous).
     x : 1-D float32 wp.array of length n (may be a row of ``basis``).
     rows : row indices to use (default all k).
     Returns (len(rows),) float64 NumPy array, ``basis[rows] @ x``, each with
     float64 products and sums per chunk (as :func:`dot`).
     """
     n = check_vector("x", x)
-    rows_wp, = _basis_rows(basis, rows)
+    basis, rows_wp = _basis_rows(basis, rows)
     if basis.shape[1] != n or basis.device != x.device:
         raise ValueError(f"basis must have shape (k, {n}) and be on {x.device}, got {tuple(basis.shape)} on {basis.device}")
     partial = wp.empty((rows_wp.shape[0], _chunks(n)), dtype=wp.float64, device=x.device)
@@ -365,11 +368,11 @@ def combine(out, basis, rows, coeffs) -> None:
     """``out = sum_r coeffs[r] * basis[rows[r]]`` (float32) in one pass over memory.
 
     out : 1-D float32 wp.array of length n, not a row of ``basis``.
-    basis : (k, n) contiguous float32 wp.array.
+    basis : (k, n) float32 wp.array (copied first if not contiguous).
     rows, coeffs : row indices and their (finite) coefficients, equal lengths.
     """
     n = check_vector("out", out)
-    rows_wp, coeffs_wp = _basis_rows(basis, rows, coeffs)
+    basis, rows_wp, coeffs_wp = _basis_rows(basis, rows, coeffs)
     if basis.shape[1] != n or basis.device != out.device:
         raise ValueError(f"basis must have shape (k, {n}) and be on {out.device}, got {tuple(basis.shape)} on {basis.device}")
     out4, = _vec4(out)
