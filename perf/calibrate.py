@@ -4,11 +4,15 @@ Every configuration is a set of :class:`ivkernels.Params` fields; for each it
 decomposes the synthetic training sequences (seeds other than 0, which is kept
 for reporting) with ground-truth flow and without temporal terms, and prints
 the LMSE (Grosse et al., mean of albedo and shading) per kind and the mean.
+With ``--mit`` it also decomposes the MIT-Berkeley training objects (each
+a static object under ten lights, so with their exact zero flow) and prints
+the albedo LMSE inside the mask per object and its mean, on separate rows.
 Choices made with it are recorded in the docstring of :class:`ivkernels.Params`
 and in perf/RESULTS.md with the command that produced them.
 
     python perf/calibrate.py --seeds 12 13 --frames 6 --size 120 160 \\
         --grid lam_shading_local=2,10,30 lam_albedo_smooth=0.1,0.3,1
+    python perf/calibrate.py --kinds --mit --grid lam_shading_local=10,30
 """
 from __future__ import annotations
 
@@ -41,6 +45,14 @@ def score(seq, params, temporal: bool) -> float:
     return metrics.intrinsic_lmse(video.albedo, video.shading, seq.albedo, seq.shading)["mean"]
 
 
+def mit_albedo_lmse(obj, params) -> float:
+    """Albedo LMSE in the mask of one MIT object (:class:`ivkernels.datasets.MITObject`), zero flow."""
+    t, h, w, _ = obj.frames.shape
+    video = iv.decompose(obj.frames, flow=np.zeros((t - 1, h, w, 2), np.float32), params=params)
+    truth = np.broadcast_to(obj.albedo, obj.frames.shape)
+    return metrics.intrinsic_lmse(video.albedo, video.shading, truth, obj.frame_shading, mask=obj.mask)["albedo"]
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, nargs="+", default=[12])
@@ -50,6 +62,8 @@ def main(argv=None) -> int:
     parser.add_argument("--grid", nargs="*", default=[], help="name=v1,v2 ... (Params fields)")
     parser.add_argument("--base", nargs="*", default=[], help="name=v fields fixed for every row")
     parser.add_argument("--no-ablation", action="store_true", help="skip the temporal=False rows")
+    parser.add_argument("--mit", action="store_true", help="also the MIT-Berkeley training objects")
+    parser.add_argument("--mit-scale", type=float, default=0.5)
     args = parser.parse_args(argv)
     if EVAL_SEED in args.seeds:
         raise SystemExit(f"seed {EVAL_SEED} is the evaluation seed; choose weights on other seeds")
@@ -57,14 +71,33 @@ def main(argv=None) -> int:
     seqs = [(kind, seed, synthetic.render_sequence(kind, n_frames=args.frames, size=tuple(args.size),
                                                    seed=seed))
             for seed in args.seeds for kind in args.kinds]
+    objects = []
+    if args.mit:
+        from ivkernels import datasets
+
+        objects = [datasets.load_mit_object(name, scale=args.mit_scale)
+                   for name in datasets.available_mit_objects()]
+        if not objects:
+            raise SystemExit("--mit: the MIT-Berkeley objects are not present (ivkernels.datasets)")
     header = " ".join(f"{k[:8]}/{s}" for k, s, _ in seqs)
-    print(f"{'config':<60} {'mode':<8} {header}   mean      s")
+    if seqs:
+        print(f"{'config':<60} {'mode':<8} {header}   mean      s")
+    if objects:
+        print(f"MIT albedo LMSE: {'config':<43} " + " ".join(f"{o.name[:10]:>10}" for o in objects)
+              + "     mean      s")
     for cfg in parse_grid(args.grid):
         params = iv.Params().replace(**base, **cfg)
+        label = ", ".join(f"{k}={v}" for k, v in cfg.items()) or "defaults"
+        if objects:
+            t0 = time.perf_counter()
+            vals = [mit_albedo_lmse(o, params) for o in objects]
+            print(f"MIT albedo LMSE: {label:<43} " + " ".join(f"{v:10.4f}" for v in vals)
+                  + f" {np.mean(vals):8.4f} {time.perf_counter() - t0:6.0f}", flush=True)
+        if not seqs:
+            continue
         for temporal in ([True] if args.no_ablation else [True, False]):
             t0 = time.perf_counter()
             vals = [score(seq, params, temporal) for _, _, seq in seqs]
-            label = ", ".join(f"{k}={v}" for k, v in cfg.items()) or "defaults"
             print(f"{label:<60} {'IV' if temporal else 'noflow':<8} "
                   + " ".join(f"{v:10.4f}" for v in vals)
                   + f" {np.mean(vals):8.4f} {time.perf_counter() - t0:6.0f}", flush=True)
