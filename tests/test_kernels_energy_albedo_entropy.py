@@ -5,6 +5,7 @@ discrete energy, lattice shifts, clamping outside the cube, bad input."""
 import numpy as np
 import pytest
 
+from ivkernels.kernels.cases.energy_albedo_entropy import clustered_albedo
 from ivkernels.kernels.reference import energy_albedo_entropy as ref
 from ivkernels.priors import entropy_blur_weights, load_albedo_prior
 from kernel_harness import contract, finite_differences, pytest_generate_tests  # noqa: F401  (fixture)
@@ -19,12 +20,7 @@ def prior():
     return load_albedo_prior()
 
 
-def make_albedo(rng, t, h, w, spread=0.05, n_colours=4):
-    """Log albedo of a few materials: per-frame cluster centres plus spread."""
-    centres = rng.normal(-1.0, 0.5, (t, n_colours, 3))
-    label = rng.integers(0, n_colours, (t, h * w))
-    A = np.take_along_axis(centres, label[..., None], axis=1).reshape(t, h, w, 3)
-    return (A + rng.normal(0.0, spread, A.shape)).astype(np.float32)
+make_albedo = clustered_albedo          # log albedo of a few materials (the case table's input)
 
 
 def bins_for(h_bin, lo=LO, hi=2.5):
