@@ -125,11 +125,11 @@ class Params:
         shading, up-sampled, divides the input into the albedo the next
         flow is estimated on (:func:`ivkernels.flow.joint.guide_albedo`).
         Chosen on training seed 1 (8 frames at 320x240, perf/RESULTS.md,
-        "Flow and intrinsic video together"): at 0.5 the second pass keeps
-        most of what a full-size first pass gives (flow EPE on the four
-        kinds 1.085 / 1.303 / 0.053 / 0.186 against 1.085 / 1.249 / 0.001 /
-        0.170, from 1.173 / 1.295 / 0.168 / 0.527 with one pass) for a
-        quarter of its cost.
+        "Flow and intrinsic video together, per window"): at 0.5 the second
+        pass keeps most of what a full-size first pass gives (flow EPE on
+        the four kinds 1.087 / 1.305 / 0.054 / 0.186 against 1.085 / 1.249 /
+        0.001 / 0.170, from 1.173 / 1.295 / 0.168 / 0.527 with one pass) for
+        a quarter of its cost.
 
     Long videos
     -----------
