@@ -83,6 +83,16 @@ def pytest_generate_tests(metafunc) -> None:
 
 # ----------------------------------------------------------------------------- checks
 
+def call_host(be, family: str, name: str, inputs, outputs, *params):
+    """Call ``be.<family>.<name>(*inputs, *outputs, *params)`` on float32 copies of the
+    NumPy ``inputs`` and ``outputs``; return the outputs as NumPy (one array, or a list)."""
+    args = [be.asarray(np.ascontiguousarray(a, np.float32)) for a in inputs]
+    outs = [be.asarray(np.ascontiguousarray(o, np.float32).copy()) for o in outputs]
+    getattr(getattr(be, family), name)(*args, *outs, *params)
+    result = [be.numpy(o).copy() for o in outs]
+    return result[0] if len(result) == 1 else result
+
+
 def finite_differences(energy, x, h: float = 1e-6) -> np.ndarray:
     """Central differences ``(E(x + h e_i) - E(x - h e_i)) / 2h`` of a scalar ``energy`` at every entry of ``x``.
 

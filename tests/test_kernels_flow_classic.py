@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ivkernels.kernels.reference import flow_classic as ref
-from kernel_harness import contract, pytest_generate_tests  # noqa: F401  (the kernel_backend fixture)
+from kernel_harness import call_host, contract, pytest_generate_tests  # noqa: F401  (the kernel_backend fixture)
 
 TestContract = contract("flow_classic")
 
@@ -14,12 +14,8 @@ T, H, W = 2, 37, 53
 
 
 def run(be, name, inputs, outputs, *params):
-    """Call ``be.flow_classic.<name>(*inputs, *outputs, *params)`` on copies; return the outputs as numpy."""
-    args = [be.asarray(np.ascontiguousarray(a, np.float32)) for a in inputs]
-    outs = [be.asarray(np.ascontiguousarray(o, np.float32).copy()) for o in outputs]
-    getattr(be.flow_classic, name)(*args, *outs, *params)
-    result = [be.numpy(o).copy() for o in outs]
-    return result[0] if len(result) == 1 else result
+    """``be.flow_classic.<name>(*inputs, *outputs, *params)`` on copies; the outputs as NumPy."""
+    return call_host(be, "flow_classic", name, inputs, outputs, *params)
 
 
 def linear_system(rng, t=T, h=H, w=W, quad_frac=0.0):

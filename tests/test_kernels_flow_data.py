@@ -6,17 +6,14 @@ channel equal to the brightness term, a ramp's gradient, bad input."""
 import numpy as np
 import pytest
 
-from kernel_harness import pytest_generate_tests  # noqa: F401  (the kernel_backend fixture)
+from kernel_harness import call_host, pytest_generate_tests  # noqa: F401  (the kernel_backend fixture)
 
 T, H, W = 2, 23, 37          # odd sizes: the red-black and border paths both run
 
 
 def run(be, name, inputs, outputs, *params):
-    args = [be.asarray(np.ascontiguousarray(a, np.float32)) for a in inputs]
-    outs = [be.asarray(np.ascontiguousarray(o, np.float32).copy()) for o in outputs]
-    getattr(be.flow_classic, name)(*args, *outs, *params)
-    result = [be.numpy(o).copy() for o in outs]
-    return result[0] if len(result) == 1 else result
+    """``be.flow_classic.<name>(*inputs, *outputs, *params)`` on copies; the outputs as NumPy."""
+    return call_host(be, "flow_classic", name, inputs, outputs, *params)
 
 
 def channel_system(rng, c, t=T, h=H, w=W):
