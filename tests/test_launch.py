@@ -135,6 +135,42 @@ def test_launch_rows_runs_every_row_once_in_its_band(split_everything, n, n_rows
     np.testing.assert_array_equal(first.numpy(), expected)
 
 
+@pytest.mark.parametrize("n", [1, 2, 3, 4])
+@pytest.mark.parametrize("n_rows", [1, 7, 101, 480])
+def test_balanced_launch_runs_every_row_once_in_chunks(split_everything, n, n_rows):
+    visits = wp.zeros(n_rows, dtype=int, device="cpu")
+    first = wp.full(n_rows, -1, dtype=int, device="cpu")
+    with threads(n):
+        for _ in range(2):                       # the first launch compiles, the second races
+            launch_rows(count_rows, n_rows, [visits, first], balance=True)
+    np.testing.assert_array_equal(visits.numpy(), 2)
+    chunks = row_bands(n_rows, n * launch.BALANCE_CHUNKS_PER_THREAD) if n > 1 else [(0, n_rows)]
+    expected = np.empty(n_rows, int)
+    for begin, count in chunks:
+        expected[begin:begin + count] = begin
+    np.testing.assert_array_equal(first.numpy(), expected)
+    if n > 1 and n_rows >= n * launch.BALANCE_CHUNKS_PER_THREAD:
+        assert len(np.unique(first.numpy())) == n * launch.BALANCE_CHUNKS_PER_THREAD
+
+
+def test_balanced_launch_passes_a_kernel_error_on(split_everything, monkeypatch):
+    calls = []
+
+    def failing_launch(kernel, dim, inputs, device):
+        calls.append(inputs[0])
+        if inputs[0] == 0:
+            raise RuntimeError("chunk failed")
+
+    visits = wp.zeros(64, dtype=int, device="cpu")
+    first = wp.zeros(64, dtype=int, device="cpu")
+    with threads(2):
+        launch_rows(count_rows, 64, [visits, first], balance=True)     # compiled and warm
+        monkeypatch.setattr(launch.wp, "launch", failing_launch)
+        with pytest.raises(RuntimeError, match="chunk failed"):
+            launch_rows(count_rows, 64, [visits, first], balance=True)
+    assert 0 in calls
+
+
 # ----------------------------------------------------------------------------- thread count
 
 def test_available_cores_is_the_affinity_mask():
@@ -298,13 +334,21 @@ def test_gather_and_scatter_kernels_identical_on_1_to_4_threads(split_everything
         splat = be.zeros((T, H, W, 3))
         gS, energy = be.zeros((T, H, W)), be.zeros(T * H, np.float64)
         median = be.zeros((T, H, W, 3))
+        wmed = be.zeros((T, H, W, 2))
+        lab = be.asarray(src * 100.0)
+        occ = be.asarray(np.ones((T, H, W), np.float32))
+        mask = np.zeros((T, H, W), np.float32)
+        mask[:, :5] = 1.0                                  # all the work in the top rows
         with threads(n):
+            be.median.weighted_median_flow(be.asarray(flow), lab, occ, be.asarray(mask), wmed,
+                                           radius=3)                                     # balanced
             be.derivatives.image_gradient(be.asarray(src), gx, gy)                            # gather
             be.median.median5x5(be.asarray(src), median)                                     # gather
             be.energy_shading.shading_smoothness(be.asarray(S), gS, energy)                  # gather
             be.sampling.splat_bilinear(be.asarray(src), be.asarray(flow), splat)             # scatter
-        results[n] = [be.numpy(a).copy() for a in (gx, gy, median, gS, energy, splat)]
-    assert max(band_counts) == 4                 # the launches did split
+        results[n] = [be.numpy(a).copy() for a in (gx, gy, median, gS, energy, splat, wmed)]
+    assert 4 in band_counts                      # the launches did split
+    assert 4 * launch.BALANCE_CHUNKS_PER_THREAD in band_counts      # and the balanced one into chunks
     for n in (2, 3, 4):
         for a, b in zip(results[1], results[n]):
             np.testing.assert_array_equal(a, b)

@@ -3,6 +3,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 PERF = Path(__file__).resolve().parents[1] / "perf"
@@ -75,3 +76,27 @@ def test_eval_flow_passes_prints_a_row_per_pass():
     rows = [line.split() for line in proc.stdout.splitlines() if line.startswith("static_moving_light")]
     assert [r[1] for r in rows] == ["1", "2"]
     assert float(rows[0][9]) == 0.0 < float(rows[1][9])      # a guide solve only with 2 passes
+
+
+@pytest.mark.slow
+def test_bench_balance_prints_a_row_per_pair(tmp_path):
+    import cv2
+
+    from ivkernels.flowio import write_flo
+    from ivkernels.synthetic import render_sequence
+
+    seq = render_sequence("objects_camera", n_frames=2, size=(40, 56), seed=1)
+    pair = tmp_path / "Venus"
+    pair.mkdir()
+    for name, frame in zip(("frame10.png", "frame11.png"), seq.frames):
+        encoded = np.round(np.clip(frame, 0, 1) ** (1 / 2.2) * 255).astype(np.uint8)
+        cv2.imwrite(str(pair / name), encoded[..., ::-1])
+    write_flo(pair / "flow10.flo", seq.flow[0])
+    proc = subprocess.run(
+        [sys.executable, str(PERF / "bench_balance.py"), "--data", str(tmp_path), "--sequences", "Venus",
+         "--threads", "2", "--chunks", "4", "--repeat", "1"],
+        capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    rows = [line.split() for line in proc.stdout.splitlines() if line.startswith("Venus")]
+    assert len(rows) == 1 and len(rows[0]) == 2 + 2 * 3        # name, share, 3 configurations x (s, ratio)
+    assert "2 x 4" in proc.stdout

@@ -11,6 +11,12 @@ thread runs the last band, a shared pool the others.
 Gather kernels (each output row written by the thread owning it) can be split
 at any row.  Scatter kernels must be split where the bands write disjoint
 memory; pass ``align=rows_per_frame`` to split only at frame boundaries.
+Kernels whose rows differ in work by the data (the weighted medians, which
+work only where a mask is set, often in one part of the image) pass
+``balance=True``: their rows are cut into :data:`BALANCE_CHUNKS_PER_THREAD`
+chunks per thread, which the threads take in turn as they finish, so that no
+thread waits on another that drew the busy half of the image.
+
 A band covers at least :data:`MIN_BAND_ELEMENTS` elements of the launch's
 largest array (:func:`min_band_rows`), so small launches (coarse pyramid
 levels, short vectors) stay on one thread, where handing a band to another
@@ -35,6 +41,12 @@ from ivkernels.kernels.thread_count import (THREADS_ENV, available_cores, defaul
 #: Fewest array elements a band must cover (rows times the elements per row
 #: of the launch's largest array argument) for a launch to be split.
 MIN_BAND_ELEMENTS = 16384
+
+#: Chunks per thread of a balanced launch (``launch_rows(..., balance=True)``).
+#: ``perf/bench_balance.py`` (the weighted flow median of Classic+NL-fast on
+#: Middlebury pairs, 2 threads): 1 thread / N threads 1.53 with one band per
+#: thread, 1.73 / 1.76 / 1.81 / 1.79 with 2 / 4 / 8 / 16 chunks per thread.
+BALANCE_CHUNKS_PER_THREAD = 8
 
 _pool: ThreadPoolExecutor | None = None
 _pool_workers = 0
@@ -97,7 +109,8 @@ def _executor(workers: int) -> ThreadPoolExecutor:
         return _pool
 
 
-def launch_rows(kernel, n_rows: int, inputs: list, device="cpu", *, align: int = 1) -> None:
+def launch_rows(kernel, n_rows: int, inputs: list, device="cpu", *, align: int = 1,
+                balance: bool = False) -> None:
     """Launch ``kernel(row_begin, *inputs)`` over ``n_rows`` rows.
 
     Parameters
@@ -109,9 +122,12 @@ def launch_rows(kernel, n_rows: int, inputs: list, device="cpu", *, align: int =
     align : split only at multiples of ``align`` rows (use the frame height
         for kernels that scatter into other rows).  If no aligned split
         exists the launch runs on one thread.
+    balance : cut the rows into :data:`BALANCE_CHUNKS_PER_THREAD` chunks per
+        thread, handed out one at a time to whichever thread is free (for
+        kernels whose work per row depends on the data).
 
     The rows are split by :func:`row_bands` into at most :func:`get_threads`
-    bands of at least :func:`min_band_rows` rows each.
+    bands (chunks) of at least :func:`min_band_rows` rows each.
     """
     if n_rows <= 0:
         return
@@ -119,7 +135,8 @@ def launch_rows(kernel, n_rows: int, inputs: list, device="cpu", *, align: int =
     n_threads = get_threads() if dev.is_cpu else 1
     bands = [(0, n_rows)]
     if n_threads > 1:
-        bands = row_bands(n_rows, n_threads, align, min_band_rows(n_rows, inputs))
+        n_bands = n_threads * BALANCE_CHUNKS_PER_THREAD if balance else n_threads
+        bands = row_bands(n_rows, n_bands, align, min_band_rows(n_rows, inputs))
     if len(bands) == 1:
         wp.launch(kernel, dim=n_rows, inputs=[0, *inputs], device=dev)
         return
@@ -132,12 +149,40 @@ def launch_rows(kernel, n_rows: int, inputs: list, device="cpu", *, align: int =
         for begin, count in bands:
             wp.launch(kernel, dim=count, inputs=[begin, *inputs], device=dev)
         return
+    if len(bands) > n_threads:
+        _launch_chunks(kernel, bands, inputs, dev, n_threads)
+        return
     pool = _executor(len(bands) - 1)
     others = [pool.submit(wp.launch, kernel, dim=count, inputs=[begin, *inputs], device=dev)
               for begin, count in bands[:-1]]
     begin, count = bands[-1]
     try:
         wp.launch(kernel, dim=count, inputs=[begin, *inputs], device=dev)
+    finally:
+        wait(others)
+    for other in others:
+        other.result()
+
+
+def _launch_chunks(kernel, chunks: list[tuple[int, int]], inputs: list, dev, n_threads: int) -> None:
+    """Launch ``chunks`` on ``n_threads`` threads (the caller's and ``n_threads - 1``
+    of the pool), each taking the next chunk not yet taken until none is left."""
+    pending = iter(chunks)
+    lock = threading.Lock()
+
+    def work() -> None:
+        while True:
+            with lock:
+                chunk = next(pending, None)
+            if chunk is None:
+                return
+            begin, count = chunk
+            wp.launch(kernel, dim=count, inputs=[begin, *inputs], device=dev)
+
+    pool = _executor(n_threads - 1)
+    others = [pool.submit(work) for _ in range(n_threads - 1)]
+    try:
+        work()
     finally:
         wait(others)
     for other in others:

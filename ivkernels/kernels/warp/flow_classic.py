@@ -153,12 +153,17 @@ def rof_dual_step_rows(row_begin: int, img: wp.array3d(dtype=float), p_in: wp.ar
     width = img.shape[2]
     t = r // height
     y = r - t * height
+    # v = img + theta div(p) at (y, x); its value at x + 1 is carried to the next x
+    v = float(0.0)
+    if width > 0:
+        v = img[t, y, 0] + theta * rof_divergence(p_in, t, y, 0)
     for x in range(width):
-        v = img[t, y, x] + theta * rof_divergence(p_in, t, y, x)
         gx = 0.0
         gy = 0.0
+        v_right = float(0.0)
         if x < width - 1:
-            gx = img[t, y, x + 1] + theta * rof_divergence(p_in, t, y, x + 1) - v
+            v_right = img[t, y, x + 1] + theta * rof_divergence(p_in, t, y, x + 1)
+            gx = v_right - v
         if y < height - 1:
             gy = img[t, y + 1, x] + theta * rof_divergence(p_in, t, y + 1, x) - v
         px = p_in[t, y, x, 0] + delta * gx
@@ -166,6 +171,7 @@ def rof_dual_step_rows(row_begin: int, img: wp.array3d(dtype=float), p_in: wp.ar
         norm = wp.max(1.0, wp.sqrt(px * px + py * py))
         p_out[t, y, x, 0] = px / norm
         p_out[t, y, x, 1] = py / norm
+        v = v_right
 
 
 @wp.kernel

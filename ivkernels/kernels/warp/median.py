@@ -505,7 +505,7 @@ def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float
                             wp.float32, S.device)
     launch_rows(weighted_median_shading_rows, t * h,
                 [S, flow, w_bnd, out, buf, spatial, radius, lam, KMEANS_ITERATIONS, MIN_SEPARATION],
-                device=S.device)
+                device=S.device, balance=True)
 
 
 def weighted_median_flow(flow, lab, occ, mask, out, radius: int = 7, sigma_x: float = 7.0,
@@ -542,4 +542,4 @@ def weighted_median_flow(flow, lab, occ, mask, out, radius: int = 7, sigma_x: fl
     check_workspace(workspace)
     buf = _scratch(workspace, "flow_window", flow_scratch_shape(flow.shape, radius), flow.device)
     launch_rows(weighted_median_flow_rows, t * h,
-                [flow, lab, occ, mask, out, buf, radius, sigma_x, sigma_i], device=flow.device)
+                [flow, lab, occ, mask, out, buf, radius, sigma_x, sigma_i], device=flow.device, balance=True)
