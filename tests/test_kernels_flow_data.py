@@ -2,7 +2,7 @@
 constancy) in kernels/*/flow_classic.py; their generic contract (against the NumPy
 reference) runs with the family's in test_kernels_flow_classic.py.  Here: the log floor, a
 gain becoming an offset, a hand-computed census with its border, offsets ignored, one
-channel equal to the brightness term, a ramp's gradient, bad input."""
+channel equal to the brightness term, the gradient feature of a ramp, bad input."""
 import numpy as np
 import pytest
 
@@ -81,8 +81,12 @@ def test_bad_input_raises(kernel_backend):
         be.flow_classic.log_grey(be.zeros((T, H, W, 3)), be.zeros((T, H, W)), 0.0)
 
 
-def test_gradient_channels_of_a_ramp(kernel_backend):
-    ramp = np.broadcast_to(2.5 * np.arange(W, dtype=np.float32), (1, H, W)).copy()
-    g = run(kernel_backend, "gradient_channels", [ramp], [np.zeros((1, H, W, 2))])
+def test_gradient_feature_of_a_ramp(kernel_backend):
+    """The gradient-constancy feature as the flow builds it: image_gradient, then pack_gradient."""
+    ramp = np.broadcast_to(2.5 * np.arange(W, dtype=np.float32)[:, None], (1, H, W, 1)).copy()
+    zeros = np.zeros((1, H, W, 1))
+    gx, gy = call_host(kernel_backend, "derivatives", "image_gradient", [ramp], [zeros, zeros])
+    g = run(kernel_backend, "pack_gradient", [gx[..., 0], gy[..., 0]], [np.zeros((1, H, W, 2))])
+    np.testing.assert_array_equal(g, np.concatenate([gx, gy], axis=-1))
     np.testing.assert_allclose(g[0, :, 2:-2, 0], 2.5, rtol=1e-5)
     np.testing.assert_allclose(g[..., 1], 0.0, atol=1e-6)

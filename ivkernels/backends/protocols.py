@@ -244,15 +244,15 @@ class FlowClassicFamily(Protocol):
     def pack_image_gradient(self, img, gx, gy, out) -> None:
         """``out = (img, gx, gy)``: inputs (T, H, W), out (T, H, W, 3)."""
 
+    def pack_gradient(self, gx, gy, out) -> None:
+        """``out = (gx, gy)``: inputs (T, H, W), out (T, H, W, 2)."""
+
     def data_coefficients(self, i1, i1x, i1y, warped, inside, du, out, blend: float = 0.5, a: float = 0.45,
                           eps: float = 0.001, quad_frac: float = 0.0, quad_weight: float = 2000000.0) -> None:
         """IRLS data coefficients (T, H, W, 5) of brightness constancy; warped (T, H, W, 3), du (T, H, W, 2)."""
 
     def soft_census(self, img, out, radius: int = 1, eps: float = 4.0, scale: float = 1.0) -> None:
         """Soft census of img (T, H, W) into out (T, H, W, (2r+1)^2 - 1)."""
-
-    def gradient_channels(self, img, out) -> None:
-        """``(d/dx, d/dy)`` of img (T, H, W) into out (T, H, W, 2)."""
 
     def pack_channels_gradient(self, feat, gx, gy, out) -> None:
         """Interleave feat, gx, gy (T, H, W, C) into out (T, H, W, 3C)."""

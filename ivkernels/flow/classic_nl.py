@@ -279,12 +279,15 @@ def gnc_schedule(stages: int) -> list[float]:
 
 
 def _features(be, s, tex3, gx3, gy3):
-    """Feature channels (T, h, w, C) of the data term and their weights (C,)."""
+    """Feature channels (T, h, w, C) of the data term and their weights (C,).
+
+    tex3 : the texture image (T, h, w); gx3, gy3 : its 5-point derivatives (T, h, w).
+    """
     t_all, h, w = tex3.shape
     if s.data_term == "gradient":
         if s.brightness_weight == 0.0:
             feat = be.empty((t_all, h, w, 2))
-            be.flow_classic.gradient_channels(tex3, feat)
+            be.flow_classic.pack_gradient(gx3, gy3, feat)
             return feat, (s.gradient_weight, s.gradient_weight)
         feat = be.empty((t_all, h, w, 3))
         be.flow_classic.pack_image_gradient(tex3, gx3, gy3, feat)

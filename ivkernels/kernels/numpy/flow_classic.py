@@ -53,6 +53,12 @@ def pack_image_gradient(img, gx, gy, out) -> None:
     write("out", out, ref.pack_image_gradient(img, gx, gy))
 
 
+def pack_gradient(gx, gy, out) -> None:
+    """``out = (gx, gy)`` (T, H, W, 2) of ``gx``, ``gy`` (T, H, W)."""
+    arrays(gx=gx, gy=gy)
+    write("out", out, ref.pack_gradient(gx, gy))
+
+
 def data_coefficients(i1, i1x, i1y, warped, inside, du, out, blend: float = 0.5, a: float = 0.45,
                       eps: float = 0.001, quad_frac: float = 0.0, quad_weight: float = 2000000.0) -> None:
     """IRLS data coefficients (T, H, W, 5) of the linearised brightness constancy."""
@@ -70,12 +76,6 @@ def soft_census(img, out, radius: int = 1, eps: float = 4.0, scale: float = 1.0)
     if not eps > 0.0:
         raise ValueError(f"eps must be > 0, got {eps!r}")
     write("out", out, ref.soft_census(img, radius, float(eps), float(scale)))
-
-
-def gradient_channels(img, out) -> None:
-    """``(d/dx, d/dy)`` (T, H, W, 2) of ``img`` (T, H, W)."""
-    arrays(img=img)
-    write("out", out, ref.gradient_channels(img))
 
 
 def pack_channels_gradient(feat, gx, gy, out) -> None:

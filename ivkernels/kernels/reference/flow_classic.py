@@ -66,6 +66,11 @@ def pack_image_gradient(img, gx, gy):
     return np.stack([img, gx, gy], axis=-1).astype(np.float64)
 
 
+def pack_gradient(gx, gy):
+    """(T, H, W) x 2 -> (T, H, W, 2) ``(gx, gy)``."""
+    return np.stack([gx, gy], axis=-1).astype(np.float64)
+
+
 def data_coefficients(i1, i1x, i1y, warped, inside, du, blend=0.5, a=0.45, eps=1e-3,
                       quad_frac=0.0, quad_weight=2e6):
     """(T, H, W, 5) ``psi * (Ix Ix, Ix Iy, Iy Iy, Ix It, Iy It)``."""
@@ -239,11 +244,3 @@ def data_coefficients_channels(first, warped, inside, du, weights, blend=0.5, a=
 def log_grey(rgb, floor=1e-3):
     """(T, H, W, 3) linear RGB -> (T, H, W) ``log(max(grey, floor))``."""
     return np.log(np.maximum(np.asarray(rgb, np.float64) @ np.asarray(GREY_WEIGHTS), floor))
-
-
-def gradient_channels(img):
-    """(T, H, W) -> (T, H, W, 2) 5-point derivatives ``(dI/dx, dI/dy)``, replicate border."""
-    from ivkernels.kernels.reference.derivatives import image_gradient
-
-    gx, gy = image_gradient(np.asarray(img, np.float64)[..., None])
-    return np.concatenate([gx, gy], axis=-1)

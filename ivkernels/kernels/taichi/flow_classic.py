@@ -123,6 +123,14 @@ def _pack_image_gradient(img: nd3, gx: nd3, gy: nd3, out: nd4):
 
 
 @ti.kernel
+def _pack_gradient(gx: nd3, gy: nd3, out: nd4):
+    for t, y in ti.ndrange(gx.shape[0], gx.shape[1]):
+        for x in range(gx.shape[2]):
+            out[t, y, x, 0] = gx[t, y, x]
+            out[t, y, x, 1] = gy[t, y, x]
+
+
+@ti.kernel
 def _data_coefficients(i1: nd3, i1x: nd3, i1y: nd3, warped: nd4, inside: nd3, du: nd4, out: nd4,
                        blend: ti.f32, a: ti.f32, eps: ti.f32, quad_frac: ti.f32, quad_weight: ti.f32):
     for t, y in ti.ndrange(i1.shape[0], i1.shape[1]):
@@ -166,24 +174,6 @@ def _soft_census(img: nd3, out: nd4, radius: ti.i32, eps: ti.f32, scale: ti.f32)
                         d = img[t, yy, ti.math.clamp(x + dx, 0, width - 1)] - centre
                         out[t, y, x, k] = scale * d / ti.sqrt(d * d + eps * eps)
                         k += 1
-
-
-@ti.kernel
-def _gradient_channels(img: nd3, out: nd4):
-    height = img.shape[1]
-    width = img.shape[2]
-    for t, y in ti.ndrange(img.shape[0], height):
-        ym2 = ti.max(y - 2, 0)
-        ym1 = ti.max(y - 1, 0)
-        yp1 = ti.min(y + 1, height - 1)
-        yp2 = ti.min(y + 2, height - 1)
-        for x in range(width):
-            xm2 = ti.max(x - 2, 0)
-            xm1 = ti.max(x - 1, 0)
-            xp1 = ti.min(x + 1, width - 1)
-            xp2 = ti.min(x + 2, width - 1)
-            out[t, y, x, 0] = (img[t, y, xm2] - 8.0 * img[t, y, xm1] + 8.0 * img[t, y, xp1] - img[t, y, xp2]) / 12.0
-            out[t, y, x, 1] = (img[t, ym2, x] - 8.0 * img[t, ym1, x] + 8.0 * img[t, yp1, x] - img[t, yp2, x]) / 12.0
 
 
 @ti.kernel
@@ -474,6 +464,15 @@ def pack_image_gradient(img, gx, gy, out) -> None:
     _pack_image_gradient(img, gx, gy, out)
 
 
+def pack_gradient(gx, gy, out) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.pack_gradient`."""
+    gx = check_array("gx", gx, (None, None, None), "(T, H, W)")
+    t, h, w = gx.shape
+    gy = check_array("gy", gy, (t, h, w), "(T, H, W)")
+    check_array("out", out, (t, h, w, 2), "(T, H, W, 2)", output=True)
+    _pack_gradient(gx, gy, out)
+
+
 def data_coefficients(i1, i1x, i1y, warped, inside, du, out, blend: float = 0.5, a: float = 0.45,
                       eps: float = 1e-3, quad_frac: float = 0.0, quad_weight: float = 2e6) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.data_coefficients`."""
@@ -580,14 +579,6 @@ def soft_census(img, out, radius: int = 1, eps: float = 4.0, scale: float = 1.0)
     c = (2 * radius + 1) ** 2 - 1
     check_array("out", out, (t, h, w, c), f"(T, H, W, {c})", output=True)
     _soft_census(img, out, radius, float(eps), float(scale))
-
-
-def gradient_channels(img, out) -> None:
-    """See :func:`ivkernels.kernels.warp.flow_classic.gradient_channels`."""
-    img = check_array("img", img, (None, None, None), "(T, H, W)")
-    t, h, w = img.shape
-    check_array("out", out, (t, h, w, 2), "(T, H, W, 2)", output=True)
-    _gradient_channels(img, out)
 
 
 def pack_channels_gradient(feat, gx, gy, out) -> None:

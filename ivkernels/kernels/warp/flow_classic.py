@@ -200,6 +200,18 @@ def pack_image_gradient_rows(row_begin: int, img: wp.array3d(dtype=float), gx: w
 
 
 @wp.kernel
+def pack_gradient_rows(row_begin: int, gx: wp.array3d(dtype=float), gy: wp.array3d(dtype=float),
+                       out: wp.array4d(dtype=float)):
+    r = row_begin + wp.tid()
+    height = gx.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(gx.shape[2]):
+        out[t, y, x, 0] = gx[t, y, x]
+        out[t, y, x, 1] = gy[t, y, x]
+
+
+@wp.kernel
 def data_coefficients_rows(row_begin: int, i1: wp.array3d(dtype=float), i1x: wp.array3d(dtype=float),
                            i1y: wp.array3d(dtype=float), warped: wp.array4d(dtype=float),
                            inside: wp.array3d(dtype=float), du: wp.array4d(dtype=float),
@@ -244,26 +256,6 @@ def soft_census_rows(row_begin: int, img: wp.array3d(dtype=float), out: wp.array
                     d = img[t, yy, wp.clamp(x + dx, 0, width - 1)] - centre
                     out[t, y, x, k] = scale * d / wp.sqrt(d * d + eps * eps)
                     k += 1
-
-
-@wp.kernel
-def gradient_channels_rows(row_begin: int, img: wp.array3d(dtype=float), out: wp.array4d(dtype=float)):
-    r = row_begin + wp.tid()
-    height = img.shape[1]
-    width = img.shape[2]
-    t = r // height
-    y = r - t * height
-    ym2 = wp.max(y - 2, 0)
-    ym1 = wp.max(y - 1, 0)
-    yp1 = wp.min(y + 1, height - 1)
-    yp2 = wp.min(y + 2, height - 1)
-    for x in range(width):
-        xm2 = wp.max(x - 2, 0)
-        xm1 = wp.max(x - 1, 0)
-        xp1 = wp.min(x + 1, width - 1)
-        xp2 = wp.min(x + 2, width - 1)
-        out[t, y, x, 0] = (img[t, y, xm2] - 8.0 * img[t, y, xm1] + 8.0 * img[t, y, xp1] - img[t, y, xp2]) / 12.0
-        out[t, y, x, 1] = (img[t, ym2, x] - 8.0 * img[t, ym1, x] + 8.0 * img[t, yp1, x] - img[t, yp2, x]) / 12.0
 
 
 @wp.kernel
@@ -646,6 +638,19 @@ def pack_image_gradient(img, gx, gy, out) -> None:
     launch_rows(pack_image_gradient_rows, t * h, [img, gx, gy, out], img.device)
 
 
+def pack_gradient(gx, gy, out) -> None:
+    """Stack two derivatives as channels: ``out = (gx, gy)``, the feature of a gradient-constancy term.
+
+    gx, gy : (T, H, W) float32 (e.g. from
+    :func:`ivkernels.kernels.warp.derivatives.image_gradient`); out : (T, H, W, 2) float32.
+    """
+    check_array("gx", gx, (None, None, None), "(T, H, W)")
+    t, h, w = gx.shape
+    check_array("gy", gy, (t, h, w), "(T, H, W)", gx.device)
+    check_array("out", out, (t, h, w, 2), "(T, H, W, 2)", gx.device)
+    launch_rows(pack_gradient_rows, t * h, [gx, gy, out], gx.device)
+
+
 def data_coefficients(i1, i1x, i1y, warped, inside, du, out, blend: float = 0.5, a: float = 0.45,
                       eps: float = 1e-3, quad_frac: float = 0.0, quad_weight: float = 2e6) -> None:
     """IRLS coefficients of the linearised brightness-constancy term.
@@ -700,20 +705,6 @@ def soft_census(img, out, radius: int = 1, eps: float = 4.0, scale: float = 1.0)
     c = (2 * radius + 1) ** 2 - 1
     check_array("out", out, (t, h, w, c), f"(T, H, W, {c})", img.device)
     launch_rows(soft_census_rows, t * h, [img, out, radius, float(eps), float(scale)], img.device)
-
-
-def gradient_channels(img, out) -> None:
-    """x and y derivatives of an image as two channels, the feature of a gradient-constancy term.
-
-    The 5-point filter ``[1 -8 0 8 -1] / 12`` of
-    :func:`ivkernels.kernels.warp.derivatives.image_gradient`, replicate border.
-
-    img : (T, H, W) float32; out : (T, H, W, 2) float32 ``(dI/dx, dI/dy)``.
-    """
-    check_array("img", img, (None, None, None), "(T, H, W)")
-    t, h, w = img.shape
-    check_array("out", out, (t, h, w, 2), "(T, H, W, 2)", img.device)
-    launch_rows(gradient_channels_rows, t * h, [img, out], img.device)
 
 
 def pack_channels_gradient(feat, gx, gy, out) -> None:
