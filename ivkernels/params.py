@@ -158,6 +158,7 @@ class Params:
     # Eq. 9, 10, 13
     lam_shading_local: float = 10.0
     eps_shading: float = 0.001
+    shading_gate_tau: float = 0.0
     lam_shading_nonlocal: float = 10000.0
     lam_coupling: float = 10.0
     sigma_s: float = 7.0
@@ -229,4 +230,5 @@ _RULES = {
     "overlap": Range(int, 0),
     "boundary_threshold": Range(float, 0.0),
     "init_blur": Range(float, 0.0),
+    "shading_gate_tau": Range(float, 0.0, why="a log-contrast change; 0 switches the gate off"),
 }

@@ -28,6 +28,19 @@ def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
     write("occ", occ, ref.warp_reliability(log_image, flow, occ, float(max_spread)))
 
 
+def shading_gate(log_image, flow, gate, tau: float) -> None:
+    """The gate (T, H, W) of Eq. 9's local term from log_image (T, H, W, 3) and flow (T-1, H, W, 2)."""
+    arrays(log_image=log_image, flow=flow)
+    if log_image.ndim != 4 or log_image.shape[3] != 3:
+        raise ValueError(f"log_image must have shape (T, H, W, 3), got {log_image.shape}")
+    t, h, w, _ = log_image.shape
+    if flow.shape != (max(t - 1, 0), h, w, 2):
+        raise ValueError(f"flow must have shape {(max(t - 1, 0), h, w, 2)} (T-1, H, W, 2), got {flow.shape}")
+    check_disjoint("gate", gate, "log_image", log_image, "the gate is written while log_image is read")
+    check_disjoint("gate", gate, "flow", flow, "the gate is written while flow is read")
+    write("gate", gate, ref.shading_gate(log_image, flow, check_positive("tau", tau)))
+
+
 def motion_boundary(sobel_mag, out, threshold: float, radius: int, *, workspace=None) -> None:
     """``w_bnd`` (T, H, W): ``sobel_mag`` above ``threshold``, dilated by ``radius`` pixels."""
     check_workspace(workspace)

@@ -53,3 +53,39 @@ def motion_boundary(sobel_mag, threshold: float, radius: int) -> np.ndarray:
         for dx in range(2 * radius + 1):
             out |= p[:, dy:dy + h, dx:dx + w]
     return out.astype(np.float64)
+
+
+def log_change(log_image, flow):
+    """``(D, valid)``, both (T-1, H, W): ``D = L_{t+1}(x + u) - L_t(x)`` with ``L`` the
+    mean over channels of the log image (bilinear sample, clamped corners), and
+    ``valid`` = 1 where ``x + u`` lies inside the image."""
+    L = np.asarray(log_image, np.float64).mean(-1)
+    warped, inside = warp_bilinear(L[1:, ..., None], np.asarray(flow, np.float64))
+    return warped[..., 0] - L[:-1], inside
+
+
+def shading_gate(log_image, flow, tau: float) -> np.ndarray:
+    """The temporal gate of the local shading smoothness (T, H, W), in (0, 1].
+
+    ``gate = exp(-(e / tau)^2)`` with ``e(x) = max_{y in N3(x)} |D(x) - D(y)|``
+    over the neighbours ``y`` whose sample is valid too (:func:`log_change` of
+    the frame's pair with the next frame; the last frame uses the pair before
+    it); 0 where ``x``'s own sample is not valid, and 1 everywhere for T = 1.
+    """
+    img = np.asarray(log_image, np.float64)
+    t, h, w, _ = img.shape
+    if t < 2:
+        return np.ones((t, h, w))
+    D, valid = log_change(img, flow)
+    e = np.zeros(D.shape)
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            if dy == dx == 0:
+                continue
+            ys, xs = slice(max(0, -dy), h - max(0, dy)), slice(max(0, -dx), w - max(0, dx))
+            yn, xn = slice(max(0, dy), h + min(0, dy)), slice(max(0, dx), w + min(0, dx))
+            d = np.abs(D[:, ys, xs] - D[:, yn, xn]) * valid[:, yn, xn]
+            e[:, ys, xs] = np.maximum(e[:, ys, xs], d)
+    e *= valid
+    e = np.concatenate([e, e[-1:]], 0)
+    return np.exp(-(e / tau) ** 2)
