@@ -70,7 +70,7 @@ def shading_gate(log_image, flow, tau: float) -> np.ndarray:
     ``gate = exp(-(e / tau)^2)`` with ``e(x) = max_{y in N3(x)} |D(x) - D(y)|``
     over the neighbours ``y`` whose sample is valid too (:func:`log_change` of
     the frame's pair with the next frame; the last frame uses the pair before
-    it); 0 where ``x``'s own sample is not valid, and 1 everywhere for T = 1.
+    it); e = 0 (gate 1) where ``x``'s own sample is not valid, and gate 1 everywhere for T = 1.
     """
     img = np.asarray(log_image, np.float64)
     t, h, w, _ = img.shape

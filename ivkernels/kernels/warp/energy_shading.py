@@ -121,7 +121,7 @@ def shading_smoothness_gated(S, gate, gS, energy_rows, lam: float = 2.0, eps: fl
     the pair weight ``w(x, y) = (gate(x) + gate(y)) / 2`` (symmetric, so
     ``dE/dS(x) = 2 lam sum_y w(x, y) psi(S(x) - S(y))``).  With ``gate = 1``
     everywhere it is :func:`shading_smoothness`.  The gate comes from the
-    input (:func:`ivkernels.kernels.warp.shading_gate.shading_gate`): low
+    input (:func:`ivkernels.kernels.warp.maps.shading_gate`): low
     across a likely shading edge, which the term then lets through.
 
     Parameters
