@@ -169,3 +169,24 @@ def test_shading_gate_bad_input(kernel_backend):
     with pytest.raises(ValueError, match="log_image"):
         m.shading_gate(kernel_backend.zeros((2, 4, 5, 1)), kernel_backend.zeros((1, 4, 5, 2)),
                        kernel_backend.zeros((2, 4, 5)), 0.1)
+
+
+def test_shading_gate_chroma_keeps_a_colour_edge_open(kernel_backend):
+    """A moving edge of one channel (a colour edge): without tau_chroma the gate closes across
+    it like across a shadow; with it the rows where this frame's colour changes stay open."""
+    t, h, w = 2, 8, 12
+    img = np.zeros((t, h, w, 3), np.float32)
+    for k in range(t):
+        img[k, : 2 + 2 * k, :, 0] -= 0.6                           # red drops above the edge, 2 rows lower in frame 1
+    still = np.zeros((t - 1, h, w, 2), np.float32)
+    plain = gate(kernel_backend, img, still, 0.2)
+    np.testing.assert_allclose(plain[0, 1:5], np.exp(-1.0), rtol=1e-5)   # |dD| = 0.6 / 3 across rows 1|2 and 3|4
+    out = kernel_backend.zeros((t, h, w))
+    kernel_backend.maps.shading_gate(kernel_backend.asarray(img), kernel_backend.asarray(still), out, 0.2,
+                                     tau_chroma=0.1)
+    chroma = kernel_backend.numpy(out)
+    np.testing.assert_allclose(chroma[0, 1:3], 1.0, atol=1e-6)          # frame 0's colour edge: rows 1|2
+    np.testing.assert_allclose(chroma[0, 3:5], np.exp(-1.0), rtol=1e-5)  # no colour change in frame 0 there
+    with pytest.raises(ValueError, match="tau_chroma"):
+        kernel_backend.maps.shading_gate(kernel_backend.asarray(img), kernel_backend.asarray(still), out, 0.2,
+                                         tau_chroma=-1.0)

@@ -83,7 +83,7 @@ class MapsFamily(Protocol):
     def warp_reliability(self, log_image, flow, occ, max_spread: float) -> None:
         """Clear occ (T, H, W) where the warp of log_image (T+1, H, W, C) by flow straddles an edge."""
 
-    def shading_gate(self, log_image, flow, gate, tau: float) -> None:
+    def shading_gate(self, log_image, flow, gate, tau: float, tau_chroma: float = 0.0) -> None:
         """Gate (T, H, W) of Eq. 9's local term: log_image (T, H, W, 3), flow (T-1, H, W, 2), tau > 0."""
 
     def motion_boundary(self, sobel_mag, out, threshold: float, radius: int, *, workspace=None) -> None:

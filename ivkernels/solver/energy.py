@@ -81,7 +81,8 @@ class WindowEnergy:
         self.gate = None             # per-pixel weight of Eq. 9's local term (Params.shading_gate_tau)
         if params.shading_gate_tau > 0 and self.temporal:
             self.gate = be.empty((T, h, w))
-            be.maps.shading_gate(log_image, flow, self.gate, params.shading_gate_tau)
+            be.maps.shading_gate(log_image, flow, self.gate, params.shading_gate_tau,
+                                 tau_chroma=params.shading_gate_chroma)
         self.workspace = Workspace()        # the kernels' scratch buffers, freed with this energy
         self._rows_shape = (T * h,)
         self._gsm = None

@@ -9,7 +9,7 @@ of :mod:`ivkernels.kernels.taichi.sampling`.  Parallel over the ``T * H`` rows.
 import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.taichi._checks import check_array, check_disjoint, check_int, check_positive
+from ivkernels.kernels.taichi._checks import check_array, check_disjoint, check_int, check_non_negative, check_positive
 from ivkernels.kernels.taichi.sampling import bilinear_at, clamped_corners, inside_image
 from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 
@@ -104,8 +104,18 @@ def log_change_at(img: ti.template(), flow: ti.template(), p, y, x):
     return d / 3.0, inside_image(px, py, height, width)
 
 
+@ti.func
+def chroma_distance(img: ti.template(), t, y, x, yy, xx):
+    """``|C(x) - C(y)|`` (Euclidean), ``C`` the log chromaticity (log image minus its channel mean)."""
+    d0 = img[t, y, x, 0] - img[t, yy, xx, 0]
+    d1 = img[t, y, x, 1] - img[t, yy, xx, 1]
+    d2 = img[t, y, x, 2] - img[t, yy, xx, 2]
+    m = (d0 + d1 + d2) / 3.0
+    return ti.sqrt((d0 - m) * (d0 - m) + (d1 - m) * (d1 - m) + (d2 - m) * (d2 - m))
+
+
 @ti.kernel
-def shading_gate_rows(img: nd4, flow: nd4, gate: nd3, tau: ti.f32):
+def shading_gate_rows(img: nd4, flow: nd4, gate: nd3, tau: ti.f32, tau_chroma: ti.f32):
     height = img.shape[1]
     width = img.shape[2]
     for r in range(img.shape[0] * height):
@@ -126,6 +136,18 @@ def shading_gate_rows(img: nd4, flow: nd4, gate: nd3, tau: ti.f32):
                                     dn, valid_n = log_change_at(img, flow, p, yy, xx)
                                     if valid_n > 0.0:
                                         e = ti.max(e, ti.abs(d - dn))
+            if tau_chroma > 0.0:
+                c = 0.0
+                for j in ti.static(range(3)):
+                    yy = y + j - 1
+                    if 0 <= yy < height:
+                        for i in ti.static(range(3)):
+                            xx = x + i - 1
+                            if ti.static(i != 1 or j != 1):
+                                if 0 <= xx < width:
+                                    c = ti.max(c, chroma_distance(img, t, y, x, yy, xx))
+                qc = c / tau_chroma
+                e = e * ti.exp(-qc * qc)
             q = e / tau
             gate[t, y, x] = ti.exp(-q * q)
 
@@ -217,7 +239,7 @@ def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
         warp_reliability_rows(log_image, flow, occ, max_spread)
 
 
-def shading_gate(log_image, flow, gate, tau: float) -> None:
+def shading_gate(log_image, flow, gate, tau: float, tau_chroma: float = 0.0) -> None:
     """The per-pixel gate of the local shading smoothness (Eq. 9) from the input's log
     change along the flow; see :func:`ivkernels.kernels.warp.maps.shading_gate`."""
     log_image = check_array("log_image", log_image, (None, None, None, 3), "(T, H, W, 3)")
@@ -227,10 +249,11 @@ def shading_gate(log_image, flow, gate, tau: float) -> None:
     check_disjoint("gate", gate, "log_image", log_image, "the gate is written while log_image is read")
     check_disjoint("gate", gate, "flow", flow, "the gate is written while flow is read")
     tau = check_positive("tau", tau)
+    tau_chroma = check_non_negative("tau_chroma", tau_chroma)
     if t == 1:
         gate[...] = 1.0
     elif gate.size:
-        shading_gate_rows(log_image, flow, gate, tau)
+        shading_gate_rows(log_image, flow, gate, tau, tau_chroma)
 
 
 def motion_boundary(sobel_mag, out, threshold: float, radius: int, *, workspace=None) -> None:
