@@ -64,6 +64,38 @@ class Params:
         0.0160 / 0.0161; 5 / 0.3 and 10 / 0.3 give 0.0168 / 0.0194.  The
         ablation without temporal terms is best at 2 / 0.3 (0.0189) and gets
         0.0193 at 10 / 1: its best is 15% worse than intrinsic video here.
+    shading_gate_tau
+        A per-pixel gate on the pair terms of Eq. 9's local term, computed
+        from the input (``maps.shading_gate``): pair weight ``(g(x) + g(y)) /
+        2`` with ``g = exp(-(e / tau)^2)``, ``e`` the largest change, along
+        the flow from one frame to the next, of the input's log difference
+        to a neighbour (Weiss: an albedo edge keeps its contrast while the
+        light or the scene moves, a shading edge does not).  Needs the flow:
+        without temporal terms it is not computed.  0 switches it off
+        (``energy_shading.shading_smoothness``, bit for bit).  Off by
+        default: measured (perf/RESULTS.md, "An edge-aware local shading
+        term"; ``python perf/calibrate.py --seeds 12 13 --frames 6 --size
+        120 160 --no-ablation --grid lam_shading_local=30
+        shading_gate_tau=0.05,0.1,0.2`` and ``--kinds --mit --mit-objects
+        squirrel teabag2 dinosaur apple phone``), with lambda_Ss = 30 it
+        lowers the synthetic training LMSE from 0.0169 (lambda_Ss = 10, no
+        gate) to 0.0144 / 0.0160 / 0.0220 at tau = 0.05 / 0.1 / 0.2, but on
+        the MIT objects, lit from ten very different directions, the input's
+        contrast changes between frames nearly everywhere on the object
+        (the gate closes on 60-90% of it at tau = 0.1), so the term loses
+        the stronger smoothness those objects need: mean albedo LMSE of
+        those five objects 0.0836 / 0.0631 at tau = 0.1 / 0.2 against 0.0406
+        without the gate at lambda_Ss = 30 and 0.0694 at 10.
+    shading_gate_chroma
+        With the gate on and this > 0, a contrast change where the
+        input's log chromaticity changes by about this much or more is not
+        taken for a shading edge (evidence times ``exp(-(c / tau_c)^2)``).
+        0 (default): colour is not used.  Measured with lambda_Ss = 30,
+        tau = 0.05 (same section): it brings the MIT objects back near the
+        ungated lambda_Ss = 30 (teabag2 / dinosaur / squirrel 0.0229 /
+        0.0290 / 0.1060 at tau_c = 0.05) but loses the synthetic gain,
+        whose textures change colour everywhere (seed 12: 0.0283 / 0.0259 /
+        0.0208 at tau_c = 0.05 / 0.2 / 0.5 against 0.0138 without a gate).
     lam_shading_nonlocal, lam_coupling, sigma_s, nonlocal_radius
         Eq. 9-10, 13: 15x15 (radius 7) weighted L1 near motion boundaries,
         minimised through the coupling variable S~.
@@ -158,6 +190,8 @@ class Params:
     # Eq. 9, 10, 13
     lam_shading_local: float = 10.0
     eps_shading: float = 0.001
+    shading_gate_tau: float = 0.0
+    shading_gate_chroma: float = 0.0
     lam_shading_nonlocal: float = 10000.0
     lam_coupling: float = 10.0
     sigma_s: float = 7.0
@@ -229,4 +263,6 @@ _RULES = {
     "overlap": Range(int, 0),
     "boundary_threshold": Range(float, 0.0),
     "init_blur": Range(float, 0.0),
+    "shading_gate_tau": Range(float, 0.0, why="a log-contrast change; 0 switches the gate off"),
+    "shading_gate_chroma": Range(float, 0.0, why="a log-chromaticity change; 0: the gate ignores colour"),
 }

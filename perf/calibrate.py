@@ -64,6 +64,8 @@ def main(argv=None) -> int:
     parser.add_argument("--no-ablation", action="store_true", help="skip the temporal=False rows")
     parser.add_argument("--mit", action="store_true", help="also the MIT-Berkeley training objects")
     parser.add_argument("--mit-scale", type=float, default=0.5)
+    parser.add_argument("--mit-objects", nargs="+", default=None, metavar="NAME",
+                        help="a subset of the MIT objects (default: every one present)")
     args = parser.parse_args(argv)
     if EVAL_SEED in args.seeds:
         raise SystemExit(f"seed {EVAL_SEED} is the evaluation seed; choose weights on other seeds")
@@ -75,8 +77,8 @@ def main(argv=None) -> int:
     if args.mit:
         from ivkernels import datasets
 
-        objects = [datasets.load_mit_object(name, scale=args.mit_scale)
-                   for name in datasets.available_mit_objects()]
+        names = args.mit_objects or datasets.available_mit_objects()
+        objects = [datasets.load_mit_object(name, scale=args.mit_scale) for name in names]
         if not objects:
             raise SystemExit("--mit: the MIT-Berkeley objects are not present (ivkernels.datasets)")
     header = " ".join(f"{k[:8]}/{s}" for k, s, _ in seqs)

@@ -71,3 +71,38 @@ def test_bad_input_raises(kernel_backend, rng):
         cp(S, kernel_backend.zeros((1, 5, 6)), w_bnd, gS, er)
     with pytest.raises(TypeError, match="w_bnd must have dtype float32"):
         cp(S, S_tilde, kernel_backend.zeros((1, 5, 6), np.float64), gS, er)
+
+
+def run_gated(be, S, gate, **kw):
+    gS, er = buffers(be, S.shape, None, None)
+    be.energy_shading.shading_smoothness_gated(be.asarray(S), be.asarray(gate), gS, er, **kw)
+    return be.numpy(er).copy(), be.numpy(gS).copy()
+
+
+def test_gated_smoothness_with_gate_one_is_the_plain_term(kernel_backend, rng):
+    S = rng.normal(size=(2, 9, 13)).astype(np.float32)
+    er, gS = run_gated(kernel_backend, S, np.ones_like(S), lam=3.0, eps=0.01)
+    er0, gS0 = run_smoothness(kernel_backend, S, lam=3.0, eps=0.01)
+    np.testing.assert_array_equal(er, er0)
+    np.testing.assert_array_equal(gS, gS0)
+
+
+def test_gated_smoothness_hand_computed_pair(kernel_backend):
+    """1x2 image: one pair, counted twice, weighted by the mean of its two gates."""
+    S = np.array([[[0.0, 0.3]]], np.float32)
+    er, gS = run_gated(kernel_backend, S, np.array([[[0.2, 0.6]]], np.float32), lam=2.0, eps=0.4)
+    rho = np.hypot(0.3, 0.4)                        # 0.5
+    np.testing.assert_allclose(er.sum(), 2 * 2.0 * 0.4 * rho, rtol=1e-6)
+    np.testing.assert_allclose(gS[0, 0], [-2 * 2.0 * 0.4 * 0.3 / rho, 2 * 2.0 * 0.4 * 0.3 / rho], rtol=1e-6)
+    er, gS = run_gated(kernel_backend, S, np.zeros((1, 1, 2), np.float32), lam=2.0, eps=0.4)
+    assert not er.any() and not gS.any()
+
+
+def test_gated_smoothness_bad_input_raises(kernel_backend):
+    S, gS = kernel_backend.zeros((2, 5, 6)), kernel_backend.zeros((2, 5, 6))
+    er = kernel_backend.zeros((10,), np.float64)
+    with pytest.raises(ValueError, match="gate must have shape"):
+        kernel_backend.energy_shading.shading_smoothness_gated(S, kernel_backend.zeros((2, 5, 7)), gS, er)
+    with pytest.raises(TypeError, match="gate must have dtype float32"):
+        kernel_backend.energy_shading.shading_smoothness_gated(S, kernel_backend.zeros((2, 5, 6), np.float64),
+                                                               gS, er)

@@ -115,3 +115,78 @@ def test_motion_boundary_workspace_reused_across_shapes(kernel_backend, rng):
             np.testing.assert_array_equal(boundary(kernel_backend, mag, 0.8, 2, workspace=ws),
                                           ref.motion_boundary(mag, 0.8, 2))
     assert len(ws) == 2
+
+
+# ------------------------------------------------ shading gate (Eq. 9's local term)
+def gate(be, log_image, flow, tau):
+    out = be.zeros(log_image.shape[:3])
+    be.maps.shading_gate(be.asarray(log_image), be.asarray(flow), out, tau)
+    return be.numpy(out).copy()
+
+
+def test_shading_gate_hand_cases(kernel_backend):
+    """A static edge under a global light change keeps the gate at 1; a moving shadow edge
+    closes it on both of its sides, in every frame it crosses; one frame gives 1."""
+    t, h, w = 3, 8, 12
+    albedo_edge = np.zeros((t, h, w, 3), np.float32)
+    albedo_edge[:, :, 6:] = (-1.0, -0.5, -2.0)
+    albedo_edge += np.float32(0.3) * np.arange(t, dtype=np.float32)[:, None, None, None]   # brighter light
+    still = np.zeros((t - 1, h, w, 2), np.float32)
+    np.testing.assert_array_equal(gate(kernel_backend, albedo_edge, still, 0.1), 1.0)
+    shadow = albedo_edge.copy()
+    for k in range(t):
+        shadow[k, : 2 + 2 * k] -= 0.4                                # a shadow edge 2 rows lower each frame
+    got = gate(kernel_backend, shadow, still, 0.4)
+    # frame 0: D = 0 on rows < 2 and rows >= 4, -0.4 on rows 2, 3; |D(x) - D(y)| = 0.4 across rows 1|2 and 3|4
+    want = np.ones((h, w), np.float32)
+    want[1:5] = np.exp(-1.0)
+    np.testing.assert_allclose(got[0], want, rtol=1e-5)
+    np.testing.assert_allclose(got[2], got[1], rtol=1e-6)               # the last frame uses the pair before it
+    np.testing.assert_array_equal(gate(kernel_backend, shadow[:1], still[:0], 0.4), 1.0)
+
+
+def test_shading_gate_follows_the_flow(kernel_backend):
+    """A textured frame moved by a whole pixel: zero change along the true flow, a closed gate with zero flow."""
+    rng = np.random.default_rng(5)
+    frame = np.log(rng.uniform(0.1, 1.0, (1, 9, 14, 3))).astype(np.float32)
+    moved = np.concatenate([frame, np.roll(frame, 1, axis=2)])          # content moves one pixel right
+    flow = np.zeros((1, 9, 14, 2), np.float32)
+    flow[..., 0] = 1.0
+    got = gate(kernel_backend, moved, flow, 0.05)
+    np.testing.assert_array_equal(got[:, :, :-1], 1.0)                  # the last column samples outside
+    assert gate(kernel_backend, moved, np.zeros_like(flow), 0.05).mean() < 0.1
+
+
+def test_shading_gate_bad_input(kernel_backend):
+    m = kernel_backend.maps
+    img = kernel_backend.zeros((2, 4, 5, 3))
+    with pytest.raises(ValueError, match="tau"):
+        m.shading_gate(img, kernel_backend.zeros((1, 4, 5, 2)), kernel_backend.zeros((2, 4, 5)), 0.0)
+    with pytest.raises(ValueError, match="flow"):
+        m.shading_gate(img, kernel_backend.zeros((2, 4, 5, 2)), kernel_backend.zeros((2, 4, 5)), 0.1)
+    with pytest.raises(ValueError, match="gate"):
+        m.shading_gate(img, kernel_backend.zeros((1, 4, 5, 2)), kernel_backend.zeros((1, 4, 5)), 0.1)
+    with pytest.raises(ValueError, match="log_image"):
+        m.shading_gate(kernel_backend.zeros((2, 4, 5, 1)), kernel_backend.zeros((1, 4, 5, 2)),
+                       kernel_backend.zeros((2, 4, 5)), 0.1)
+
+
+def test_shading_gate_chroma_keeps_a_colour_edge_open(kernel_backend):
+    """A moving edge of one channel (a colour edge): without tau_chroma the gate closes across
+    it like across a shadow; with it the rows where this frame's colour changes stay open."""
+    t, h, w = 2, 8, 12
+    img = np.zeros((t, h, w, 3), np.float32)
+    for k in range(t):
+        img[k, : 2 + 2 * k, :, 0] -= 0.6                           # red drops above the edge, 2 rows lower in frame 1
+    still = np.zeros((t - 1, h, w, 2), np.float32)
+    plain = gate(kernel_backend, img, still, 0.2)
+    np.testing.assert_allclose(plain[0, 1:5], np.exp(-1.0), rtol=1e-5)   # |dD| = 0.6 / 3 across rows 1|2 and 3|4
+    out = kernel_backend.zeros((t, h, w))
+    kernel_backend.maps.shading_gate(kernel_backend.asarray(img), kernel_backend.asarray(still), out, 0.2,
+                                     tau_chroma=0.1)
+    chroma = kernel_backend.numpy(out)
+    np.testing.assert_allclose(chroma[0, 1:3], 1.0, atol=1e-6)          # frame 0's colour edge: rows 1|2
+    np.testing.assert_allclose(chroma[0, 3:5], np.exp(-1.0), rtol=1e-5)  # no colour change in frame 0 there
+    with pytest.raises(ValueError, match="tau_chroma"):
+        kernel_backend.maps.shading_gate(kernel_backend.asarray(img), kernel_backend.asarray(still), out, 0.2,
+                                         tau_chroma=-1.0)

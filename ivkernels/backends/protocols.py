@@ -71,7 +71,7 @@ class DerivativesFamily(Protocol):
 
 
 class MapsFamily(Protocol):
-    """``maps``: occlusion, warp reliability and motion boundaries."""
+    """``maps``: occlusion, warp reliability, motion boundaries and the shading gate."""
 
     def occlusion_soft(self, lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: float = 0.3) -> None:
         """Eq. 7's likelihood: lab (T+1, H, W, 3), flow (T, H, W, 2), div_neg, out (T, H, W)."""
@@ -82,6 +82,9 @@ class MapsFamily(Protocol):
 
     def warp_reliability(self, log_image, flow, occ, max_spread: float) -> None:
         """Clear occ (T, H, W) where the warp of log_image (T+1, H, W, C) by flow straddles an edge."""
+
+    def shading_gate(self, log_image, flow, gate, tau: float, tau_chroma: float = 0.0) -> None:
+        """Gate (T, H, W) of Eq. 9's local term: log_image (T, H, W, 3), flow (T-1, H, W, 2), tau > 0."""
 
     def motion_boundary(self, sobel_mag, out, threshold: float, radius: int, *, workspace=None) -> None:
         """``w_bnd`` (T, H, W): sobel_mag (T, H, W) above threshold, dilated by radius pixels."""
@@ -181,6 +184,9 @@ class EnergyShadingFamily(Protocol):
 
     def shading_smoothness(self, S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
         """Add the 3x3 Charbonnier smoothness of S (T, H, W) and its gradient gS (T, H, W)."""
+
+    def shading_smoothness_gated(self, S, gate, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
+        """The same with pair weights ``(gate(x) + gate(y)) / 2``: S, gate, gS (T, H, W)."""
 
     def coupling_term(self, S, S_tilde, w_bnd, gS, energy_rows, lam: float = 10.0) -> None:
         """Add ``lam w_bnd (S - S~)^2``: S, S_tilde, gS (T, H, W), w_bnd (T', H, W), T' <= T."""

@@ -47,6 +47,14 @@ def check_positive(name: str, value) -> float:
     return value
 
 
+def check_non_negative(name: str, value) -> float:
+    """``float(value)``; raise unless it is ``>= 0`` (``inf`` passes, ``nan`` does not)."""
+    value = float(value)
+    if not value >= 0.0:
+        raise ValueError(f"{name} must be >= 0, got {value!r}")
+    return value
+
+
 def check_int(name: str, value, minimum: int, hint: str = "") -> int:
     """``value`` as an int; raise unless it is an integer (not ``bool``) ``>= minimum``.
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.kernels.checks import check_float, check_int, check_positive, check_separate  # noqa: F401
+from ivkernels.kernels.checks import check_float, check_int, check_non_negative, check_positive, check_separate  # noqa: F401
 
 try:
     from numpy.lib.array_utils import byte_bounds

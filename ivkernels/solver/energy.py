@@ -12,7 +12,8 @@ term                       paper        kernel
 data                       Eq. 3        ``energy_data.data_term``
 temporal albedo            Eq. 4-5      ``energy_temporal.temporal_term`` on A
 temporal shading           Eq. 8        ``energy_temporal.temporal_term`` on S
-local shading smoothness   Eq. 9        ``energy_shading.shading_smoothness``
+local shading smoothness   Eq. 9        ``energy_shading.shading_smoothness`` (``_gated``
+                                        with the gate ``maps.shading_gate``)
 coupling to S~             Eq. 13       ``energy_shading.coupling_term``
 albedo GSM smoothness      Eq. 11       ``energy_albedo_gsm.gsm_smoothness``
 albedo global sparsity     Eq. 12       ``energy_albedo_entropy.entropy_term``
@@ -77,6 +78,11 @@ class WindowEnergy:
         self.A, self.S = self.X[: 3 * n].reshape((T, h, w, 3)), self.X[3 * n:].reshape((T, h, w))
         self.gA, self.gS = self.G[: 3 * n].reshape((T, h, w, 3)), self.G[3 * n:].reshape((T, h, w))
         self.S_tilde = be.empty((T, h, w))
+        self.gate = None             # per-pixel weight of Eq. 9's local term (Params.shading_gate_tau)
+        if params.shading_gate_tau > 0 and self.temporal:
+            self.gate = be.empty((T, h, w))
+            be.maps.shading_gate(log_image, flow, self.gate, params.shading_gate_tau,
+                                 tau_chroma=params.shading_gate_chroma)
         self.workspace = Workspace()        # the kernels' scratch buffers, freed with this energy
         self._rows_shape = (T * h,)
         self._gsm = None
@@ -123,8 +129,12 @@ class WindowEnergy:
                 be.energy_shading.coupling_term(self.S, self.S_tilde, self.boundary, self.gS, rows,
                                                 lam=p.lam_coupling)
         if want("shading_local") and p.lam_shading_local > 0:
-            be.energy_shading.shading_smoothness(self.S, self.gS, rows, lam=p.lam_shading_local,
-                                                 eps=p.eps_shading)
+            if self.gate is None:
+                be.energy_shading.shading_smoothness(self.S, self.gS, rows, lam=p.lam_shading_local,
+                                                     eps=p.eps_shading)
+            else:
+                be.energy_shading.shading_smoothness_gated(self.S, self.gate, self.gS, rows,
+                                                           lam=p.lam_shading_local, eps=p.eps_shading)
         if want("albedo_smooth") and self._gsm is not None:
             sigma_inv, table_g, table_dg, r2_max = self._gsm
             be.energy_albedo_gsm.gsm_smoothness(self.A, sigma_inv, table_g, table_dg, r2_max,

@@ -1,8 +1,9 @@
-"""Cases of :mod:`ivkernels.kernels.warp.energy_shading` (Eq. 9 local smoothness, Eq. 13 coupling)."""
+"""Cases of :mod:`ivkernels.kernels.warp.energy_shading` (Eq. 9 local smoothness, ungated and gated,
+Eq. 13 coupling)."""
 from __future__ import annotations
 
 from ivkernels.kernels.cases import Case, Gradient, Tol
-from ivkernels.kernels.cases.inputs import mask, normal, pairs
+from ivkernels.kernels.cases.inputs import mask, normal, pairs, uniform
 from ivkernels.kernels.reference import energy_shading as ref
 
 
@@ -13,6 +14,15 @@ def _smoothness(rng, T, H, W):
 
 def _smoothness_reference(v):
     er, gS = ref.shading_smoothness(v["S"], v["lam"], v["eps"])
+    return {"energy_rows": v["energy_rows"] + er, "gS": v["gS"] + gS}
+
+
+def _smoothness_gated(rng, T, H, W):
+    return {**_smoothness(rng, T, H, W), "gate": uniform(rng, (T, H, W))}
+
+
+def _smoothness_gated_reference(v):
+    er, gS = ref.shading_smoothness_gated(v["S"], v["gate"], v["lam"], v["eps"])
     return {"energy_rows": v["energy_rows"] + er, "gS": v["gS"] + gS}
 
 
@@ -36,6 +46,9 @@ CASES = (
     Case("energy_shading", "shading_smoothness", _smoothness, ("S", "gS", "energy_rows"), ("gS", "energy_rows"),
          _smoothness_reference, keywords=("lam", "eps"), updates=("gS", "energy_rows"), tol=_TOL,
          no_alias=(("S", "gS"),), gradients=(Gradient("S", "gS", overrides={"eps": 0.05}),)),
+    Case("energy_shading", "shading_smoothness_gated", _smoothness_gated, ("S", "gate", "gS", "energy_rows"),
+         ("gS", "energy_rows"), _smoothness_gated_reference, keywords=("lam", "eps"), updates=("gS", "energy_rows"),
+         tol=_TOL, no_alias=(("S", "gS"), ("gate", "gS")), gradients=(Gradient("S", "gS", overrides={"eps": 0.05}),)),
     *(Case("energy_shading", "coupling_term", _coupling(t_flow), ("S", "S_tilde", "w_bnd", "gS", "energy_rows"),
            ("gS", "energy_rows"), _coupling_reference, variant=variant, keywords=("lam",),
            updates=("gS", "energy_rows"), tol=_TOL, gradients=(Gradient("S", "gS"),))

@@ -1,4 +1,5 @@
-"""Cases of :mod:`ivkernels.kernels.warp.maps` (occlusion, warp reliability, motion boundaries)."""
+"""Cases of :mod:`ivkernels.kernels.warp.maps` (occlusion, warp reliability, motion boundaries,
+shading gate)."""
 from __future__ import annotations
 
 import numpy as np
@@ -72,6 +73,19 @@ def _boundary(radius):
                 variant=f"radius={radius}", tol=EXACT, no_alias=(("sobel_mag", "out"),) if radius else ())
 
 
+def _gate(tau, static, tau_chroma=0.0):
+    def make(rng, T, H, W):
+        img = normal(rng, (T, H, W, 3), -1.0, 0.5)
+        img[:, H // 4: H // 2 + 1, W // 4: W // 2 + 1] = -1.0          # a flat patch
+        f = np.zeros((pairs(T), H, W, 2), F32) if static else flow(rng, pairs(T), H, W)
+        return {"log_image": img, "flow": f, "gate": nans((T, H, W)), "tau": tau, "tau_chroma": tau_chroma}
+
+    return Case("maps", "shading_gate", make, ("log_image", "flow", "gate", "tau"), ("gate",),
+                lambda v: {"gate": ref.shading_gate(v["log_image"], v["flow"], v["tau"], v["tau_chroma"])},
+                variant=f"tau={tau:g},tau_chroma={tau_chroma:g},{'static' if static else 'moving'}",
+                keywords=("tau_chroma",), tol=Tol(1e-4, 1e-5))
+
+
 CASES = (
     _occlusion_soft(20.0, 0.3),
     _occlusion_soft(40.0, 1.0),
@@ -82,4 +96,7 @@ CASES = (
     _boundary(0),
     _boundary(1),
     _boundary(3),
+    _gate(0.1, True),
+    _gate(0.5, False),
+    _gate(0.5, False, 0.3),
 )

@@ -17,6 +17,19 @@ def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001)
     add("energy_rows", energy_rows, rows)
 
 
+def shading_smoothness_gated(S, gate, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
+    """Add Eq. 9's smoothness of S (T, H, W) with pair weights ``(gate(x) + gate(y)) / 2``, gate (T, H, W)."""
+    arrays(S=S, gate=gate)
+    if gate.shape != S.shape:
+        raise ValueError(f"gate must have shape {S.shape} (T, H, W), got {gate.shape}")
+    check_disjoint("gS", gS, "S", S, "the gradient is scattered into gS while S is read")
+    check_disjoint("gS", gS, "gate", gate, "the gradient is scattered into gS while gate is read")
+    arrays(np.float64, energy_rows=energy_rows)
+    rows, grad = ref.shading_smoothness_gated(S, gate, float(lam), float(eps))
+    add("gS", gS, grad)
+    add("energy_rows", energy_rows, rows)
+
+
 def coupling_term(S, S_tilde, w_bnd, gS, energy_rows, lam: float = 10.0) -> None:
     """Add ``lam w_bnd (S - S~)^2``: S, S_tilde, gS (T, H, W), w_bnd (T', H, W), T' <= T."""
     arrays(S=S, S_tilde=S_tilde, w_bnd=w_bnd)

@@ -1,7 +1,7 @@
 """``maps`` on the NumPy backend: :mod:`ivkernels.kernels.reference.maps` written into the outputs."""
 from __future__ import annotations
 
-from ivkernels.kernels.checks import check_int, check_positive
+from ivkernels.kernels.checks import check_int, check_non_negative, check_positive
 from ivkernels.kernels.numpy._adapt import arrays, check_disjoint, write
 from ivkernels.kernels.reference import maps as ref
 from ivkernels.kernels.workspace import check_workspace
@@ -26,6 +26,20 @@ def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
     """Clear ``occ`` (T, H, W) in place where the warp of ``log_image`` (T+1, H, W, C) straddles an edge."""
     arrays(log_image=log_image, flow=flow, occ=occ)
     write("occ", occ, ref.warp_reliability(log_image, flow, occ, float(max_spread)))
+
+
+def shading_gate(log_image, flow, gate, tau: float, tau_chroma: float = 0.0) -> None:
+    """The gate (T, H, W) of Eq. 9's local term from log_image (T, H, W, 3) and flow (T-1, H, W, 2)."""
+    arrays(log_image=log_image, flow=flow)
+    if log_image.ndim != 4 or log_image.shape[3] != 3:
+        raise ValueError(f"log_image must have shape (T, H, W, 3), got {log_image.shape}")
+    t, h, w, _ = log_image.shape
+    if flow.shape != (max(t - 1, 0), h, w, 2):
+        raise ValueError(f"flow must have shape {(max(t - 1, 0), h, w, 2)} (T-1, H, W, 2), got {flow.shape}")
+    check_disjoint("gate", gate, "log_image", log_image, "the gate is written while log_image is read")
+    check_disjoint("gate", gate, "flow", flow, "the gate is written while flow is read")
+    write("gate", gate, ref.shading_gate(log_image, flow, check_positive("tau", tau),
+                                         check_non_negative("tau_chroma", tau_chroma)))
 
 
 def motion_boundary(sobel_mag, out, threshold: float, radius: int, *, workspace=None) -> None:

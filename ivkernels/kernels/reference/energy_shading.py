@@ -1,5 +1,5 @@
 """NumPy reference of :mod:`ivkernels.kernels.warp.energy_shading` (Eq. 9 local part,
-Eq. 13 coupling), float64."""
+ungated and gated, Eq. 13 coupling), float64."""
 from __future__ import annotations
 
 import numpy as np
@@ -29,6 +29,33 @@ def shading_smoothness(S, lam: float = 2.0, eps: float = 0.001):
         rho = np.sqrt(d * d + eps * eps)
         energy[:, ys, xs] += lam * rho
         psi = lam * d / rho
+        grad[:, ys, xs] += psi
+        grad[:, yn, xn] -= psi
+    return energy.sum(axis=2).reshape(t * h), grad
+
+
+def shading_smoothness_gated(S, gate, lam: float = 2.0, eps: float = 0.001):
+    """Eq. 9's local smoothness with a per-pixel gate on its pair terms, and its gradient.
+
+    ``E = lam * sum_x sum_{y in N3(x)} w(x, y) sqrt((S(x) - S(y))^2 + eps^2)`` with
+    ``w(x, y) = (gate(x) + gate(y)) / 2``; ``gate = 1`` gives :func:`shading_smoothness`.
+
+    Returns ``(energy_rows (T*H,), gS (T, H, W))``, float64.
+    """
+    S, gate = np.asarray(S, np.float64), np.asarray(gate, np.float64)
+    t, h, w = S.shape
+    energy = np.zeros((t, h, w))
+    grad = np.zeros((t, h, w))
+    for dy, dx in NEIGHBOURS_3X3:
+        ys = slice(max(0, -dy), h - max(0, dy))
+        xs = slice(max(0, -dx), w - max(0, dx))
+        yn = slice(max(0, dy), h + min(0, dy))
+        xn = slice(max(0, dx), w + min(0, dx))
+        d = S[:, ys, xs] - S[:, yn, xn]
+        wgt = 0.5 * (gate[:, ys, xs] + gate[:, yn, xn])
+        rho = np.sqrt(d * d + eps * eps)
+        energy[:, ys, xs] += lam * wgt * rho
+        psi = lam * wgt * d / rho
         grad[:, ys, xs] += psi
         grad[:, yn, xn] -= psi
     return energy.sum(axis=2).reshape(t * h), grad

@@ -53,3 +53,63 @@ def motion_boundary(sobel_mag, threshold: float, radius: int) -> np.ndarray:
         for dx in range(2 * radius + 1):
             out |= p[:, dy:dy + h, dx:dx + w]
     return out.astype(np.float64)
+
+
+def log_change(log_image, flow):
+    """``(D, valid)``, both (T-1, H, W): ``D = L_{t+1}(x + u) - L_t(x)`` with ``L`` the
+    mean over channels of the log image (bilinear sample, clamped corners), and
+    ``valid`` = 1 where ``x + u`` lies inside the image."""
+    L = np.asarray(log_image, np.float64).mean(-1)
+    warped, inside = warp_bilinear(L[1:, ..., None], np.asarray(flow, np.float64))
+    return warped[..., 0] - L[:-1], inside
+
+
+def chroma_step(log_image) -> np.ndarray:
+    """(T, H, W): ``max_{y in N3(x)} |C(x) - C(y)|`` (Euclidean over channels), ``C`` the log
+    chromaticity ``log_image - mean over channels``."""
+    img = np.asarray(log_image, np.float64)
+    C = img - img.mean(-1, keepdims=True)
+    t, h, w, _ = img.shape
+    out = np.zeros((t, h, w))
+    for dy, dx in _NEIGHBOURS:
+        ys, xs, yn, xn = _pair_slices(dy, dx, h, w)
+        out[:, ys, xs] = np.maximum(out[:, ys, xs], np.sqrt(((C[:, ys, xs] - C[:, yn, xn]) ** 2).sum(-1)))
+    return out
+
+
+def shading_gate(log_image, flow, tau: float, tau_chroma: float = 0.0) -> np.ndarray:
+    """The temporal gate of the local shading smoothness (T, H, W), in (0, 1].
+
+    ``gate = exp(-(e / tau)^2)`` with ``e(x) = max_{y in N3(x)} |D(x) - D(y)|``
+    over the neighbours ``y`` whose sample is valid too (:func:`log_change` of
+    the frame's pair with the next frame; the last frame uses the pair before
+    it); e = 0 (gate 1) where ``x``'s own sample is not valid, and gate 1
+    everywhere for T = 1.  With ``tau_chroma > 0``, ``e`` is multiplied by
+    ``exp(-(c / tau_chroma)^2)``, ``c`` the frame's :func:`chroma_step`: a
+    change of contrast where the chromaticity changes too is not taken for
+    a shading edge.
+    """
+    img = np.asarray(log_image, np.float64)
+    t, h, w, _ = img.shape
+    if t < 2:
+        return np.ones((t, h, w))
+    D, valid = log_change(img, flow)
+    e = np.zeros(D.shape)
+    for dy, dx in _NEIGHBOURS:
+        ys, xs, yn, xn = _pair_slices(dy, dx, h, w)
+        d = np.abs(D[:, ys, xs] - D[:, yn, xn]) * valid[:, yn, xn]
+        e[:, ys, xs] = np.maximum(e[:, ys, xs], d)
+    e *= valid
+    e = np.concatenate([e, e[-1:]], 0)
+    if tau_chroma > 0:
+        e *= np.exp(-(chroma_step(img) / tau_chroma) ** 2)
+    return np.exp(-(e / tau) ** 2)
+
+
+_NEIGHBOURS = tuple((dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if (dy, dx) != (0, 0))
+
+
+def _pair_slices(dy: int, dx: int, h: int, w: int):
+    """Slices of the pixels ``x`` whose neighbour ``x + (dy, dx)`` is inside, and of those neighbours."""
+    return (slice(max(0, -dy), h - max(0, dy)), slice(max(0, -dx), w - max(0, dx)),
+            slice(max(0, dy), h + min(0, dy)), slice(max(0, dx), w + min(0, dx)))

@@ -1,5 +1,5 @@
 """Taichi mirror of :mod:`ivkernels.kernels.warp.energy_shading` (Eq. 9 local
-smoothness, Eq. 13 coupling): same host functions and signatures, NumPy arrays
+smoothness, ungated and gated, Eq. 13 coupling): same host functions and signatures, NumPy arrays
 passed as ``ti.types.ndarray()``.  The outermost loop runs over rows in parallel.
 The local term's Charbonnier penalty is the data term's (:mod:`ivkernels.kernels.taichi.energy_data`).
 """
@@ -42,6 +42,34 @@ def shading_smoothness_rows(S: nd3, gS: nd3, energy_rows: nd1_f64, lam: ti.f32, 
 
 
 @ti.kernel
+def shading_smoothness_gated_rows(S: nd3, gate: nd3, gS: nd3, energy_rows: nd1_f64, lam: ti.f32, eps: ti.f32):
+    height = S.shape[1]
+    width = S.shape[2]
+    for r in range(S.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        e = ti.f64(0.0)
+        for x in range(width):
+            s = S[t, y, x]
+            m = gate[t, y, x]
+            g = 0.0
+            for j in ti.static(range(3)):
+                yy = y + j - 1
+                if 0 <= yy < height:
+                    for i in ti.static(range(3)):
+                        xx = x + i - 1
+                        if ti.static(i != 1 or j != 1):
+                            if 0 <= xx < width:
+                                d = s - S[t, yy, xx]
+                                rho = charbonnier(d, eps)
+                                wgt = 0.5 * (m + gate[t, yy, xx])     # the pair's weight, symmetric
+                                e += ti.cast(wgt * rho, ti.f64)
+                                g += wgt * d / rho
+            gS[t, y, x] += 2.0 * lam * g
+        energy_rows[r] += ti.cast(lam, ti.f64) * e
+
+
+@ti.kernel
 def coupling_rows(S: nd3, S_tilde: nd3, w_bnd: nd3, gS: nd3, energy_rows: nd1_f64, lam: ti.f32):
     height = S.shape[1]
     for r in range(w_bnd.shape[0] * height):
@@ -67,6 +95,21 @@ def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001)
     if t * h * w == 0:
         return
     shading_smoothness_rows(S, gS, energy_rows, float(lam), float(eps))
+
+
+def shading_smoothness_gated(S, gate, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
+    """Add Eq. 9's local shading smoothness with a per-pixel gate on its pair terms; see
+    :func:`ivkernels.kernels.warp.energy_shading.shading_smoothness_gated`."""
+    S = check_array("S", S, (None, None, None), "(T, H, W)")
+    t, h, w = S.shape
+    gate = check_array("gate", gate, (t, h, w), "(T, H, W)")
+    check_array("gS", gS, (t, h, w), "(T, H, W)", output=True)
+    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dtype=np.float64, output=True)
+    check_disjoint("gS", gS, "S", S, "the gradient is scattered into gS while S is read")
+    check_disjoint("gS", gS, "gate", gate, "the gradient is scattered into gS while gate is read")
+    if t * h * w == 0:
+        return
+    shading_smoothness_gated_rows(S, gate, gS, energy_rows, float(lam), float(eps))
 
 
 def coupling_term(S, S_tilde, w_bnd, gS, energy_rows, lam: float = 10.0) -> None:

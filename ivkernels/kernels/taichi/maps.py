@@ -1,5 +1,6 @@
 """Taichi mirror of :mod:`ivkernels.kernels.warp.maps`: occlusion maps (Eq. 6, 7)
-and the motion-boundary map (Sec. 3.3), same host functions and signatures,
+the motion-boundary map (Sec. 3.3) and the gate of the local shading
+smoothness (Eq. 9), same host functions and signatures,
 NumPy arrays passed as ``ti.types.ndarray()``.
 
 The next frame's Lab colour at ``x + u`` is sampled with the bilinear helpers
@@ -8,7 +9,7 @@ of :mod:`ivkernels.kernels.taichi.sampling`.  Parallel over the ``T * H`` rows.
 import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.taichi._checks import check_array, check_disjoint, check_int, check_positive
+from ivkernels.kernels.taichi._checks import check_array, check_disjoint, check_int, check_non_negative, check_positive
 from ivkernels.kernels.taichi.sampling import bilinear_at, clamped_corners, inside_image
 from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 
@@ -86,6 +87,69 @@ def warp_reliability_rows(img: nd4, flow: nd4, occ: nd3, max_spread: ti.f32):
             y0, y1, fy = clamped_corners(ti.cast(y, ti.f32) + flow[t, y, x, 1], height)
             if corner_spread(img, t + 1, x0, x1, fx, y0, y1, fy) >= max_spread:
                 occ[t, y, x] = 0.0
+
+
+@ti.func
+def log_change_at(img: ti.template(), flow: ti.template(), p, y, x):
+    """``(L_{p+1}(x + u) - L_p(x), inside)``, ``L`` the mean over channels of ``img``."""
+    height = img.shape[1]
+    width = img.shape[2]
+    px = ti.cast(x, ti.f32) + flow[p, y, x, 0]
+    py = ti.cast(y, ti.f32) + flow[p, y, x, 1]
+    x0, x1, fx = clamped_corners(px, width)
+    y0, y1, fy = clamped_corners(py, height)
+    d = 0.0
+    for c in ti.static(range(3)):
+        d += bilinear_at(img, p + 1, c, x0, x1, fx, y0, y1, fy) - img[p, y, x, c]
+    return d / 3.0, inside_image(px, py, height, width)
+
+
+@ti.func
+def chroma_distance(img: ti.template(), t, y, x, yy, xx):
+    """``|C(x) - C(y)|`` (Euclidean), ``C`` the log chromaticity (log image minus its channel mean)."""
+    d0 = img[t, y, x, 0] - img[t, yy, xx, 0]
+    d1 = img[t, y, x, 1] - img[t, yy, xx, 1]
+    d2 = img[t, y, x, 2] - img[t, yy, xx, 2]
+    m = (d0 + d1 + d2) / 3.0
+    return ti.sqrt((d0 - m) * (d0 - m) + (d1 - m) * (d1 - m) + (d2 - m) * (d2 - m))
+
+
+@ti.kernel
+def shading_gate_rows(img: nd4, flow: nd4, gate: nd3, tau: ti.f32, tau_chroma: ti.f32):
+    height = img.shape[1]
+    width = img.shape[2]
+    for r in range(img.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        p = ti.min(t, img.shape[0] - 2)      # the frame's pair with the next frame; the last uses the one before
+        for x in range(width):
+            d, valid = log_change_at(img, flow, p, y, x)
+            e = 0.0
+            if valid > 0.0:
+                for j in ti.static(range(3)):
+                    yy = y + j - 1
+                    if 0 <= yy < height:
+                        for i in ti.static(range(3)):
+                            xx = x + i - 1
+                            if ti.static(i != 1 or j != 1):
+                                if 0 <= xx < width:
+                                    dn, valid_n = log_change_at(img, flow, p, yy, xx)
+                                    if valid_n > 0.0:
+                                        e = ti.max(e, ti.abs(d - dn))
+            if tau_chroma > 0.0:
+                c = 0.0
+                for j in ti.static(range(3)):
+                    yy = y + j - 1
+                    if 0 <= yy < height:
+                        for i in ti.static(range(3)):
+                            xx = x + i - 1
+                            if ti.static(i != 1 or j != 1):
+                                if 0 <= xx < width:
+                                    c = ti.max(c, chroma_distance(img, t, y, x, yy, xx))
+                qc = c / tau_chroma
+                e = e * ti.exp(-qc * qc)
+            q = e / tau
+            gate[t, y, x] = ti.exp(-q * q)
 
 
 @ti.func
@@ -173,6 +237,23 @@ def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
     max_spread = check_positive("max_spread", max_spread)
     if occ.size:
         warp_reliability_rows(log_image, flow, occ, max_spread)
+
+
+def shading_gate(log_image, flow, gate, tau: float, tau_chroma: float = 0.0) -> None:
+    """The per-pixel gate of the local shading smoothness (Eq. 9) from the input's log
+    change along the flow; see :func:`ivkernels.kernels.warp.maps.shading_gate`."""
+    log_image = check_array("log_image", log_image, (None, None, None, 3), "(T, H, W, 3)")
+    t, h, w, _ = log_image.shape
+    flow = check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)")
+    check_array("gate", gate, (t, h, w), "(T, H, W)", output=True)
+    check_disjoint("gate", gate, "log_image", log_image, "the gate is written while log_image is read")
+    check_disjoint("gate", gate, "flow", flow, "the gate is written while flow is read")
+    tau = check_positive("tau", tau)
+    tau_chroma = check_non_negative("tau_chroma", tau_chroma)
+    if t == 1:
+        gate[...] = 1.0
+    elif gate.size:
+        shading_gate_rows(log_image, flow, gate, tau, tau_chroma)
 
 
 def motion_boundary(sobel_mag, out, threshold: float, radius: int, *, workspace=None) -> None:

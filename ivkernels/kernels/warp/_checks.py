@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import warp as wp
 
-from ivkernels.kernels.checks import check_float, check_int, check_positive, check_separate  # noqa: F401
+from ivkernels.kernels.checks import check_float, check_int, check_non_negative, check_positive, check_separate  # noqa: F401
 
 
 def memory_span(a):

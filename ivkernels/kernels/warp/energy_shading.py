@@ -46,6 +46,35 @@ def shading_smoothness_rows(row_begin: int, S: wp.array3d(dtype=float), gS: wp.a
 
 
 @wp.kernel
+def shading_smoothness_gated_rows(row_begin: int, S: wp.array3d(dtype=float), gate: wp.array3d(dtype=float),
+                                  gS: wp.array3d(dtype=float), energy_rows: wp.array(dtype=wp.float64),
+                                  lam: float, eps: float):
+    r = row_begin + wp.tid()
+    height = S.shape[1]
+    width = S.shape[2]
+    t = r // height
+    y = r - t * height
+    e = wp.float64(0.0)
+    for x in range(width):
+        s = S[t, y, x]
+        m = gate[t, y, x]
+        g = float(0.0)
+        for j in range(3):
+            yy = y + j - 1
+            if yy >= 0 and yy < height:
+                for i in range(3):
+                    xx = x + i - 1
+                    if xx >= 0 and xx < width and (i != 1 or j != 1):
+                        d = s - S[t, yy, xx]
+                        rho = charbonnier(d, eps)
+                        wgt = 0.5 * (m + gate[t, yy, xx])      # the pair's weight, symmetric
+                        e += wp.float64(wgt * rho)
+                        g += wgt * d / rho
+        gS[t, y, x] = gS[t, y, x] + 2.0 * lam * g
+    energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
+
+
+@wp.kernel
 def coupling_rows(row_begin: int, S: wp.array3d(dtype=float), S_tilde: wp.array3d(dtype=float),
                   w_bnd: wp.array3d(dtype=float), gS: wp.array3d(dtype=float),
                   energy_rows: wp.array(dtype=wp.float64), lam: float):
@@ -83,6 +112,35 @@ def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001)
     check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", S.device, dtype=wp.float64)
     check_disjoint("gS", gS, "S", S, "the gradient is scattered into gS while S is read")
     launch_rows(shading_smoothness_rows, t * h, [S, gS, energy_rows, float(lam), float(eps)], device=S.device)
+
+
+def shading_smoothness_gated(S, gate, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
+    """Add Eq. 9's local shading smoothness with a per-pixel gate on its pair terms, and its gradient.
+
+    ``E = lam * sum_x sum_{y in N3(x)} w(x, y) sqrt((S(x) - S(y))^2 + eps^2)`` with
+    the pair weight ``w(x, y) = (gate(x) + gate(y)) / 2`` (symmetric, so
+    ``dE/dS(x) = 2 lam sum_y w(x, y) psi(S(x) - S(y))``).  With ``gate = 1``
+    everywhere it is :func:`shading_smoothness`.  The gate comes from the
+    input (:func:`ivkernels.kernels.warp.maps.shading_gate`): low
+    across a likely shading edge, which the term then lets through.
+
+    Parameters
+    ----------
+    S : wp.array float32 (T, H, W), log shading.
+    gate : wp.array float32 (T, H, W), per-pixel weight, dimensionless, in [0, 1].
+    gS : wp.array float32 (T, H, W), accumulated.  Must not overlap ``S`` or ``gate``.
+    energy_rows : wp.array float64 (T*H,), accumulated.
+    lam : lambda_Ss.  eps : Charbonnier epsilon.
+    """
+    check_array("S", S, (None, None, None), "(T, H, W)")
+    t, h, w = S.shape
+    check_array("gate", gate, (t, h, w), "(T, H, W)", S.device)
+    check_array("gS", gS, (t, h, w), "(T, H, W)", S.device)
+    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", S.device, dtype=wp.float64)
+    check_disjoint("gS", gS, "S", S, "the gradient is scattered into gS while S is read")
+    check_disjoint("gS", gS, "gate", gate, "the gradient is scattered into gS while gate is read")
+    launch_rows(shading_smoothness_gated_rows, t * h, [S, gate, gS, energy_rows, float(lam), float(eps)],
+                device=S.device)
 
 
 def coupling_term(S, S_tilde, w_bnd, gS, energy_rows, lam: float = 10.0) -> None:

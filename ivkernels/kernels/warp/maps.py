@@ -6,7 +6,9 @@
 * :func:`motion_boundary`: ``w_bnd`` of Eq. 9, 1 = near a motion boundary
   (thresholded Sobel magnitude of the flow, dilated),
 * :func:`warp_reliability`: clears ``w_occ`` where the bilinear warp of the
-  next frame is not trustworthy (a sub-pixel sample across an edge).
+  next frame is not trustworthy (a sub-pixel sample across an edge),
+* :func:`shading_gate`: the per-pixel weight of the local shading smoothness
+  (Eq. 9), low where the input's log gradient changes along the flow.
 
 The next frame's Lab colour at ``x + u`` is sampled inside the kernels with the
 bilinear helpers of :mod:`ivkernels.kernels.warp.sampling` (clamped corners).
@@ -16,7 +18,7 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array, check_disjoint, check_int, check_positive
+from ivkernels.kernels.warp._checks import check_array, check_disjoint, check_int, check_non_negative, check_positive
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners, inside_image
 from ivkernels.kernels.workspace import check_workspace, scratch_buffer
 
@@ -113,6 +115,68 @@ def warp_reliability_rows(row_begin: int, img: wp.array4d(dtype=float), flow: wp
         y0, y1, fy = clamped_corners(float(y) + flow[t, y, x, 1], height)
         if corner_spread(img, t + 1, x0, x1, fx, y0, y1, fy) >= max_spread:
             occ[t, y, x] = 0.0
+
+
+@wp.func
+def log_change_at(img: wp.array4d(dtype=float), flow: wp.array4d(dtype=float), p: int, y: int, x: int):
+    """``(L_{p+1}(x + u) - L_p(x), inside)``, ``L`` the mean over channels of ``img``."""
+    height = img.shape[1]
+    width = img.shape[2]
+    px = float(x) + flow[p, y, x, 0]
+    py = float(y) + flow[p, y, x, 1]
+    x0, x1, fx = clamped_corners(px, width)
+    y0, y1, fy = clamped_corners(py, height)
+    d = float(0.0)
+    for c in range(3):
+        d += bilinear_at(img, p + 1, c, x0, x1, fx, y0, y1, fy) - img[p, y, x, c]
+    return d / 3.0, inside_image(px, py, height, width)
+
+
+@wp.func
+def chroma_distance(img: wp.array4d(dtype=float), t: int, y: int, x: int, yy: int, xx: int):
+    """``|C(x) - C(y)|`` (Euclidean), ``C`` the log chromaticity (log image minus its channel mean)."""
+    d0 = img[t, y, x, 0] - img[t, yy, xx, 0]
+    d1 = img[t, y, x, 1] - img[t, yy, xx, 1]
+    d2 = img[t, y, x, 2] - img[t, yy, xx, 2]
+    m = (d0 + d1 + d2) / 3.0
+    return wp.sqrt((d0 - m) * (d0 - m) + (d1 - m) * (d1 - m) + (d2 - m) * (d2 - m))
+
+
+@wp.kernel
+def shading_gate_rows(row_begin: int, img: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
+                      gate: wp.array3d(dtype=float), tau: float, tau_chroma: float):
+    r = row_begin + wp.tid()
+    height = img.shape[1]
+    width = img.shape[2]
+    t = r // height
+    y = r - t * height
+    p = wp.min(t, img.shape[0] - 2)          # the frame's pair with the next frame; the last uses the one before
+    for x in range(width):
+        d, valid = log_change_at(img, flow, p, y, x)
+        e = float(0.0)
+        if valid > 0.0:
+            for j in range(3):
+                yy = y + j - 1
+                if yy >= 0 and yy < height:
+                    for i in range(3):
+                        xx = x + i - 1
+                        if xx >= 0 and xx < width and (i != 1 or j != 1):
+                            dn, valid_n = log_change_at(img, flow, p, yy, xx)
+                            if valid_n > 0.0:
+                                e = wp.max(e, wp.abs(d - dn))
+        if tau_chroma > 0.0:
+            c = float(0.0)
+            for j in range(3):
+                yy = y + j - 1
+                if yy >= 0 and yy < height:
+                    for i in range(3):
+                        xx = x + i - 1
+                        if xx >= 0 and xx < width and (i != 1 or j != 1):
+                            c = wp.max(c, chroma_distance(img, t, y, x, yy, xx))
+            qc = c / tau_chroma
+            e = e * wp.exp(-qc * qc)
+        q = e / tau
+        gate[t, y, x] = wp.exp(-q * q)
 
 
 @wp.func
@@ -245,6 +309,50 @@ def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
     check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", dev)
     max_spread = check_positive("max_spread", max_spread)
     launch_rows(warp_reliability_rows, (t - 1) * h, [log_image, flow, occ, max_spread], device=dev)
+
+
+def shading_gate(log_image, flow, gate, tau: float, tau_chroma: float = 0.0) -> None:
+    """The per-pixel gate of the local shading smoothness (Eq. 9), from the input.
+
+    Weiss's observation, along the flow: across an albedo edge the input's
+    log difference between two neighbours stays the same from frame to frame,
+    across a shading edge that moves with the light or the scene it changes.
+    With ``L`` the mean over channels of the log image and
+    ``D_t(x) = L_{t+1}(x + u_t(x)) - L_t(x)`` its change along the flow
+    (bilinear sample), the evidence of a moving shading edge at ``x`` is
+    ``e(x) = max_{y in N3(x)} |D_t(x) - D_t(y)|`` over the 8 neighbours whose
+    sample lies inside the image (0 where ``x``'s own does not), and
+    ``gate = exp(-(e / tau)^2)``: 1 on flat and static-edge regions, towards 0
+    across edges whose contrast changes by ``tau`` or more between frames.
+    Frame ``t < T-1`` uses the pair ``(t, t+1)``, the last frame the pair
+    before it; a single frame gets ``gate = 1``.  With ``tau_chroma > 0`` the
+    evidence is multiplied by ``exp(-(c / tau_chroma)^2)``, ``c(x)`` the
+    largest change over the 8 neighbours of the frame's log chromaticity
+    (log image minus its mean over channels, Euclidean): a change of
+    contrast where the colour changes too is not taken for a shading edge
+    (a shadow under a white light changes no chromaticity).
+
+    Parameters
+    ----------
+    log_image : wp.array float32 (T, H, W, 3), log input image.
+    flow : wp.array float32 (T-1, H, W, 2), forward flow in pixels (zeros for a static scene).
+    gate : wp.array float32 (T, H, W), written; dimensionless, in (0, 1].
+    tau : log-contrast change (log units) at which the gate falls to 1/e, > 0.
+    tau_chroma : log-chromaticity change (log units) that divides the evidence by e; 0: not used.
+    """
+    check_array("log_image", log_image, (None, None, None, 3), "(T, H, W, 3)")
+    t, h, w, _ = log_image.shape
+    dev = log_image.device
+    check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)", dev)
+    check_array("gate", gate, (t, h, w), "(T, H, W)", dev)
+    check_disjoint("gate", gate, "log_image", log_image, "the gate is written while log_image is read")
+    check_disjoint("gate", gate, "flow", flow, "the gate is written while flow is read")
+    tau = check_positive("tau", tau)
+    tau_chroma = check_non_negative("tau_chroma", tau_chroma)
+    if t == 1:
+        gate.fill_(1.0)
+        return
+    launch_rows(shading_gate_rows, t * h, [log_image, flow, gate, tau, tau_chroma], device=dev)
 
 
 def motion_boundary(sobel_mag, out, threshold: float, radius: int, *, workspace=None) -> None:
