@@ -16,22 +16,7 @@ def shading_smoothness(S, lam: float = 2.0, eps: float = 0.001):
     Returns ``(energy_rows (T*H,), gS (T, H, W))``, float64.
     """
     S = np.asarray(S, np.float64)
-    t, h, w = S.shape
-    energy = np.zeros((t, h, w))
-    grad = np.zeros((t, h, w))
-    for dy, dx in NEIGHBOURS_3X3:
-        # pixels x whose neighbour x + (dy, dx) lies inside the image
-        ys = slice(max(0, -dy), h - max(0, dy))
-        xs = slice(max(0, -dx), w - max(0, dx))
-        yn = slice(max(0, dy), h + min(0, dy))
-        xn = slice(max(0, dx), w + min(0, dx))
-        d = S[:, ys, xs] - S[:, yn, xn]
-        rho = np.sqrt(d * d + eps * eps)
-        energy[:, ys, xs] += lam * rho
-        psi = lam * d / rho
-        grad[:, ys, xs] += psi
-        grad[:, yn, xn] -= psi
-    return energy.sum(axis=2).reshape(t * h), grad
+    return shading_smoothness_gated(S, np.ones(S.shape), lam, eps)
 
 
 def shading_smoothness_gated(S, gate, lam: float = 2.0, eps: float = 0.001):

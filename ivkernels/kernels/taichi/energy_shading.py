@@ -15,7 +15,10 @@ nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 
 
 @ti.kernel
-def shading_smoothness_rows(S: nd3, gS: nd3, energy_rows: nd1_f64, lam: ti.f32, eps: ti.f32):
+def shading_smoothness_rows(S: nd3, gate: nd3, gated: ti.template(), gS: nd3, energy_rows: nd1_f64,
+                            lam: ti.f32, eps: ti.f32):
+    """Eq. 9's local term; with ``gated`` (compile time) each pair is weighted by
+    the mean of its two ``gate`` values (``gate`` is not read otherwise)."""
     height = S.shape[1]
     width = S.shape[2]
     for r in range(S.shape[0] * height):
@@ -34,37 +37,14 @@ def shading_smoothness_rows(S: nd3, gS: nd3, energy_rows: nd1_f64, lam: ti.f32, 
                             if 0 <= xx < width:
                                 d = s - S[t, yy, xx]
                                 rho = charbonnier(d, eps)
-                                e += ti.cast(rho, ti.f64)
-                                g += d / rho
+                                if ti.static(gated):
+                                    wgt = 0.5 * (gate[t, y, x] + gate[t, yy, xx])     # the pair's weight, symmetric
+                                    e += ti.cast(wgt * rho, ti.f64)
+                                    g += wgt * d / rho
+                                else:
+                                    e += ti.cast(rho, ti.f64)
+                                    g += d / rho
             # S(x) appears in the pair (x, y) and in (y, x): twice the derivative
-            gS[t, y, x] += 2.0 * lam * g
-        energy_rows[r] += ti.cast(lam, ti.f64) * e
-
-
-@ti.kernel
-def shading_smoothness_gated_rows(S: nd3, gate: nd3, gS: nd3, energy_rows: nd1_f64, lam: ti.f32, eps: ti.f32):
-    height = S.shape[1]
-    width = S.shape[2]
-    for r in range(S.shape[0] * height):
-        t = r // height
-        y = r - t * height
-        e = ti.f64(0.0)
-        for x in range(width):
-            s = S[t, y, x]
-            m = gate[t, y, x]
-            g = 0.0
-            for j in ti.static(range(3)):
-                yy = y + j - 1
-                if 0 <= yy < height:
-                    for i in ti.static(range(3)):
-                        xx = x + i - 1
-                        if ti.static(i != 1 or j != 1):
-                            if 0 <= xx < width:
-                                d = s - S[t, yy, xx]
-                                rho = charbonnier(d, eps)
-                                wgt = 0.5 * (m + gate[t, yy, xx])     # the pair's weight, symmetric
-                                e += ti.cast(wgt * rho, ti.f64)
-                                g += wgt * d / rho
             gS[t, y, x] += 2.0 * lam * g
         energy_rows[r] += ti.cast(lam, ti.f64) * e
 
@@ -87,29 +67,30 @@ def coupling_rows(S: nd3, S_tilde: nd3, w_bnd: nd3, gS: nd3, energy_rows: nd1_f6
 def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
     """Add the local shading smoothness of Eq. 9 and its gradient; see
     :func:`ivkernels.kernels.warp.energy_shading.shading_smoothness`."""
-    S = check_array("S", S, (None, None, None), "(T, H, W)")
-    t, h, w = S.shape
-    check_array("gS", gS, (t, h, w), "(T, H, W)", output=True)
-    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dtype=np.float64, output=True)
-    check_disjoint("gS", gS, "S", S, "the gradient is scattered into gS while S is read")
-    if t * h * w == 0:
-        return
-    shading_smoothness_rows(S, gS, energy_rows, float(lam), float(eps))
+    _local_term(S, None, gS, energy_rows, lam, eps)
 
 
 def shading_smoothness_gated(S, gate, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
     """Add Eq. 9's local shading smoothness with a per-pixel gate on its pair terms; see
     :func:`ivkernels.kernels.warp.energy_shading.shading_smoothness_gated`."""
+    _local_term(S, gate, gS, energy_rows, lam, eps)
+
+
+def _local_term(S, gate, gS, energy_rows, lam: float, eps: float) -> None:
+    """Checks and launch of Eq. 9's local term, gated unless ``gate`` is None."""
     S = check_array("S", S, (None, None, None), "(T, H, W)")
     t, h, w = S.shape
-    gate = check_array("gate", gate, (t, h, w), "(T, H, W)")
+    if gate is not None:
+        gate = check_array("gate", gate, (t, h, w), "(T, H, W)")
     check_array("gS", gS, (t, h, w), "(T, H, W)", output=True)
     check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dtype=np.float64, output=True)
     check_disjoint("gS", gS, "S", S, "the gradient is scattered into gS while S is read")
-    check_disjoint("gS", gS, "gate", gate, "the gradient is scattered into gS while gate is read")
+    if gate is not None:
+        check_disjoint("gS", gS, "gate", gate, "the gradient is scattered into gS while gate is read")
     if t * h * w == 0:
         return
-    shading_smoothness_gated_rows(S, gate, gS, energy_rows, float(lam), float(eps))
+    shading_smoothness_rows(S, S if gate is None else gate, gate is not None, gS, energy_rows,
+                            float(lam), float(eps))
 
 
 def coupling_term(S, S_tilde, w_bnd, gS, energy_rows, lam: float = 10.0) -> None:

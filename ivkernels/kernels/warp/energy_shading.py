@@ -19,8 +19,11 @@ wp.set_module_options({"enable_backward": False})
 
 
 @wp.kernel
-def shading_smoothness_rows(row_begin: int, S: wp.array3d(dtype=float), gS: wp.array3d(dtype=float),
-                            energy_rows: wp.array(dtype=wp.float64), lam: float, eps: float):
+def shading_smoothness_rows(row_begin: int, S: wp.array3d(dtype=float), gate: wp.array3d(dtype=float),
+                            gated: int, gS: wp.array3d(dtype=float), energy_rows: wp.array(dtype=wp.float64),
+                            lam: float, eps: float):
+    """Eq. 9's local term; with ``gated`` each pair is weighted by the mean of
+    its two ``gate`` values (``gate`` is not read otherwise)."""
     r = row_begin + wp.tid()
     height = S.shape[1]
     width = S.shape[2]
@@ -38,38 +41,14 @@ def shading_smoothness_rows(row_begin: int, S: wp.array3d(dtype=float), gS: wp.a
                     if xx >= 0 and xx < width and (i != 1 or j != 1):
                         d = s - S[t, yy, xx]
                         rho = charbonnier(d, eps)
-                        e += wp.float64(rho)
-                        g += d / rho
+                        if gated != 0:
+                            wgt = 0.5 * (gate[t, y, x] + gate[t, yy, xx])      # the pair's weight, symmetric
+                            e += wp.float64(wgt * rho)
+                            g += wgt * d / rho
+                        else:
+                            e += wp.float64(rho)
+                            g += d / rho
         # S(x) appears in the pair (x, y) and in (y, x): twice the derivative
-        gS[t, y, x] = gS[t, y, x] + 2.0 * lam * g
-    energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
-
-
-@wp.kernel
-def shading_smoothness_gated_rows(row_begin: int, S: wp.array3d(dtype=float), gate: wp.array3d(dtype=float),
-                                  gS: wp.array3d(dtype=float), energy_rows: wp.array(dtype=wp.float64),
-                                  lam: float, eps: float):
-    r = row_begin + wp.tid()
-    height = S.shape[1]
-    width = S.shape[2]
-    t = r // height
-    y = r - t * height
-    e = wp.float64(0.0)
-    for x in range(width):
-        s = S[t, y, x]
-        m = gate[t, y, x]
-        g = float(0.0)
-        for j in range(3):
-            yy = y + j - 1
-            if yy >= 0 and yy < height:
-                for i in range(3):
-                    xx = x + i - 1
-                    if xx >= 0 and xx < width and (i != 1 or j != 1):
-                        d = s - S[t, yy, xx]
-                        rho = charbonnier(d, eps)
-                        wgt = 0.5 * (m + gate[t, yy, xx])      # the pair's weight, symmetric
-                        e += wp.float64(wgt * rho)
-                        g += wgt * d / rho
         gS[t, y, x] = gS[t, y, x] + 2.0 * lam * g
     energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
 
@@ -106,12 +85,7 @@ def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001)
     energy_rows : wp.array float64 (T*H,), accumulated.
     lam : lambda_Ss.  eps : Charbonnier epsilon.
     """
-    check_array("S", S, (None, None, None), "(T, H, W)")
-    t, h, w = S.shape
-    check_array("gS", gS, (t, h, w), "(T, H, W)", S.device)
-    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", S.device, dtype=wp.float64)
-    check_disjoint("gS", gS, "S", S, "the gradient is scattered into gS while S is read")
-    launch_rows(shading_smoothness_rows, t * h, [S, gS, energy_rows, float(lam), float(eps)], device=S.device)
+    _local_term(S, None, gS, energy_rows, lam, eps)
 
 
 def shading_smoothness_gated(S, gate, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
@@ -132,14 +106,22 @@ def shading_smoothness_gated(S, gate, gS, energy_rows, lam: float = 2.0, eps: fl
     energy_rows : wp.array float64 (T*H,), accumulated.
     lam : lambda_Ss.  eps : Charbonnier epsilon.
     """
+    _local_term(S, gate, gS, energy_rows, lam, eps)
+
+
+def _local_term(S, gate, gS, energy_rows, lam: float, eps: float) -> None:
+    """Checks and launch of Eq. 9's local term, gated unless ``gate`` is None."""
     check_array("S", S, (None, None, None), "(T, H, W)")
     t, h, w = S.shape
-    check_array("gate", gate, (t, h, w), "(T, H, W)", S.device)
+    if gate is not None:
+        check_array("gate", gate, (t, h, w), "(T, H, W)", S.device)
     check_array("gS", gS, (t, h, w), "(T, H, W)", S.device)
     check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", S.device, dtype=wp.float64)
     check_disjoint("gS", gS, "S", S, "the gradient is scattered into gS while S is read")
-    check_disjoint("gS", gS, "gate", gate, "the gradient is scattered into gS while gate is read")
-    launch_rows(shading_smoothness_gated_rows, t * h, [S, gate, gS, energy_rows, float(lam), float(eps)],
+    if gate is not None:
+        check_disjoint("gS", gS, "gate", gate, "the gradient is scattered into gS while gate is read")
+    launch_rows(shading_smoothness_rows, t * h,
+                [S, S if gate is None else gate, int(gate is not None), gS, energy_rows, float(lam), float(eps)],
                 device=S.device)
 
 
