@@ -25,15 +25,14 @@ rows, the median seconds of all of the pair's calls per configuration, and
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from bench_launch import time_configs  # noqa: E402
 from eval_flow import SEQUENCES, default_data_dir, middlebury_pairs  # noqa: E402
 
 
@@ -77,7 +76,6 @@ def main(argv=None) -> int:
     header = f"{'sequence':13s} {'1st half':>8s} " + " ".join(f"{name:>10s} {'ratio':>5s}" for name in configs)
     print(header)
     print("-" * len(header))
-    default_chunks = launch.BALANCE_CHUNKS_PER_THREAD
     ratios = {name: [] for name in configs}
     for name, frames, _ in middlebury_pairs(data, args.sequences):
         calls = record_median_calls(be, frames)
@@ -86,23 +84,12 @@ def main(argv=None) -> int:
         masks = [inputs[3] for inputs, _, _ in calls]
         first_half = sum(m.reshape(-1, m.shape[-1])[: m.shape[0] * m.shape[1] // 2].sum() for m in masks) \
             / max(1.0, sum(m.sum() for m in masks))
-        times = {c: [] for c in configs}
-        order = list(configs)
-        try:
-            for r in range(-1, args.repeat):
-                for c in order[r % len(order):] + order[:r % len(order)]:
-                    threads, chunks = configs[c]
-                    launch.BALANCE_CHUNKS_PER_THREAD = chunks
-                    with launch.threads(threads):
-                        t0 = time.perf_counter()
-                        for (inputs, a, k), out in zip(arrays, outs):
-                            be.median.weighted_median_flow(*inputs, out, *a, **k)
-                        be.synchronize()
-                        if r >= 0:
-                            times[c].append(time.perf_counter() - t0)
-        finally:
-            launch.BALANCE_CHUNKS_PER_THREAD = default_chunks
-        med = {c: statistics.median(v) for c, v in times.items()}
+
+        def replay():
+            for (inputs, a, k), out in zip(arrays, outs):
+                be.median.weighted_median_flow(*inputs, out, *a, **k)
+
+        med = time_configs(replay, be, configs, args.repeat, float("inf"), setting="BALANCE_CHUNKS_PER_THREAD")
         row = f"{name:13s} {first_half:8.2f} "
         for c in configs:
             ratios[c].append(med["1 thread"] / med[c])
@@ -111,7 +98,7 @@ def main(argv=None) -> int:
     print("-" * len(header))
     gm = {c: float(np.exp(np.mean(np.log(v)))) for c, v in ratios.items()}
     print(f"{'geomean':13s} {'':8s} " + " ".join(f"{'':>10s} {gm[c]:5.2f}" for c in configs))
-    print(f"library default: {default_chunks} chunks per thread")
+    print(f"library default: {launch.BALANCE_CHUNKS_PER_THREAD} chunks per thread")
     return 0
 
 

@@ -39,19 +39,22 @@ def largest_input_elements(values: dict) -> int:
     return max((v.size for v in values.values() if isinstance(v, np.ndarray)), default=0)
 
 
-def time_configs(call, be, configs: dict, repeat: int, budget_s: float) -> dict:
-    """Median seconds of ``call`` under each ``{name: (threads, min_band_elements)}`` configuration."""
+def time_configs(call, be, configs: dict, repeat: int, budget_s: float,
+                 setting: str = "MIN_BAND_ELEMENTS") -> dict:
+    """Median seconds of ``call`` under each ``{name: (threads, value)}`` configuration,
+    ``value`` given to the launch setting ``setting`` (an attribute of
+    :mod:`ivkernels.kernels.launch`, restored afterwards), in rotating order."""
     from ivkernels.kernels import launch
 
-    default_min = launch.MIN_BAND_ELEMENTS
+    default = getattr(launch, setting)
     times = {name: [] for name in configs}
     names = list(configs)
     t_start = time.perf_counter()
     try:
         for r in range(-1, repeat):                      # round -1 warms every configuration
             for name in names[r % len(names):] + names[:r % len(names)]:
-                n, min_elements = configs[name]
-                launch.MIN_BAND_ELEMENTS = min_elements
+                n, value = configs[name]
+                setattr(launch, setting, value)
                 with launch.threads(n):
                     t0 = time.perf_counter()
                     call()
@@ -61,7 +64,7 @@ def time_configs(call, be, configs: dict, repeat: int, budget_s: float) -> dict:
             if r >= 4 and time.perf_counter() - t_start > budget_s:
                 break
     finally:
-        launch.MIN_BAND_ELEMENTS = default_min
+        setattr(launch, setting, default)
     return {name: statistics.median(v) for name, v in times.items()}
 
 

@@ -149,24 +149,13 @@ def launch_rows(kernel, n_rows: int, inputs: list, device="cpu", *, align: int =
         for begin, count in bands:
             wp.launch(kernel, dim=count, inputs=[begin, *inputs], device=dev)
         return
-    if len(bands) > n_threads:
-        _launch_chunks(kernel, bands, inputs, dev, n_threads)
-        return
-    pool = _executor(len(bands) - 1)
-    others = [pool.submit(wp.launch, kernel, dim=count, inputs=[begin, *inputs], device=dev)
-              for begin, count in bands[:-1]]
-    begin, count = bands[-1]
-    try:
-        wp.launch(kernel, dim=count, inputs=[begin, *inputs], device=dev)
-    finally:
-        wait(others)
-    for other in others:
-        other.result()
+    _launch_chunks(kernel, bands, inputs, dev, min(n_threads, len(bands)))
 
 
 def _launch_chunks(kernel, chunks: list[tuple[int, int]], inputs: list, dev, n_threads: int) -> None:
     """Launch ``chunks`` on ``n_threads`` threads (the caller's and ``n_threads - 1``
-    of the pool), each taking the next chunk not yet taken until none is left."""
+    of the pool), each taking the next chunk not yet taken until none is left
+    (one band per thread when there are as many chunks as threads)."""
     pending = iter(chunks)
     lock = threading.Lock()
 

@@ -9,23 +9,29 @@ from ivkernels.kernels.reference import energy_shading as ref
 
 def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
     """Add Eq. 9's 3x3 Charbonnier smoothness of S (T, H, W) and its gradient into gS (T, H, W)."""
-    arrays(S=S)
-    check_disjoint("gS", gS, "S", S, "the gradient is scattered into gS while S is read")
-    arrays(np.float64, energy_rows=energy_rows)
-    rows, grad = ref.shading_smoothness(S, float(lam), float(eps))
-    add("gS", gS, grad)
-    add("energy_rows", energy_rows, rows)
+    _local_term(S, None, gS, energy_rows, lam, eps)
 
 
 def shading_smoothness_gated(S, gate, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
     """Add Eq. 9's smoothness of S (T, H, W) with pair weights ``(gate(x) + gate(y)) / 2``, gate (T, H, W)."""
-    arrays(S=S, gate=gate)
-    if gate.shape != S.shape:
-        raise ValueError(f"gate must have shape {S.shape} (T, H, W), got {gate.shape}")
+    _local_term(S, gate, gS, energy_rows, lam, eps)
+
+
+def _local_term(S, gate, gS, energy_rows, lam: float, eps: float) -> None:
+    """Checks and reference of Eq. 9's local term, gated unless ``gate`` is None."""
+    arrays(S=S)
+    if gate is not None:
+        arrays(gate=gate)
+        if gate.shape != S.shape:
+            raise ValueError(f"gate must have shape {S.shape} (T, H, W), got {gate.shape}")
     check_disjoint("gS", gS, "S", S, "the gradient is scattered into gS while S is read")
-    check_disjoint("gS", gS, "gate", gate, "the gradient is scattered into gS while gate is read")
+    if gate is not None:
+        check_disjoint("gS", gS, "gate", gate, "the gradient is scattered into gS while gate is read")
     arrays(np.float64, energy_rows=energy_rows)
-    rows, grad = ref.shading_smoothness_gated(S, gate, float(lam), float(eps))
+    if gate is None:
+        rows, grad = ref.shading_smoothness(S, float(lam), float(eps))
+    else:
+        rows, grad = ref.shading_smoothness_gated(S, gate, float(lam), float(eps))
     add("gS", gS, grad)
     add("energy_rows", energy_rows, rows)
 
