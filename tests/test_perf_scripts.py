@@ -100,3 +100,24 @@ def test_bench_balance_prints_a_row_per_pair(tmp_path):
     rows = [line.split() for line in proc.stdout.splitlines() if line.startswith("Venus")]
     assert len(rows) == 1 and len(rows[0]) == 2 + 2 * 3        # name, share, 3 configurations x (s, ratio)
     assert "2 x 4" in proc.stdout
+
+
+def test_energy_at_truth_puts_the_truth_beside_the_solution():
+    proc = subprocess.run(
+        [sys.executable, str(PERF / "energy_at_truth.py"), "--seeds", "3", "--frames", "3",
+         "--size", "24", "32", "--kinds", "static_moving_light", "--set", "lbfgs_iterations=5"],
+        capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    rows = {line.split()[1]: line.split() for line in proc.stdout.splitlines()
+            if line.startswith("static_moving_light/3")}
+    assert set(rows) == {"solution", "truth", "weiss"}
+    # The synthetic frames are albedo x shading exactly, so A = I - S_truth is the true albedo.
+    assert float(rows["truth"][-1]) < 1e-3 < float(rows["solution"][-1])
+    totals = {point: float(row[-2]) for point, row in rows.items()}
+    assert all(np.isfinite(v) and v > 0 for v in totals.values())
+
+
+def test_energy_at_truth_refuses_the_evaluation_seed():
+    proc = subprocess.run([sys.executable, str(PERF / "energy_at_truth.py"), "--seeds", "0"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode != 0 and "seed 0" in proc.stderr
