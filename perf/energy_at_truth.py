@@ -13,6 +13,10 @@ searches, :class:`ivkernels.solver.energy.ConstrainedEnergy`):
 - ``weiss``: the log shading that Weiss's temporal median implies
   (``I - A_weiss``, grey part), the baseline the MIT objects are scored against.
 
+On the MIT objects the truth exists inside the mask only; outside it (the
+black background) the ``truth`` and ``weiss`` points keep the solution's
+shading, so their energies differ from the solution's only on the object.
+
 If the truth's energy is above the solution's, the model prefers the wrong
 split and weights (not iterations) must change; if it is below, the solver
 stops short of a better minimum.  The albedo LMSE of each point is printed
@@ -113,11 +117,17 @@ def main(argv=None) -> int:
         video = iv.decompose(frames, flow=flow, params=params, backend=args.backend)
         energy = finest_energy(be, frames, flow, params, prior)
         weiss_albedo, _ = baselines.weiss(frames)
+        solution = np.log(np.maximum(video.shading, 1e-12))
         points = {
-            "solution": np.log(np.maximum(video.shading, 1e-12)),
+            "solution": solution,
             "truth": np.log(np.maximum(shading, params.log_floor)),
             "weiss": grey_log_shading(frames, weiss_albedo, params.log_floor),
         }
+        if mask is not None:
+            # No truth outside the mask (black background): every point keeps the
+            # solution's shading there, so the totals differ only where truth exists.
+            for name in ("truth", "weiss"):
+                points[name] = np.where(mask, points[name], solution).astype(np.float32)
         for point, log_shading in points.items():
             terms = terms_at(energy, log_shading)
             implied = np.exp(np.log(np.maximum(frames, params.log_floor)) - log_shading[..., None])
