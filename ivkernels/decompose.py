@@ -231,26 +231,29 @@ class _Decomposer:
         """Whether the flow is re-estimated on the albedo (estimated flow, temporal terms on)."""
         return self.flow is None and self.flow_method is not None and self.flow_passes > 1
 
-    def _joint_flow(self, frames_be, flow_np: np.ndarray) -> np.ndarray:
+    def _joint_flow(self, frames_be, flow_np: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Passes 2..N of flow and intrinsic video together, for one window.
 
         Each pass re-estimates the window's flow on the albedo of a guide
-        solve (:func:`ivkernels.flow.joint.guide_albedo`), which obeys
+        solve (:func:`ivkernels.flow.joint.guide_solve`), which obeys
         brightness constancy where the input does not (paper Sec. 5.1, 6);
-        Classic+NL starts from the previous pass's flow.
+        Classic+NL starts from the previous pass's flow.  Returns the last
+        flow and the last guide's log shading (at the guide's size).
         """
         from ivkernels.flow import estimate_flow
-        from ivkernels.flow.joint import guide_albedo
+        from ivkernels.flow.joint import guide_solve
 
         classic = self.flow_method.startswith("classic_nl")
+        guide_shading = None
         for _ in range(self.flow_passes - 1):
-            albedo = guide_albedo(self.be, frames_be, flow_np, self.params, self.prior, log=self.log)
+            albedo, guide_shading = guide_solve(self.be, frames_be, flow_np, self.params, self.prior,
+                                                log=self.log)
             t0 = time.perf_counter()
             extra = {"init": flow_np} if classic else {}
             flow_np = estimate_flow(albedo, method=self.flow_method, backend=self.be.name,
                                     device=self.be.device, **extra)
             self.log.add_time("flow", time.perf_counter() - t0)
-        return flow_np
+        return flow_np, guide_shading
 
     def windows(self) -> Iterator[WindowResult]:
         from ivkernels.solver.motion_maps import motion_maps
@@ -274,8 +277,9 @@ class _Decomposer:
                 flow_np = self._flow_for(start, stop, cached_flow)
                 occ_np = bnd_np = None
                 frames_be = be.asarray(frames_np)
+                guide_shading = None
                 if flow_np is not None and self.joint:
-                    flow_np = self._joint_flow(frames_be, flow_np)
+                    flow_np, guide_shading = self._joint_flow(frames_be, flow_np)
                 t0 = time.perf_counter()
                 flow_be = occ_be = bnd_be = None
                 if flow_np is not None:
@@ -291,7 +295,8 @@ class _Decomposer:
                     carried=None if carried is None else
                     (carried[0][-n_carried:], carried[1][-n_carried:]) if n_carried else None,
                     window_index=index, log=self.log,
-                    progress=None if bar is None else bar.update)
+                    progress=None if bar is None else bar.update,
+                    start_shading=guide_shading if use_flow and p.start_from_guide else None)
                 carried = (A, S)
                 albedo, shading = np.exp(A), np.exp(S)
                 if self.scale is None:

@@ -162,6 +162,12 @@ class Params:
         the four kinds 1.087 / 1.305 / 0.054 / 0.186 against 1.085 / 1.249 /
         0.001 / 0.170, from 1.173 / 1.295 / 0.168 / 0.527 with one pass) for
         a quarter of its cost.
+    start_from_guide
+        With ``flow_passes`` > 1, the window's last solve starts from the
+        last guide's log shading at the guide's pyramid level
+        (:func:`ivkernels.solver.window_solver.start_level_for`) instead of
+        from blurred luminance at the coarsest level: the levels below the
+        guide's size, which the guide already solved, are skipped.
 
     Long videos
     -----------
@@ -211,6 +217,7 @@ class Params:
     log_floor: float = 1e-4
     # flow and intrinsic video together
     flow_guide_scale: float = 0.5
+    start_from_guide: bool = False
     # long videos
     window: int = 8
     overlap: int = 2

@@ -90,3 +90,57 @@ def test_default_passes_remove_the_motion_a_moving_light_fakes():
     epe_one = metrics.endpoint_error(one.flow, seq.flow)
     epe_two = metrics.endpoint_error(two.flow, seq.flow)
     assert epe_two < 0.5 * epe_one, (epe_one, epe_two)
+
+
+def test_a_solve_started_from_the_truth_skips_the_coarse_levels_and_keeps_it():
+    """solve_window(start_shading=...) enters the pyramid at the start's level and solves from it."""
+    import ivkernels as iv
+    from ivkernels import metrics
+    from ivkernels.backends import get_backend
+    from ivkernels.priors import load_albedo_prior
+    from ivkernels.solver.motion_maps import motion_maps
+    from ivkernels.solver.pyramid import level_shapes
+    from ivkernels.solver.window_solver import SolveLog, solve_window
+
+    seq = synthetic.render_sequence("static_moving_light", n_frames=3, size=(96, 128), seed=2)
+    be = get_backend("warp")
+    params = iv.Params(lbfgs_iterations=5, lbfgs_iterations_coarse=5)
+    frames, flow = be.asarray(seq.frames), be.asarray(seq.flow)
+    occ, bnd = motion_maps(be, frames, flow, params)
+    shapes = level_shapes(96, 128, params.pyramid_scale, params.pyramid_min_size)
+    assert shapes[1] == (48, 64) and len(shapes) == 3
+    truth_small = np.log(seq.shading[:, ::2, ::2]).astype(np.float32)       # (3, 48, 64)
+
+    def solve(start):
+        log = SolveLog()
+        A, S = solve_window(be, frames, flow, occ, bnd, params, load_albedo_prior(), log=log,
+                            start_shading=start)
+        lmse = metrics.intrinsic_lmse(np.exp(A), np.exp(S), seq.albedo, seq.shading)["mean"]
+        return lmse, [entry["level"] for entry in log.levels]
+
+    lmse_default, levels_default = solve(None)
+    lmse_truth, levels_truth = solve(truth_small)
+    assert levels_default == [2, 1, 0] and levels_truth == [1, 0]
+    # five iterations per level cannot get far from the blurred-luminance start; from the truth
+    # (sub-sampled, so not exactly the finest level's minimum) the answer stays near it
+    assert lmse_truth < 0.5 * lmse_default
+    with pytest.raises(ValueError, match="start_shading"):
+        solve(truth_small[:2])
+
+
+def test_decompose_starts_the_last_solve_from_the_guide():
+    import ivkernels as iv
+
+    seq = synthetic.render_sequence("objects_camera", n_frames=3, size=(96, 128), seed=4)
+    params = iv.Params(lbfgs_iterations=5, lbfgs_iterations_coarse=5)
+    plain = iv.decompose(seq.frames, flow="dis", params=params, flow_passes=2)
+    started = iv.decompose(seq.frames, flow="dis", params=params.replace(start_from_guide=True),
+                           flow_passes=2)
+    # the guide solves at half size (level 1 of the window's pyramid); the last solve starts there
+    assert [e["level"] for e in plain.diagnostics["levels"]] == [2, 1, 0]
+    assert [e["level"] for e in started.diagnostics["levels"]] == [1, 0]
+    assert np.isfinite(started.albedo).all() and started.albedo.shape == plain.albedo.shape
+    # without temporal terms (the ablation) the guide, a temporal solve, is not used
+    ablation = iv.decompose(seq.frames, flow="dis", temporal=False,
+                            params=params.replace(start_from_guide=True), flow_passes=2)
+    assert [e["level"] for e in ablation.diagnostics["levels"]] == [2, 1, 0]

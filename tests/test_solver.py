@@ -53,6 +53,44 @@ def test_coarse_to_fine_gives_every_callback_its_level_index():
         coarse_to_fine([], solve_level, init, upsample)
 
 
+def test_coarse_to_fine_can_start_at_a_finer_level():
+    shapes = [(9, 12), (5, 6), (3, 3)]
+    calls = []
+
+    def init(level, shape):
+        calls.append(("init", level))
+        return [level]
+
+    def upsample(level, shape, state):
+        calls.append(("upsample", level))
+        return state + [level]
+
+    def solve_level(level, shape, state):
+        calls.append(("solve", level))
+        return state
+
+    assert coarse_to_fine(shapes, solve_level, init, upsample, start_level=1) == [1, 0]
+    assert calls == [("init", 1), ("solve", 1), ("upsample", 0), ("solve", 0)]
+    calls.clear()
+    assert coarse_to_fine(shapes, solve_level, init, upsample, start_level=0) == [0]
+    assert calls == [("init", 0), ("solve", 0)]
+    for bad in (-1, 3):
+        with pytest.raises(ValueError, match="start_level"):
+            coarse_to_fine(shapes, solve_level, init, upsample, start_level=bad)
+
+
+def test_start_level_is_the_coarsest_level_that_holds_the_start():
+    from ivkernels.solver.window_solver import start_level_for
+
+    shapes = [(240, 320), (120, 160), (60, 80), (30, 40)]
+    assert start_level_for(shapes, (120, 160)) == 1          # its own level
+    assert start_level_for(shapes, (30, 40)) == 3
+    assert start_level_for(shapes, (100, 150)) == 1          # between levels: the next larger one
+    assert start_level_for(shapes, (61, 70)) == 1
+    assert start_level_for(shapes, (240, 320)) == 0
+    assert start_level_for(shapes, (10, 10)) == 3
+
+
 def test_level_shapes():
     assert level_shapes(240, 320, 0.5, 24) == [(240, 320), (120, 160), (60, 80), (30, 40)]
     assert level_shapes(10, 10, 0.5, 24) == [(10, 10)]

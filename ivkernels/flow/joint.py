@@ -38,8 +38,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["JointPass", "JointResult", "joint_decompose", "guide_albedo", "occlusion_iou", "FLOW_SOURCES",
-           "DEFAULT_PASSES"]
+__all__ = ["JointPass", "JointResult", "joint_decompose", "guide_albedo", "guide_solve", "occlusion_iou",
+           "FLOW_SOURCES", "DEFAULT_PASSES"]
 
 #: The guide solve never goes below this many pixels on its shorter side.
 MIN_GUIDE_SIZE = 16
@@ -106,6 +106,11 @@ def occlusion_iou(occlusion, visibility) -> float:
 
 
 def guide_albedo(be, frames, flow, params, prior, *, log=None) -> np.ndarray:
+    """The albedo a window's next flow pass is estimated on (:func:`guide_solve`'s first output)."""
+    return guide_solve(be, frames, flow, params, prior, log=log)[0]
+
+
+def guide_solve(be, frames, flow, params, prior, *, log=None) -> tuple[np.ndarray, np.ndarray]:
     """The albedo a window's next flow pass is estimated on, from a solve at reduced size.
 
     The window's frames and flow are resized to ``params.flow_guide_scale``
@@ -130,7 +135,10 @@ def guide_albedo(be, frames, flow, params, prior, *, log=None) -> np.ndarray:
 
     Returns
     -------
-    (T, H, W, 3) float32 NumPy array in [0, 1].
+    albedo : (T, H, W, 3) float32 NumPy array in [0, 1].
+    log_shading : (T, h, w) float32 NumPy array, the guide's log shading at
+        its own (reduced) size: the start the window's last solve can take
+        (``solve_window(..., start_shading=...)``).
     """
     from ivkernels.solver.motion_maps import motion_maps
     from ivkernels.solver.pyramid import downsample, resize, resize_flow
@@ -148,15 +156,16 @@ def guide_albedo(be, frames, flow, params, prior, *, log=None) -> np.ndarray:
         small = downsample(be, frames, shape)
         small_flow = resize_flow(be, be.asarray(np.ascontiguousarray(flow, np.float32)), shape)
     occlusion, boundary = motion_maps(be, small, small_flow, params)
-    _, S = solve_window(be, small, small_flow, occlusion, boundary, params, prior, log=SolveLog())
+    _, S_small = solve_window(be, small, small_flow, occlusion, boundary, params, prior, log=SolveLog())
+    S = S_small
     if shape != (H, W):
-        S = be.numpy(resize(be, be.asarray(np.ascontiguousarray(S[..., None])), (H, W)))[..., 0]
+        S = be.numpy(resize(be, be.asarray(np.ascontiguousarray(S_small[..., None])), (H, W)))[..., 0]
     log_image = np.log(np.maximum(be.numpy(frames), params.log_floor))
     albedo = np.exp(log_image - S[..., None])
     albedo /= float(np.percentile(albedo, 99.0)) or 1.0
     if log is not None:
         log.add_time("guide", time.perf_counter() - t0)
-    return np.ascontiguousarray(np.clip(albedo, 0.0, 1.0), np.float32)
+    return np.ascontiguousarray(np.clip(albedo, 0.0, 1.0), np.float32), S_small
 
 
 def _flow_input(video, source: str, frames) -> np.ndarray:

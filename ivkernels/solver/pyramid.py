@@ -79,7 +79,7 @@ def image_pyramid(be, frames, shapes: list[tuple[int, int]]) -> list:
 
 
 def coarse_to_fine(shapes: list[tuple[int, int]], solve_level: Callable, init: Callable,
-                   upsample: Callable):
+                   upsample: Callable, start_level: int | None = None):
     """Run ``solve_level`` from the coarsest shape to the finest; returns the finest state.
 
     Every callback gets the index ``level`` of the level it works on (0 = the
@@ -91,15 +91,20 @@ def coarse_to_fine(shapes: list[tuple[int, int]], solve_level: Callable, init: C
     shapes : level shapes (h, w), finest first (:func:`level_shapes`, or any
         other pyramid's sizes).
     solve_level : ``solve_level(level, shape, state) -> state``.
-    init : ``init(level, shape) -> state`` at the coarsest level.
+    init : ``init(level, shape) -> state`` at the first level solved.
     upsample : ``upsample(level, shape, state) -> state``: the state solved at
         ``level + 1`` brought to ``level``, of shape ``shape``.
+    start_level : the level to start at (default: the coarsest); the levels
+        coarser than it are skipped, for a start that is already solved there.
     """
     if not shapes:
         raise ValueError("coarse_to_fine needs at least one level shape")
+    first = len(shapes) - 1 if start_level is None else int(start_level)
+    if not 0 <= first < len(shapes):
+        raise ValueError(f"start_level must be in [0, {len(shapes) - 1}], got {start_level}")
     state = None
-    for level in range(len(shapes) - 1, -1, -1):
+    for level in range(first, -1, -1):
         shape = shapes[level]
-        state = init(level, shape) if level == len(shapes) - 1 else upsample(level, shape, state)
+        state = init(level, shape) if level == first else upsample(level, shape, state)
         state = solve_level(level, shape, state)
     return state

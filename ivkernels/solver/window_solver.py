@@ -67,9 +67,17 @@ def _initial_shading(be, log_image, params: Params):
     return out.reshape((T, h, w))
 
 
+def start_level_for(shapes: list[tuple[int, int]], start_shape: tuple[int, int]) -> int:
+    """The pyramid level a start of size ``start_shape`` enters at: the coarsest
+    level at least as large on both sides (its own level when the sizes match)."""
+    h, w = start_shape
+    fits = [level for level, (lh, lw) in enumerate(shapes) if lh >= h and lw >= w]
+    return max(fits) if fits else 0
+
+
 def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, prior, *,
                  carried=None, window_index: int = 0, log: SolveLog | None = None,
-                 progress=None):
+                 progress=None, start_shading=None):
     """Minimise Eq. 2 over one window; returns full-resolution log ``(A, S)``.
 
     Parameters
@@ -88,6 +96,12 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
         (``log.levels``) why each L-BFGS run stopped and whether all of them
         converged (stopped on the tolerance, not on the iteration budget).
     progress : optional callable ``progress(n_done_levels)``.
+    start_shading : optional (T, h, w) NumPy array, log shading of this
+        window solved at a reduced size (the flow guide's solve,
+        :func:`ivkernels.flow.joint.guide_solve`).  The solve starts from it at
+        the level :func:`start_level_for` gives (resized to that level if the
+        sizes differ) and skips the coarser levels, which that solve already
+        did; without it the coarsest level starts from blurred log luminance.
 
     Returns
     -------
@@ -120,8 +134,15 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
 
     def init(level, shape):
         energy = make_energy(level, shape)
-        be.vecops.copy(_initial_shading(be, energy.I, params).reshape((energy.n,)),
-                       energy.S.reshape((energy.n,)))
+        if start_shading is None:
+            S0 = _initial_shading(be, energy.I, params)
+        else:
+            start = np.empty((*start_shading.shape, 1), np.float32)
+            start[..., 0] = start_shading
+            S0 = be.asarray(start)
+            if tuple(start_shading.shape[1:]) != tuple(shape):
+                S0 = resize(be, S0, shape)
+        be.vecops.copy(S0.reshape((energy.n,)), energy.S.reshape((energy.n,)))
         return energy
 
     def upsample(level, shape, energy):
@@ -163,7 +184,14 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
             progress(1)
         return energy
 
-    final = coarse_to_fine(shapes, solve_level, init, upsample)
+    start_level = None
+    if start_shading is not None:
+        if start_shading.ndim != 3 or start_shading.shape[0] != T:
+            raise ValueError(f"start_shading must be ({T}, h, w) log shading, got {start_shading.shape}")
+        start_level = start_level_for(shapes, start_shading.shape[1:])
+        if progress is not None and start_level < len(shapes) - 1:
+            progress(len(shapes) - 1 - start_level)          # the skipped levels
+    final = coarse_to_fine(shapes, solve_level, init, upsample, start_level=start_level)
     A = np.array(be.numpy(final.A), dtype=np.float32, copy=True)
     S = np.array(be.numpy(final.S), dtype=np.float32, copy=True)
     return A, S
