@@ -167,7 +167,14 @@ class Params:
         last guide's log shading at the guide's pyramid level
         (:func:`ivkernels.solver.window_solver.start_level_for`) instead of
         from blurred luminance at the coarsest level: the levels below the
-        guide's size, which the guide already solved, are skipped.
+        guide's size, which the guide already solved, are skipped.  Chosen
+        on training seed 1 (8 frames at 320x240, estimated flow, two passes;
+        perf/RESULTS.md, "The last solve started from the flow guide"):
+        LMSE 0.0060 / 0.0102 / 0.0103 / 0.0136 on the four kinds against
+        0.0061 / 0.0108 / 0.0113 / 0.0140 from the coarsest level, for 9%
+        less CPU time per decomposition.  Starting at the finest level
+        instead (the guide's shading up-sampled) saves more time but raised
+        the error on every kind (mean 0.0126).
 
     Long videos
     -----------
@@ -217,7 +224,7 @@ class Params:
     log_floor: float = 1e-4
     # flow and intrinsic video together
     flow_guide_scale: float = 0.5
-    start_from_guide: bool = False
+    start_from_guide: bool = True
     # long videos
     window: int = 8
     overlap: int = 2

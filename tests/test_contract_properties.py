@@ -51,6 +51,9 @@ def test_params_accept_only_values_in_range(name, value):
     stored = getattr(p, name)
     rule = _rule(name)
     assert type(stored) is rule.kind
+    if rule.kind is bool:                       # a switch: only True and False get here
+        assert isinstance(value, (bool, np.bool_)) and stored == value
+        return
     assert math.isfinite(stored) and rule.contains(stored)
     assert stored == value
 
@@ -58,6 +61,8 @@ def test_params_accept_only_values_in_range(name, value):
 @st.composite
 def valid_value(draw, name):
     rule = _rule(name)
+    if rule.kind is bool:
+        return draw(st.booleans())
     low = rule.low if rule.low is not None else -1e6
     high = rule.high if rule.high is not None else 1e6
     if rule.kind is int:

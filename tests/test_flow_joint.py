@@ -133,14 +133,14 @@ def test_decompose_starts_the_last_solve_from_the_guide():
 
     seq = synthetic.render_sequence("objects_camera", n_frames=3, size=(96, 128), seed=4)
     params = iv.Params(lbfgs_iterations=5, lbfgs_iterations_coarse=5)
-    plain = iv.decompose(seq.frames, flow="dis", params=params, flow_passes=2)
-    started = iv.decompose(seq.frames, flow="dis", params=params.replace(start_from_guide=True),
-                           flow_passes=2)
+    assert params.start_from_guide                                    # the default
+    plain = iv.decompose(seq.frames, flow="dis", params=params.replace(start_from_guide=False),
+                         flow_passes=2)
+    started = iv.decompose(seq.frames, flow="dis", params=params, flow_passes=2)
     # the guide solves at half size (level 1 of the window's pyramid); the last solve starts there
     assert [e["level"] for e in plain.diagnostics["levels"]] == [2, 1, 0]
     assert [e["level"] for e in started.diagnostics["levels"]] == [1, 0]
     assert np.isfinite(started.albedo).all() and started.albedo.shape == plain.albedo.shape
     # without temporal terms (the ablation) the guide, a temporal solve, is not used
-    ablation = iv.decompose(seq.frames, flow="dis", temporal=False,
-                            params=params.replace(start_from_guide=True), flow_passes=2)
+    ablation = iv.decompose(seq.frames, flow="dis", temporal=False, params=params, flow_passes=2)
     assert [e["level"] for e in ablation.diagnostics["levels"]] == [2, 1, 0]

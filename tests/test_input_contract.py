@@ -41,7 +41,9 @@ def no_work(monkeypatch):
 
 # ----------------------------------------------------------------------------- Params
 FLOAT_FIELDS = [name for name, value in vars(Params()).items() if isinstance(value, float)]
-INT_FIELDS = [name for name, value in vars(Params()).items() if isinstance(value, int)]
+INT_FIELDS = [name for name, value in vars(Params()).items()
+              if isinstance(value, int) and not isinstance(value, bool)]
+BOOL_FIELDS = [name for name, value in vars(Params()).items() if isinstance(value, bool)]
 
 
 @pytest.mark.parametrize("name", FLOAT_FIELDS)
@@ -56,6 +58,14 @@ def test_params_refuse_non_finite_values(name, value):
 def test_params_integer_fields_must_be_integers(name, value):
     with pytest.raises(TypeError, match=f"Params.{name} must be an integer"):
         Params(**{name: value})
+
+
+@pytest.mark.parametrize("name", BOOL_FIELDS)
+@pytest.mark.parametrize("value", [0, 1, 1.0, "yes", None])
+def test_params_switches_must_be_true_or_false(name, value):
+    with pytest.raises(TypeError, match=f"Params.{name} must be True or False"):
+        Params(**{name: value})
+    assert getattr(Params(**{name: np.bool_(False)}), name) is False
 
 
 def test_params_numpy_numbers_are_stored_as_python_numbers():
