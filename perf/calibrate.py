@@ -28,14 +28,21 @@ from ivkernels import metrics, synthetic
 EVAL_SEED = 0
 
 
+def parse_value(text: str):
+    """A Params value from the command line: ``true`` / ``false``, an int, or a float."""
+    if text.lower() in ("true", "false"):
+        return text.lower() == "true"
+    return int(text) if text.lstrip("-").isdigit() else float(text)
+
+
 def parse_grid(items: list[str]) -> list[dict]:
-    """``["a=1,2", "b=3"]`` -> every combination as a dict of floats (ints kept int)."""
+    """``["a=1,2", "b=3", "c=false"]`` -> every combination as a dict (ints kept int, switches bool)."""
     axes = []
     for item in items:
         name, _, values = item.partition("=")
         if not values:
             raise SystemExit(f"--grid entries look like name=v1,v2; got {item!r}")
-        axes.append([(name, int(v) if v.lstrip("-").isdigit() else float(v)) for v in values.split(",")])
+        axes.append([(name, parse_value(v)) for v in values.split(",")])
     return [dict(combo) for combo in itertools.product(*axes)] if axes else [{}]
 
 

@@ -33,6 +33,7 @@ import argparse
 import numpy as np
 
 import ivkernels as iv
+from calibrate import parse_grid
 from ivkernels import baselines, datasets, metrics, synthetic
 from ivkernels.backends.registry import get_backend
 from ivkernels.priors import load_albedo_prior
@@ -102,10 +103,7 @@ def main(argv=None) -> int:
     parser.add_argument("--backend", default="warp")
     args = parser.parse_args(argv)
 
-    fields = {}
-    for item in args.set:
-        name, _, value = item.partition("=")
-        fields[name] = int(value) if value.lstrip("-").isdigit() else float(value)
+    fields = parse_grid(args.set)[0]
     be = get_backend(args.backend)
     prior = load_albedo_prior()
     print(f"terms of Eq. 2 at the finest level (A = I - S); Params changes: {fields or 'none'}")

@@ -10,6 +10,7 @@ training seeds (not 0); report on seed 0.
 
     python perf/eval_flow_passes.py --seed 1 --passes 1 2
     python perf/eval_flow_passes.py --seed 0 --passes 1 2
+    python perf/eval_flow_passes.py --seed 1 --passes 2 --set start_from_guide=false
 """
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ import argparse
 import time
 
 import ivkernels as iv
+from calibrate import parse_grid
 from ivkernels import metrics, synthetic
 from ivkernels.flow.joint import occlusion_iou
 
@@ -29,10 +31,14 @@ def main(argv=None) -> int:
     ap.add_argument("--size", type=int, nargs=2, default=(240, 320), metavar=("H", "W"))
     ap.add_argument("--passes", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--guide-scale", type=float, default=None, help="Params.flow_guide_scale")
+    ap.add_argument("--set", nargs="*", default=[], metavar="NAME=VALUE", help="other Params fields")
     args = ap.parse_args(argv)
-    params = iv.Params() if args.guide_scale is None else iv.Params(flow_guide_scale=args.guide_scale)
+    fields = parse_grid(args.set)[0]
+    if args.guide_scale is not None:
+        fields["flow_guide_scale"] = args.guide_scale
+    params = iv.Params(**fields)
     print(f"{args.frames} frames at {args.size[1]}x{args.size[0]}, seed {args.seed}, "
-          f"guide scale {params.flow_guide_scale}")
+          f"guide scale {params.flow_guide_scale}, Params changes: {fields or 'none'}")
     print(f"{'kind':20s} {'passes':>6s} {'EPE':>6s} {'EPE vis':>7s} {'occ IoU':>7s} {'LMSE A':>7s} "
           f"{'LMSE S':>7s} {'LMSE':>7s} {'flow s':>6s} {'guide s':>7s} {'solve s':>7s} {'CPU s':>6s}")
     for kind in args.kinds:

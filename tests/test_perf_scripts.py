@@ -70,9 +70,10 @@ def test_eval_joint_prints_every_pass():
 def test_eval_flow_passes_prints_a_row_per_pass():
     proc = subprocess.run(
         [sys.executable, str(PERF / "eval_flow_passes.py"), "--passes", "1", "2", "--frames", "2", "--size", "32",
-         "48", "--kinds", "static_moving_light", "--seed", "4"],
+         "48", "--kinds", "static_moving_light", "--seed", "4", "--set", "start_from_guide=false"],
         capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    assert "Params changes: {'start_from_guide': False}" in proc.stdout
     rows = [line.split() for line in proc.stdout.splitlines() if line.startswith("static_moving_light")]
     assert [r[1] for r in rows] == ["1", "2"]
     assert float(rows[0][9]) == 0.0 < float(rows[1][9])      # a guide solve only with 2 passes
