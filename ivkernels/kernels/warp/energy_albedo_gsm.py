@@ -25,7 +25,8 @@ the first pass visits the pairs from their first pixel in scan order (the
 forward half of the window), stores ``(g, g')`` per pair and starts each
 pixel's sum; the second lets each pixel gather the pairs it closes (the
 backward half) from the stored values.  Each row's energy is the same as a
-single full-window visit would give.
+single full-window visit would give.  The two passes are compiled per window
+radius (:func:`_pair_kernels_for`), so their offset loops are unrolled.
 
 Whitening.  With ``L`` upper triangular, ``L^T L = Sigma^-1`` (Cholesky), a
 whitening pass stores ``B(x) = L A(x)`` per pixel in a scratch buffer (the
@@ -119,81 +120,104 @@ def whiten_rows(row_begin: int, A: wp.array4d(dtype=float), sigma_inv: wp.array2
         B[r, x] = L * load_vec3(A, t, y, x)
 
 
-@wp.kernel
-def gsm_forward_pairs_rows(row_begin: int, B: wp.array2d(dtype=wp.vec3), coef: wp.array(dtype=wp.vec4),
-                           cells_per_root: float, lam: float, radius: int, height: int,
-                           pairs: wp.array3d(dtype=wp.vec2), acc_out: wp.array2d(dtype=wp.vec3),
-                           energy_rows: wp.array(dtype=wp.float64)):
-    """Pass 1: every unordered pair once, from its first pixel in scan order.
+def _pair_kernels_for(radius: int):
+    """The two pair passes with the window radius compiled in.
 
-    For the forward offsets ``k`` of pixel ``x`` (``dy > 0``, or ``dy = 0`` and
-    ``dx > 0``) stores ``pairs[r, x, k] = (g, g')`` and starts the gradient
-    sum ``acc_out(x) = sum_k g' (B(x) - B(x + o_k))`` and the row energy.
+    With ``radius`` a compile-time constant (``wp.static``) the offset loops
+    are unrolled and the test that picks the forward half is resolved at
+    compile time: twice as fast as a loop over a runtime radius on the CPU
+    (640x480, 8 frames, radius 2, 2 threads: 146 against 294 ms for the whole
+    term), with bitwise the same results.  One module per radius, built on
+    first use and kept (:data:`_PAIR_KERNELS`).
     """
-    r = row_begin + wp.tid()
-    width = B.shape[1]
-    t = r // height
-    y = r - t * height
-    row0 = t * height
-    e = wp.float64(0.0)
-    for x in range(width):
-        b = B[r, x]
-        acc = wp.vec3(0.0, 0.0, 0.0)
-        e_x = float(0.0)
-        k = int(0)
-        for dy in range(radius + 1):
-            yy = y + dy
-            for dx in range(-radius, radius + 1):
-                if dy > 0 or dx > 0:
-                    xx = x + dx
-                    if yy < height and xx >= 0 and xx < width:
-                        d = b - B[row0 + yy, xx]
-                        g, dg = gsm_lookup(wp.dot(d, d), coef, cells_per_root)
-                        pairs[r, x, k] = wp.vec2(g, dg)
-                        acc += dg * d
-                        e_x += g
-                    k += 1
-        acc_out[r, x] = acc
-        e += wp.float64(e_x)
-    energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
+    R = int(radius)
+
+    @wp.kernel(module="unique")
+    def gsm_forward_pairs_rows(row_begin: int, B: wp.array2d(dtype=wp.vec3), coef: wp.array(dtype=wp.vec4),
+                               cells_per_root: float, lam: float, height: int,
+                               pairs: wp.array3d(dtype=wp.vec2), acc_out: wp.array2d(dtype=wp.vec3),
+                               energy_rows: wp.array(dtype=wp.float64)):
+        """Pass 1: every unordered pair once, from its first pixel in scan order.
+
+        For the forward offsets ``k`` of pixel ``x`` (``dy > 0``, or ``dy = 0`` and
+        ``dx > 0``) stores ``pairs[r, x, k] = (g, g')`` and starts the gradient
+        sum ``acc_out(x) = sum_k g' (B(x) - B(x + o_k))`` and the row energy.
+        """
+        r = row_begin + wp.tid()
+        width = B.shape[1]
+        t = r // height
+        y = r - t * height
+        row0 = t * height
+        e = wp.float64(0.0)
+        for x in range(width):
+            b = B[r, x]
+            acc = wp.vec3(0.0, 0.0, 0.0)
+            e_x = float(0.0)
+            k = int(0)
+            for dy in range(wp.static(R + 1)):
+                yy = y + dy
+                for dx in range(wp.static(-R), wp.static(R + 1)):
+                    if dy > 0 or dx > 0:
+                        xx = x + dx
+                        if yy < height and xx >= 0 and xx < width:
+                            d = b - B[row0 + yy, xx]
+                            g, dg = gsm_lookup(wp.dot(d, d), coef, cells_per_root)
+                            pairs[r, x, k] = wp.vec2(g, dg)
+                            acc += dg * d
+                            e_x += g
+                        k += 1
+            acc_out[r, x] = acc
+            e += wp.float64(e_x)
+        energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
+
+    @wp.kernel(module="unique")
+    def gsm_backward_pairs_rows(row_begin: int, B: wp.array2d(dtype=wp.vec3), sigma_inv: wp.array2d(dtype=float),
+                                pairs: wp.array3d(dtype=wp.vec2), acc_in: wp.array2d(dtype=wp.vec3),
+                                lam: float, height: int,
+                                gA: wp.array4d(dtype=float), energy_rows: wp.array(dtype=wp.float64)):
+        """Pass 2: each pixel gathers the pairs in which it is the second pixel,
+        ``(g, g')`` read from ``pairs`` of the first, and writes its gradient
+        ``4 lam L^T (acc_in(x) + sum g' (B(x) - B(x - o_k)))``."""
+        r = row_begin + wp.tid()
+        width = B.shape[1]
+        t = r // height
+        y = r - t * height
+        row0 = t * height
+        Lt = wp.transpose(precision_factor(sigma_inv))
+        e = wp.float64(0.0)
+        for x in range(width):
+            b = B[r, x]
+            acc = acc_in[r, x]
+            e_x = float(0.0)
+            k = int(0)
+            for dy in range(wp.static(R + 1)):
+                yy = y - dy
+                for dx in range(wp.static(-R), wp.static(R + 1)):
+                    if dy > 0 or dx > 0:
+                        xx = x - dx
+                        if yy >= 0 and xx >= 0 and xx < width:
+                            p = pairs[row0 + yy, xx, k]
+                            acc += p[1] * (b - B[row0 + yy, xx])
+                            e_x += p[0]
+                        k += 1
+            grad = (4.0 * lam) * (Lt * acc)
+            gA[t, y, x, 0] = gA[t, y, x, 0] + grad[0]
+            gA[t, y, x, 1] = gA[t, y, x, 1] + grad[1]
+            gA[t, y, x, 2] = gA[t, y, x, 2] + grad[2]
+            e += wp.float64(e_x)
+        energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
+
+    return gsm_forward_pairs_rows, gsm_backward_pairs_rows
 
 
-@wp.kernel
-def gsm_backward_pairs_rows(row_begin: int, B: wp.array2d(dtype=wp.vec3), sigma_inv: wp.array2d(dtype=float),
-                            pairs: wp.array3d(dtype=wp.vec2), acc_in: wp.array2d(dtype=wp.vec3),
-                            lam: float, radius: int, height: int,
-                            gA: wp.array4d(dtype=float), energy_rows: wp.array(dtype=wp.float64)):
-    """Pass 2: each pixel gathers the pairs in which it is the second pixel,
-    ``(g, g')`` read from ``pairs`` of the first, and writes its gradient
-    ``4 lam L^T (acc_in(x) + sum g' (B(x) - B(x - o_k)))``."""
-    r = row_begin + wp.tid()
-    width = B.shape[1]
-    t = r // height
-    y = r - t * height
-    row0 = t * height
-    Lt = wp.transpose(precision_factor(sigma_inv))
-    e = wp.float64(0.0)
-    for x in range(width):
-        b = B[r, x]
-        acc = acc_in[r, x]
-        e_x = float(0.0)
-        k = int(0)
-        for dy in range(radius + 1):
-            yy = y - dy
-            for dx in range(-radius, radius + 1):
-                if dy > 0 or dx > 0:
-                    xx = x - dx
-                    if yy >= 0 and xx >= 0 and xx < width:
-                        p = pairs[row0 + yy, xx, k]
-                        acc += p[1] * (b - B[row0 + yy, xx])
-                        e_x += p[0]
-                    k += 1
-        grad = (4.0 * lam) * (Lt * acc)
-        gA[t, y, x, 0] = gA[t, y, x, 0] + grad[0]
-        gA[t, y, x, 1] = gA[t, y, x, 1] + grad[1]
-        gA[t, y, x, 2] = gA[t, y, x, 2] + grad[2]
-        e += wp.float64(e_x)
-    energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
+#: radius -> (forward, backward) pair kernels, built on first use.
+_PAIR_KERNELS: dict = {}
+
+
+def _pair_kernels(radius: int):
+    if radius not in _PAIR_KERNELS:
+        _PAIR_KERNELS[radius] = _pair_kernels_for(radius)
+    return _PAIR_KERNELS[radius]
 
 
 def _scratch(workspace, name: str, shape: tuple, dtype, device):
@@ -253,8 +277,8 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
     coef = _scratch(workspace, "cell_coefficients", (n,), wp.vec4, dev)
     wp.launch(cell_coefficients, dim=n, inputs=[table_g, table_dg, float(r2_max), float(cells_per_root), coef],
               device=dev)
-    launch_rows(gsm_forward_pairs_rows, T * H,
-                [B, coef, float(cells_per_root), float(lam), int(radius), H,
-                 pairs, acc, energy_rows], device=dev)
-    launch_rows(gsm_backward_pairs_rows, T * H,
-                [B, sigma_inv, pairs, acc, float(lam), int(radius), H, gA, energy_rows], device=dev)
+    forward_pairs, backward_pairs = _pair_kernels(radius)
+    launch_rows(forward_pairs, T * H,
+                [B, coef, float(cells_per_root), float(lam), H, pairs, acc, energy_rows], device=dev)
+    launch_rows(backward_pairs, T * H,
+                [B, sigma_inv, pairs, acc, float(lam), H, gA, energy_rows], device=dev)
