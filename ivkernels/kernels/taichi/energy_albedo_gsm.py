@@ -34,7 +34,11 @@ coefficients ``(n, 4)``, but are passed flat and indexed by pixel
 ``p = (t H + y) W + x``: ``B[3 p + c]``, ``pairs[2 (K p + k) + j]``,
 ``coef[4 i + j]``.  With stores to the pairs in the inner loop, flat
 indexing saves reloading every ndarray's shape at each access (the forward
-pass runs ~15% faster than with 4-D indexing).
+pass runs ~15% faster than with 4-D indexing).  The pair passes take the
+window radius as a ``ti.template()`` (one compiled kernel per radius), so
+the offsets are unrolled as in the Warp module: 1.45x faster than with a
+runtime radius (640x480, 8 frames, radius 2, 2 threads, alternated in one
+process: 275 against 399 ms; gradients agree to 1.2e-4, float32 rounding).
 """
 import math
 
@@ -125,7 +129,7 @@ def _whiten_rows(A: nd4, sigma_inv: nd2, B: nd1):
 
 
 @ti.kernel
-def _gsm_forward_pairs_rows(B: nd1, coef: nd1, cells_per_root: ti.f32, lam: ti.f32, radius: ti.i32,
+def _gsm_forward_pairs_rows(B: nd1, coef: nd1, cells_per_root: ti.f32, lam: ti.f32, radius: ti.template(),
                             height: ti.i32, width: ti.i32, pairs: nd1, acc_out: nd1, energy_rows: nd1_f64):
     """Pass 1: every unordered pair once, from its first pixel in scan order.
 
@@ -133,32 +137,30 @@ def _gsm_forward_pairs_rows(B: nd1, coef: nd1, cells_per_root: ti.f32, lam: ti.f
     ``dy = 0`` and ``dx > 0``; ``k = dy (2 radius + 1) + dx - 1``) inside the
     image, stores ``(g, g')`` at ``pairs[2 (K p + k) :][:2]`` and starts the
     gradient sum ``acc_out(p) = sum_k g' (B(p) - B(p + o_k))`` and the row energy.
+    ``radius`` is a compile-time constant: the offsets are unrolled.
     """
     for r in range(energy_rows.shape[0]):
         t = r // height
         y = r - t * height
         span = 2 * radius + 1
         n_forward = radius + radius * span
-        dy_hi = ti.min(radius, height - 1 - y)
         e = ti.cast(0.0, ti.f64)
         for x in range(width):
             p = r * width + x
             b = load3(B, 3 * p)
             acc = ti.Vector([0.0, 0.0, 0.0])
             e_x = 0.0
-            dx_hi = ti.min(radius, width - 1 - x)
-            for dy in range(dy_hi + 1):
-                dx_lo = ti.max(-radius, -x)
-                if dy == 0:
-                    dx_lo = 1
-                for dx in range(dx_lo, dx_hi + 1):
-                    d = b - load3(B, 3 * (p + dy * width + dx))
-                    g, dg = gsm_lookup(d.dot(d), coef, cells_per_root)
-                    q = 2 * (n_forward * p + dy * span + dx - 1)
-                    pairs[q] = g
-                    pairs[q + 1] = dg
-                    acc += dg * d
-                    e_x += g
+            for dy in ti.static(range(radius + 1)):
+                for dx in ti.static(range(-radius, radius + 1)):
+                    if ti.static(dy > 0 or dx > 0):
+                        if y + dy < height and x + dx >= 0 and x + dx < width:
+                            d = b - load3(B, 3 * (p + dy * width + dx))
+                            g, dg = gsm_lookup(d.dot(d), coef, cells_per_root)
+                            q = 2 * (n_forward * p + dy * span + dx - 1)
+                            pairs[q] = g
+                            pairs[q + 1] = dg
+                            acc += dg * d
+                            e_x += g
             for c in ti.static(range(3)):
                 acc_out[3 * p + c] = acc[c]
             e += ti.cast(e_x, ti.f64)
@@ -167,17 +169,17 @@ def _gsm_forward_pairs_rows(B: nd1, coef: nd1, cells_per_root: ti.f32, lam: ti.f
 
 @ti.kernel
 def _gsm_backward_pairs_rows(B: nd1, sigma_inv: nd2, pairs: nd1, acc_in: nd1, lam: ti.f32,
-                             radius: ti.i32, height: ti.i32, width: ti.i32, gA: nd4,
+                             radius: ti.template(), height: ti.i32, width: ti.i32, gA: nd4,
                              energy_rows: nd1_f64):
     """Pass 2: each pixel gathers the pairs in which it is the second pixel,
     ``(g, g')`` read from ``pairs`` of the first (``p - o_k``), and adds its
-    gradient ``4 lam L^T (acc_in(p) + sum_k g' (B(p) - B(p - o_k)))``."""
+    gradient ``4 lam L^T (acc_in(p) + sum_k g' (B(p) - B(p - o_k)))``.
+    ``radius`` is a compile-time constant: the offsets are unrolled."""
     for r in range(energy_rows.shape[0]):
         t = r // height
         y = r - t * height
         span = 2 * radius + 1
         n_forward = radius + radius * span
-        dy_hi = ti.min(radius, y)
         Lt = precision_factor(sigma_inv).transpose()
         e = ti.cast(0.0, ti.f64)
         for x in range(width):
@@ -185,16 +187,14 @@ def _gsm_backward_pairs_rows(B: nd1, sigma_inv: nd2, pairs: nd1, acc_in: nd1, la
             b = load3(B, 3 * p)
             acc = load3(acc_in, 3 * p)
             e_x = 0.0
-            dx_hi = ti.min(radius, x)
-            for dy in range(dy_hi + 1):
-                dx_lo = ti.max(-radius, x - width + 1)
-                if dy == 0:
-                    dx_lo = 1
-                for dx in range(dx_lo, dx_hi + 1):
-                    p0 = p - dy * width - dx
-                    q = 2 * (n_forward * p0 + dy * span + dx - 1)
-                    acc += pairs[q + 1] * (b - load3(B, 3 * p0))
-                    e_x += pairs[q]
+            for dy in ti.static(range(radius + 1)):
+                for dx in ti.static(range(-radius, radius + 1)):
+                    if ti.static(dy > 0 or dx > 0):
+                        if y - dy >= 0 and x - dx >= 0 and x - dx < width:
+                            p0 = p - dy * width - dx
+                            q = 2 * (n_forward * p0 + dy * span + dx - 1)
+                            acc += pairs[q + 1] * (b - load3(B, 3 * p0))
+                            e_x += pairs[q]
             grad = (4.0 * lam) * (Lt @ acc)
             for c in ti.static(range(3)):
                 gA[t, y, x, c] += grad[c]
