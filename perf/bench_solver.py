@@ -13,7 +13,10 @@ Prints, in one run:
   3. long videos streamed window by window (iter_decompose, as the command
      line does): 60 and 300 frames at 80x60, peak memory stays flat.
 
-    python perf/bench_solver.py [--quick] [--flow classic_nl_fast]
+With ``--device cuda`` it prints instead, per size, Warp on the CPU (2
+threads) beside Warp on the CUDA device, and their time ratio.
+
+    python perf/bench_solver.py [--quick] [--flow classic_nl_fast] [--device cuda]
 """
 from __future__ import annotations
 
@@ -38,13 +41,14 @@ def run_one(args) -> dict:
         return run_stream(args)
     tiny = synthetic.render_sequence("objects_camera", n_frames=2, size=(32, 40), seed=1)
     t0 = time.perf_counter()
-    iv.decompose(tiny.frames, flow=args.flow, backend=args.backend)       # compile + load kernels
+    iv.decompose(tiny.frames, flow=args.flow, backend=args.backend, device=args.device)  # compile + load kernels
     compile_s = time.perf_counter() - t0
     seq = synthetic.render_sequence("objects_camera", n_frames=args.frames,
                                     size=(args.height, args.width), seed=1)
     rss_before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     t0 = time.perf_counter()
-    video = iv.decompose(seq.frames, flow=args.flow, backend=args.backend, flow_passes=args.flow_passes)
+    video = iv.decompose(seq.frames, flow=args.flow, backend=args.backend, device=args.device,
+                         flow_passes=args.flow_passes)
     total = time.perf_counter() - t0
     assert np.isfinite(video.albedo).all()
     peak_kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
@@ -79,8 +83,8 @@ def run_stream(args) -> dict:
 
 
 def spawn(backend: str, threads: int, frames: int, height: int, width: int, flow: str,
-          stream: bool = False, flow_passes: int = 2) -> dict:
-    cmd = [sys.executable, __file__, "--one", "--backend", backend, "--threads", str(threads),
+          stream: bool = False, flow_passes: int = 2, device: str = "cpu") -> dict:
+    cmd = [sys.executable, __file__, "--one", "--backend", backend, "--device", device, "--threads", str(threads),
            "--frames", str(frames), "--height", str(height), "--width", str(width), "--flow", flow,
            "--flow-passes", str(flow_passes)]
     if stream:
@@ -91,10 +95,28 @@ def spawn(backend: str, threads: int, frames: int, height: int, width: int, flow
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+def compare_devices(args, sizes) -> int:
+    """Warp on the CPU (2 threads) and on ``args.device``, 8 frames per size, side by side."""
+    print(f"decompose(), 8 frames, flow={args.flow}; seconds per stage (compile excluded)")
+    print(f"{'size':>9} {'device':>8} {'flow':>6} {'guide':>6} {'solve':>7} {'total':>7} {'compile':>8}")
+    for h, w in sizes:
+        totals = {}
+        for device in ("cpu", args.device):
+            r = spawn("warp", 2, 8, h, w, args.flow, flow_passes=args.flow_passes, device=device)
+            totals[device] = r["total"]
+            s = r["stages"]
+            print(f"{w}x{h:<5} {device:>8} {s.get('flow', 0):6.2f} {s.get('guide', 0):6.2f} "
+                  f"{s.get('solve', 0):7.2f} {r['total']:7.2f} {r['compile']:8.2f}")
+        print(f"{w}x{h}: CPU / {args.device} time ratio {totals['cpu'] / totals[args.device]:.1f}")
+    return 0
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--one", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--backend", default="warp")
+    parser.add_argument("--device", default="cpu",
+                        help="'cuda': compare Warp on the CPU with Warp on the CUDA device, per size")
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--frames", type=int, default=8)
     parser.add_argument("--height", type=int, default=240)
@@ -120,6 +142,8 @@ def main(argv=None) -> int:
         sizes = list(zip(args.sizes[::2], args.sizes[1::2]))
     else:
         sizes = [(120, 160)] if args.quick else [(240, 320), (480, 640)]
+    if args.device != "cpu":
+        return compare_devices(args, sizes)
     configs = [("warp", 1), ("warp", 2), ("taichi", 1), ("taichi", 2)]
     print(f"decompose(), 8 frames, flow={args.flow}; seconds per stage (compile excluded)")
     header = f"{'size':>9} {'backend':>8} {'thr':>3} {'flow':>6} {'maps':>6} {'solve':>7} " \

@@ -126,10 +126,13 @@ def assert_outputs(case: Case, got: dict, want: dict, values: dict, label: str =
 
 
 def strided_view(be, a: np.ndarray):
-    """A non-contiguous backend view holding ``a`` (every stride doubled)."""
-    big = np.zeros(a.shape + (2,), a.dtype)
-    big[..., 0] = a
-    return be.asarray(big)[(slice(None),) * a.ndim + (0,)]
+    """A non-contiguous backend view holding ``a`` (every stride doubled).
+
+    The last axis is stored twice as long and read with a step of two, so the
+    view has ``a``'s number of axes (Warp's CUDA arrays hold at most four)."""
+    big = np.zeros(a.shape[:-1] + (2 * a.shape[-1],), a.dtype)
+    big[..., ::2] = a
+    return be.asarray(big)[(slice(None),) * (a.ndim - 1) + (slice(None, None, 2),)]
 
 
 def known_gap(check: str, be, case: Case) -> str | None:
