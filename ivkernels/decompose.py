@@ -200,7 +200,6 @@ class _Decomposer:
             return self.flow[start:stop - 1]
         if self.flow_method is None or stop - start < 2:
             return None
-        from ivkernels.flow import estimate_flow
 
         missing = [t for t in range(start, stop - 1) if t not in cached]
         if missing:
@@ -216,8 +215,7 @@ class _Decomposer:
                       disable=not self.progress, leave=False) as bar:
                 for batch in batches:
                     first, last = batch[0], batch[-1]
-                    flows = estimate_flow(self.frames[first:last + 2], method=self.flow_method,
-                                          backend=self.be.name, device=self.be.device)
+                    flows = self._first_pass_flow(self.frames[first:last + 2])
                     for t in batch:
                         cached[t] = flows[t - first]
                     bar.update(len(batch))
@@ -225,6 +223,28 @@ class _Decomposer:
         for t in [t for t in cached if t < start]:
             del cached[t]
         return np.stack([cached[t] for t in range(start, stop - 1)])
+
+    def _first_pass_flow(self, frames: np.ndarray) -> np.ndarray:
+        """The flow of the first pass on ``frames`` (T, H, W, 3), at full size.
+
+        When later passes re-estimate it (:attr:`joint`) and
+        ``Params.first_flow_at_guide_size`` is set, it only feeds the guide
+        solve, which works at the guide's size: it is estimated on the
+        frames resized to that size, and its up-sampled vectors are returned.
+        """
+        from ivkernels.flow import estimate_flow
+        from ivkernels.flow.joint import guide_shape
+        from ivkernels.solver.pyramid import downsample, resize_flow
+
+        be, (H, W) = self.be, frames.shape[1:3]
+        shape = guide_shape(H, W, self.params) if self.joint and self.params.first_flow_at_guide_size \
+            else (H, W)
+        if shape != (H, W):
+            frames = np.array(be.numpy(downsample(be, be.asarray(frames), shape)), copy=True)
+        flow = estimate_flow(frames, method=self.flow_method, backend=be.name, device=be.device)
+        if shape != (H, W):
+            flow = np.array(be.numpy(resize_flow(be, be.asarray(flow), (H, W))), copy=True)
+        return flow
 
     @property
     def joint(self) -> bool:

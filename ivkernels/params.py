@@ -175,6 +175,17 @@ class Params:
         less CPU time per decomposition.  Starting at the finest level
         instead (the guide's shading up-sampled) saves more time but raised
         the error on every kind (mean 0.0126).
+    first_flow_at_guide_size
+        With ``flow_passes`` > 1 and an estimated flow, the first pass's
+        flow only feeds the guide solve, which works at the guide's size
+        (``flow_guide_scale``): it is estimated on the frames resized to that
+        size and its vectors up-sampled, instead of at full size.  Chosen on
+        training seed 1 (8 frames at 320x240, perf/RESULTS.md, "The first
+        flow at the guide's size"): LMSE 0.0060 / 0.0099 / 0.0105 / 0.0135
+        on the four kinds against 0.0060 / 0.0102 / 0.0103 / 0.0136 at full
+        size, for 17% less CPU time per decomposition (a third less in the
+        flow); the last pass's flow EPE rises by 3-5% on the moving kinds
+        (1.143 / 1.343 against 1.087 / 1.305 px).
 
     Long videos
     -----------
@@ -225,6 +236,7 @@ class Params:
     # flow and intrinsic video together
     flow_guide_scale: float = 0.5
     start_from_guide: bool = True
+    first_flow_at_guide_size: bool = True
     # long videos
     window: int = 8
     overlap: int = 2

@@ -1,4 +1,6 @@
 """decompose(): the public API end to end on small synthetic sequences."""
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -98,16 +100,23 @@ def test_flow_passes_reestimate_the_flow_on_the_guide_albedo(seq, monkeypatch):
     original = flow_module.estimate_flow
 
     def spy(frames, method="classic_nl_fast", **options):
-        calls.append((method, "init" in options, np.asarray(frames).dtype))
+        calls.append((method, "init" in options, np.asarray(frames).dtype, np.shape(frames)[1:3]))
         return original(frames, method=method, **options)
 
     monkeypatch.setattr(flow_module, "estimate_flow", spy)
     one = iv.decompose(seq.frames, flow="dis", params=FAST, flow_passes=1)
     assert len(calls) == 1 and one.diagnostics["flow_method"] == "dis"
+    assert calls[0][3] == seq.frames.shape[1:3]                 # a single pass runs at full size
     calls.clear()
     two = iv.decompose(seq.frames, flow="dis", params=FAST, flow_passes=3)
-    # pass 1 on the input, passes 2 and 3 on guide albedos (float32 in [0, 1]); DIS takes no init
+    # pass 1 on the input at the guide's size (it only feeds the guide), passes 2 and 3 at full
+    # size on guide albedos (float32 in [0, 1]); DIS takes no init
     assert [c[0] for c in calls] == ["dis"] * 3 and not any(c[1] for c in calls)
+    assert [c[3] for c in calls] == [(20, 28), seq.frames.shape[1:3], seq.frames.shape[1:3]]
+    calls.clear()
+    full = iv.decompose(seq.frames, flow="dis", params=dataclasses.replace(FAST, first_flow_at_guide_size=False),
+                        flow_passes=2)
+    assert [c[3] for c in calls] == [seq.frames.shape[1:3]] * 2 and full.flow.shape == seq.flow.shape
     assert two.diagnostics["flow_method"] == "dis, 3 passes with the intrinsic video"
     assert "guide" in two.diagnostics["seconds"] and "guide" not in one.diagnostics["seconds"]
     assert two.flow.shape == seq.flow.shape and not np.array_equal(two.flow, one.flow)

@@ -96,6 +96,34 @@ def test_several_frames_and_uint8(rng):
     assert np.abs(flow8 - flow).mean() < 0.05
 
 
+def test_refining_an_initial_flow_skips_the_quadratic_stage(rng, monkeypatch):
+    from ivkernels.flow.classic_nl import ClassicNL
+
+    def motion(x, y):
+        return np.stack([1.2 * np.sin(2 * np.pi * y / H) + 0.5, 0.8 * np.cos(2 * np.pi * x / W) - 0.3], -1)
+
+    frames, u = pair(rng, motion)
+    init = estimate_flow(frames)
+    kept = init.copy()
+    shapes, warp_step = [], ClassicNL._warp_step
+
+    def counted(self, lv, *args, **kwargs):
+        shapes.append(lv.shape)
+        return warp_step(self, lv, *args, **kwargs)
+
+    monkeypatch.setattr(ClassicNL, "_warp_step", counted)
+    refined = estimate_flow(frames, init=init, gnc_start=1)
+    np.testing.assert_array_equal(init, kept)                       # the caller's flow is not written
+    later = pyramid_sizes(H, W, PRESETS["classic_nl_fast"].gnc_spacing, PRESETS["classic_nl_fast"].gnc_levels)
+    assert shapes == [later[1]] * 3 + [later[0]] * 3                # only the robust stage, its two levels
+    assert interior_epe(refined[0], u) < 0.2
+    shapes.clear()
+    assert np.array_equal(estimate_flow(frames, gnc_start=1), init)  # no initial flow: every stage runs
+    assert len(shapes) > 6
+    with pytest.raises(ValueError, match="gnc_start"):
+        settings_for("classic_nl_fast", gnc_start=2)
+
+
 def test_one_thread_equals_two_threads(rng):
     frames, _ = pair(rng, lambda x, y: np.broadcast_to([0.9, 0.4], x.shape + (2,)))
     with threads(1):

@@ -97,7 +97,11 @@ class ClassicNLSettings:
         ``gnc_stages`` GNC stages; ``warps`` warping steps per level;
         ``spacing`` pyramid spacing of stage 1 and ``gnc_spacing``,
         ``gnc_levels`` of the later stages; ``max_levels`` caps stage 1's
-        automatic level count (0 = no cap).
+        automatic level count (0 = no cap); ``gnc_start``: the GNC stage a
+        run with an initial flow starts at (0 = all of them; 1 skips the
+        quadratic stage and its deep pyramid, for a flow that refines a
+        good one: the later passes of :func:`ivkernels.decompose`).  A run
+        without an initial flow always starts at stage 0.
     Input
         ``rof_iters``, ``rof_theta``, ``texture_alpha``: ROF texture input
         (``texture_alpha = 0`` keeps the plain grey image); ``log_input``:
@@ -162,6 +166,7 @@ class ClassicNLSettings:
     gnc_spacing: float = 1.25
     gnc_levels: int = 2
     max_levels: int = 0
+    gnc_start: int = 0
     rof_iters: int = 100
     rof_theta: float = 0.125
     texture_alpha: float = 0.95
@@ -191,7 +196,7 @@ class ClassicNLSettings:
 
     def __post_init__(self):
         for name in ("gnc_stages", "warps", "gnc_levels", "wm_radius", "rof_iters", "sor_sweeps",
-                     "sor_sweeps_quadratic", "max_levels", "edge_radius"):
+                     "sor_sweeps_quadratic", "max_levels", "edge_radius", "gnc_start"):
             value = getattr(self, name)
             least = 1 if name in ("gnc_stages", "warps", "gnc_levels", "wm_radius") else 0
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
@@ -199,6 +204,8 @@ class ClassicNLSettings:
         for name in ("spacing", "gnc_spacing"):
             if not getattr(self, name) > 1.0:
                 raise ValueError(f"{name} must be > 1, got {getattr(self, name)!r}")
+        if not self.gnc_start < self.gnc_stages:
+            raise ValueError(f"gnc_start must be below gnc_stages ({self.gnc_stages}), got {self.gnc_start!r}")
         if not self.lam_coarse_factor >= 1.0:
             raise ValueError(f"lam_coarse_factor must be >= 1, got {self.lam_coarse_factor!r}")
         if not self.lam_quadratic >= 0.0:
@@ -508,12 +515,12 @@ class ClassicNL:
         stage1 = pyramid_sizes(height, width, s.spacing, levels)
         later = pyramid_sizes(height, width, s.gnc_spacing, s.gnc_levels)
 
+        # the flow each stage starts from, fitted to that stage's coarsest level
         if init is None:
-            flow = be.zeros((n, *stage1[-1], 2))
+            flow, first_stage = be.zeros((n, *stage1[-1], 2)), 0
         else:
-            full = be.asarray(np.ascontiguousarray(init, np.float32))
-            flow = be.empty((n, *stage1[-1], 2))
-            be.pyramid.resize_flow(full, flow)
+            # a copy: the stages update their flow in place, and the caller's array must stay
+            flow, first_stage = be.asarray(np.array(init, np.float32, copy=True)), s.gnc_start
 
         def fit(level, shape, flow):
             """``flow`` resized to ``shape`` (vectors scaled with it) unless it has that size."""
@@ -526,6 +533,8 @@ class ClassicNL:
         workspace = Workspace()             # the median kernels' scratch, freed when the run returns
         pyramids = {}
         for stage, quad_frac in enumerate(gnc_schedule(s.gnc_stages)):
+            if stage < first_stage:
+                continue
             sizes, spacing = (stage1, s.spacing) if stage == 0 else (later, s.gnc_spacing)
             if spacing not in pyramids:
                 tex_levels = self._pyramid(texture, sizes, spacing)

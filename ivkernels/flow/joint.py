@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["JointPass", "JointResult", "joint_decompose", "guide_albedo", "guide_solve", "occlusion_iou",
+__all__ = ["JointPass", "JointResult", "joint_decompose", "guide_albedo", "guide_shape", "guide_solve", "occlusion_iou",
            "FLOW_SOURCES", "DEFAULT_PASSES"]
 
 #: The guide solve never goes below this many pixels on its shorter side.
@@ -110,6 +110,15 @@ def guide_albedo(be, frames, flow, params, prior, *, log=None) -> np.ndarray:
     return guide_solve(be, frames, flow, params, prior, log=log)[0]
 
 
+def guide_shape(height: int, width: int, params) -> tuple[int, int]:
+    """(h, w) of the guide solve for frames of ``height`` x ``width``:
+    ``params.flow_guide_scale`` times their size, the shorter side kept at
+    :data:`MIN_GUIDE_SIZE` pixels or the frames' own, if smaller."""
+    floor = min(MIN_GUIDE_SIZE, height, width)
+    scale = max(float(params.flow_guide_scale), floor / min(height, width))
+    return max(1, int(round(height * scale))), max(1, int(round(width * scale)))
+
+
 def guide_solve(be, frames, flow, params, prior, *, log=None) -> tuple[np.ndarray, np.ndarray]:
     """The albedo a window's next flow pass is estimated on, from a solve at reduced size.
 
@@ -146,10 +155,7 @@ def guide_solve(be, frames, flow, params, prior, *, log=None) -> tuple[np.ndarra
 
     t0 = time.perf_counter()
     T, H, W, _ = frames.shape
-    scale = float(params.flow_guide_scale)
-    floor = min(MIN_GUIDE_SIZE, H, W)
-    scale = max(scale, floor / min(H, W))
-    shape = (max(1, int(round(H * scale))), max(1, int(round(W * scale))))
+    shape = guide_shape(H, W, params)
     if shape == (H, W):
         small, small_flow = frames, be.asarray(np.ascontiguousarray(flow, np.float32))
     else:
