@@ -90,3 +90,24 @@ def test_workspace_reused_across_shapes_gives_the_same_result(kernel_backend, rn
                 np.testing.assert_array_equal(got, w)
     # Warp keeps one splat-weight buffer per shape; Taichi's single kernel needs none
     assert len(ws) == (2 if kernel_backend.name == "warp" else 0)
+
+
+def test_both_terms_at_once_equal_the_two_terms(kernel_backend, rng):
+    """temporal_terms(A, S) adds what temporal_term(A) then temporal_term(S) add (Warp: bitwise)."""
+    be = kernel_backend
+    A, flow, occ = make_inputs(rng, 4, 17, 23, 3)
+    S = rng.normal(0.0, 1.0, (4, 17, 23)).astype(np.float32)
+    e0 = rng.normal(size=4 * 17).astype(np.float64)
+    gA0, gS0 = rng.normal(size=A.shape).astype(np.float32), rng.normal(size=S.shape).astype(np.float32)
+    rows, gA = run(be, A, flow, occ, gA0, e0, lam=10.0, alpha=1.5)
+    rows, gS = run(be, S, flow, occ, gS0, rows, lam=3.0, alpha=1.5)
+    both_rows = be.asarray(e0.copy())
+    both_gA, both_gS = be.asarray(gA0.copy()), be.asarray(gS0.copy())
+    be.energy_temporal.temporal_terms(*(be.asarray(a) for a in (A, S, flow, occ)), both_gA, both_gS, both_rows,
+                                      lam_albedo=10.0, lam_shading=3.0, alpha=1.5, workspace=Workspace())
+    exact = be.name == "warp"          # same kernels' arithmetic; Taichi's atomics add in any order
+    for got, want in ((be.numpy(both_gA), gA), (be.numpy(both_gS), gS), (be.numpy(both_rows), rows)):
+        if exact:
+            np.testing.assert_array_equal(got, want)
+        else:
+            np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-5)

@@ -178,6 +178,10 @@ class EnergyTemporalFamily(Protocol):
                       workspace=None) -> None:
         """Add the Tukey temporal term: X, gX (T, H, W, C), flow (T-1, H, W, 2), occ (T-1, H, W)."""
 
+    def temporal_terms(self, A, S, flow, occ, gA, gS, energy_rows, lam_albedo: float, lam_shading: float,
+                       alpha: float = 5.0, *, workspace=None) -> None:
+        """Both temporal terms at once: A, gA (T, H, W, 3), S, gS (T, H, W), shared flow, occ and alpha."""
+
 
 class EnergyShadingFamily(Protocol):
     """``energy_shading``: local smoothness and coupling of the shading (Eq. 9, 13)."""

@@ -10,8 +10,8 @@ backend, called one after the other:
 term                       paper        kernel
 =========================  ===========  ==========================================
 data                       Eq. 3        ``energy_data.data_term``
-temporal albedo            Eq. 4-5      ``energy_temporal.temporal_term`` on A
-temporal shading           Eq. 8        ``energy_temporal.temporal_term`` on S
+temporal albedo            Eq. 4-5      ``energy_temporal.temporal_terms``, both at
+temporal shading           Eq. 8        once (``temporal_term`` on A or S alone)
 local shading smoothness   Eq. 9        ``energy_shading.shading_smoothness`` (``_gated``
                                         with the gate ``maps.shading_gate``)
 coupling to S~             Eq. 13       ``energy_shading.coupling_term``
@@ -116,11 +116,19 @@ class WindowEnergy:
             be.energy_data.data_term(self.I, self.A, self.S, self.w_lum, self.gA, self.gS, rows,
                                      lam=p.lam_data, eps=p.eps_data)
         if self.temporal:
-            if want("temporal_albedo") and p.lam_temporal_albedo > 0:
+            albedo = want("temporal_albedo") and p.lam_temporal_albedo > 0
+            shading = want("temporal_shading") and p.lam_temporal_shading > 0
+            if albedo and shading:          # both in one pass over the flow (Eq. 4 and 8)
+                be.energy_temporal.temporal_terms(self.A, self.S, self.flow, self.occlusion, self.gA, self.gS,
+                                                  rows, lam_albedo=p.lam_temporal_albedo,
+                                                  lam_shading=p.lam_temporal_shading, alpha=p.tukey_alpha,
+                                                  workspace=self.workspace)
+                albedo = shading = False
+            if albedo:
                 be.energy_temporal.temporal_term(self.A, self.flow, self.occlusion, self.gA, rows,
                                                  lam=p.lam_temporal_albedo, alpha=p.tukey_alpha,
                                                  workspace=self.workspace)
-            if want("temporal_shading") and p.lam_temporal_shading > 0:
+            if shading:
                 be.energy_temporal.temporal_term(self.S.reshape((T, h, w, 1)), self.flow,
                                                  self.occlusion, self.gS.reshape((T, h, w, 1)), rows,
                                                  lam=p.lam_temporal_shading, alpha=p.tukey_alpha,

@@ -26,8 +26,28 @@ def _temporal(channels, variant):
                 no_alias=(("X", "gX"),), gradients=(Gradient("X", "gX", min_peak=1.0),))
 
 
+def _both(rng, T, H, W):
+    """Log albedo and shading of order 1 under one flow and w_occ, as in :func:`_temporal`."""
+    P = pairs(T)
+    return {"A": normal(rng, (T, H, W, 3)), "S": normal(rng, (T, H, W)), "flow": flow(rng, P, H, W, scale=2.0),
+            "occ": soft_mask(rng, (P, H, W)), "gA": normal(rng, (T, H, W, 3)), "gS": normal(rng, (T, H, W)),
+            "energy_rows": rng.normal(size=T * H), "lam_albedo": 10.0, "lam_shading": 3.0, "alpha": 1.5}
+
+
+def _both_reference(v):
+    er, gA, gS = ref.temporal_terms(v["A"], v["S"], v["flow"], v["occ"], v["lam_albedo"], v["lam_shading"],
+                                    v["alpha"])
+    return {"energy_rows": v["energy_rows"] + er, "gA": v["gA"] + gA, "gS": v["gS"] + gS}
+
+
 CASES = (
     _temporal(3, "C3"),
     _temporal(1, "C1"),
     _temporal(None, "HW"),
+    Case("energy_temporal", "temporal_terms", _both, ("A", "S", "flow", "occ", "gA", "gS", "energy_rows"),
+         ("gA", "gS", "energy_rows"), _both_reference, keywords=("lam_albedo", "lam_shading", "alpha"),
+         updates=("gA", "gS", "energy_rows"),
+         tol={"energy_rows": Tol(1e-5, 1e-6), "gA": Tol(1e-5, 1e-4), "gS": Tol(1e-5, 1e-4)},
+         no_alias=(("A", "gA"), ("S", "gS")),
+         gradients=(Gradient("A", "gA", min_peak=1.0), Gradient("S", "gS", min_peak=1.0))),
 )

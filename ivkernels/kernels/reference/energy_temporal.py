@@ -73,3 +73,14 @@ def temporal_term(X, flow, occ, lam: float, alpha: float = 5.0):
     if squeeze:
         grad = grad[..., 0]
     return energy.reshape(t * h), grad
+
+
+def temporal_terms(A, S, flow, occ, lam_albedo: float, lam_shading: float, alpha: float = 5.0):
+    """Both temporal terms, Eq. 4 on ``A`` (T, H, W, 3) and Eq. 8 on ``S`` (T, H, W).
+
+    Returns ``(energy_rows (T*H,), gA, gS)``, float64: the sum of
+    :func:`temporal_term` on each with its own weight and the shared ``alpha``.
+    """
+    rows_albedo, gA = temporal_term(A, flow, occ, lam_albedo, alpha)
+    rows_shading, gS = temporal_term(S, flow, occ, lam_shading, alpha)
+    return rows_albedo + rows_shading, gA, gS

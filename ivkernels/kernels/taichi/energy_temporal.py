@@ -82,6 +82,65 @@ def temporal_rows(X: nd4, flow: nd4, occ: nd3, gX: nd4, energy_rows: nd1_f64, la
         energy_rows[r] += ti.cast(lam, ti.f64) * e
 
 
+@ti.func
+def bilinear_corners(flow: nd4, t, y, x, height, width):
+    """Clamped corners and fractional weights of ``(x, y) + flow[t, y, x]``."""
+    # p clamped to [-2, n+1]: same samples, no float-to-int overflow
+    px = ti.min(ti.max(x + flow[t, y, x, 0], -2.0), width + 1.0)
+    py = ti.min(ti.max(y + flow[t, y, x, 1], -2.0), height + 1.0)
+    bx = ti.floor(px)
+    by = ti.floor(py)
+    x0 = corner_index(ti.cast(bx, ti.i32), width)
+    x1 = corner_index(ti.cast(bx, ti.i32) + 1, width)
+    y0 = corner_index(ti.cast(by, ti.i32), height)
+    y1 = corner_index(ti.cast(by, ti.i32) + 1, height)
+    return x0, x1, px - bx, y0, y1, py - by
+
+
+@ti.kernel
+def temporal_pair_rows(A: nd4, S: nd3, flow: nd4, occ: nd3, gA: nd4, gS: nd3, energy_rows: nd1_f64,
+                       lam_albedo: ti.f32, lam_shading: ti.f32, alpha: ti.f32):
+    """:func:`temporal_rows` for the albedo (3 channels) and the shading at once,
+    sharing each pixel's flow, occlusion weight and corners."""
+    height = A.shape[1]
+    width = A.shape[2]
+    for r in range(flow.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        e_albedo = ti.f64(0.0)
+        e_shading = ti.f64(0.0)
+        for x in range(width):
+            o = occ[t, y, x]
+            if o != 0.0:
+                x0, x1, fx, y0, y1, fy = bilinear_corners(flow, t, y, x, height, width)
+                w00 = (1.0 - fx) * (1.0 - fy)
+                w01 = fx * (1.0 - fy)
+                w10 = (1.0 - fx) * fy
+                w11 = fx * fy
+                for c in ti.static(range(3)):
+                    d = (w00 * A[t + 1, y0, x0, c] + w01 * A[t + 1, y0, x1, c]
+                         + w10 * A[t + 1, y1, x0, c] + w11 * A[t + 1, y1, x1, c]) - A[t, y, x, c]
+                    e_albedo += ti.cast(o * tukey(d, alpha), ti.f64)
+                    g = lam_albedo * o * tukey_derivative(d, alpha)
+                    if g != 0.0:
+                        gA[t, y, x, c] -= g
+                        gA[t + 1, y0, x0, c] += w00 * g
+                        gA[t + 1, y0, x1, c] += w01 * g
+                        gA[t + 1, y1, x0, c] += w10 * g
+                        gA[t + 1, y1, x1, c] += w11 * g
+                d = (w00 * S[t + 1, y0, x0] + w01 * S[t + 1, y0, x1]
+                     + w10 * S[t + 1, y1, x0] + w11 * S[t + 1, y1, x1]) - S[t, y, x]
+                e_shading += ti.cast(o * tukey(d, alpha), ti.f64)
+                g = lam_shading * o * tukey_derivative(d, alpha)
+                if g != 0.0:
+                    gS[t, y, x] -= g
+                    gS[t + 1, y0, x0] += w00 * g
+                    gS[t + 1, y0, x1] += w01 * g
+                    gS[t + 1, y1, x0] += w10 * g
+                    gS[t + 1, y1, x1] += w11 * g
+        energy_rows[r] += ti.cast(lam_albedo, ti.f64) * e_albedo + ti.cast(lam_shading, ti.f64) * e_shading
+
+
 def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0, *,
                   workspace=None) -> None:
     """Add the temporal term of Eq. 4 (albedo) or Eq. 8 (shading) and its gradient; see
@@ -104,3 +163,27 @@ def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0,
     if t < 2 or h * w * c == 0:
         return
     temporal_rows(X, flow, occ, gX, energy_rows, float(lam), float(alpha))
+
+
+def temporal_terms(A, S, flow, occ, gA, gS, energy_rows, lam_albedo: float, lam_shading: float,
+                   alpha: float = 5.0, *, workspace=None) -> None:
+    """Add both temporal terms, Eq. 4 on ``A`` (T, H, W, 3) and Eq. 8 on ``S``
+    (T, H, W), in one kernel; see
+    :func:`ivkernels.kernels.warp.energy_temporal.temporal_terms` (NumPy arrays
+    here; ``workspace`` is accepted, checked and unused)."""
+    A = check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
+    t, h, w, _ = A.shape
+    S = check_array("S", S, (t, h, w), "(T, H, W) like A")
+    check_array("gA", gA, (t, h, w, 3), "(T, H, W, 3) like A", output=True)
+    check_array("gS", gS, (t, h, w), "(T, H, W) like S", output=True)
+    flow = check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)")
+    occ = check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)")
+    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dtype=np.float64, output=True)
+    why = "the gradients are scattered while A and S are read"
+    for grad_name, grad in (("gA", gA), ("gS", gS)):
+        check_disjoint(grad_name, grad, "A", A, why)
+        check_disjoint(grad_name, grad, "S", S, why)
+    check_workspace(workspace)
+    if t < 2 or h * w == 0:
+        return
+    temporal_pair_rows(A, S, flow, occ, gA, gS, energy_rows, float(lam_albedo), float(lam_shading), float(alpha))

