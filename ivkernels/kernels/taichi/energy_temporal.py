@@ -45,43 +45,6 @@ def corner_index(i, n):
     return ti.min(ti.max(i, 0), n - 1)
 
 
-@ti.kernel
-def temporal_rows(X: nd4, flow: nd4, occ: nd3, gX: nd4, energy_rows: nd1_f64, lam: ti.f32, alpha: ti.f32):
-    height = X.shape[1]
-    width = X.shape[2]
-    for r in range(flow.shape[0] * height):
-        t = r // height
-        y = r - t * height
-        e = ti.f64(0.0)
-        for x in range(width):
-            o = occ[t, y, x]
-            if o != 0.0:
-                # p clamped to [-2, n+1]: same samples, no float-to-int overflow
-                px = ti.min(ti.max(x + flow[t, y, x, 0], -2.0), width + 1.0)
-                py = ti.min(ti.max(y + flow[t, y, x, 1], -2.0), height + 1.0)
-                bx = ti.floor(px)
-                by = ti.floor(py)
-                fx = px - bx
-                fy = py - by
-                x0 = corner_index(ti.cast(bx, ti.i32), width)
-                x1 = corner_index(ti.cast(bx, ti.i32) + 1, width)
-                y0 = corner_index(ti.cast(by, ti.i32), height)
-                y1 = corner_index(ti.cast(by, ti.i32) + 1, height)
-                for c in range(X.shape[3]):
-                    top = (1.0 - fx) * X[t + 1, y0, x0, c] + fx * X[t + 1, y0, x1, c]
-                    bottom = (1.0 - fx) * X[t + 1, y1, x0, c] + fx * X[t + 1, y1, x1, c]
-                    d = (1.0 - fy) * top + fy * bottom - X[t, y, x, c]
-                    e += ti.cast(o * tukey(d, alpha), ti.f64)
-                    g = lam * o * tukey_derivative(d, alpha)
-                    if g != 0.0:
-                        gX[t, y, x, c] -= g
-                        gX[t + 1, y0, x0, c] += (1.0 - fx) * (1.0 - fy) * g
-                        gX[t + 1, y0, x1, c] += fx * (1.0 - fy) * g
-                        gX[t + 1, y1, x0, c] += (1.0 - fx) * fy * g
-                        gX[t + 1, y1, x1, c] += fx * fy * g
-        energy_rows[r] += ti.cast(lam, ti.f64) * e
-
-
 @ti.func
 def bilinear_corners(flow: nd4, t, y, x, height, width):
     """Clamped corners and fractional weights of ``(x, y) + flow[t, y, x]``."""
@@ -95,6 +58,33 @@ def bilinear_corners(flow: nd4, t, y, x, height, width):
     y0 = corner_index(ti.cast(by, ti.i32), height)
     y1 = corner_index(ti.cast(by, ti.i32) + 1, height)
     return x0, x1, px - bx, y0, y1, py - by
+
+
+@ti.kernel
+def temporal_rows(X: nd4, flow: nd4, occ: nd3, gX: nd4, energy_rows: nd1_f64, lam: ti.f32, alpha: ti.f32):
+    height = X.shape[1]
+    width = X.shape[2]
+    for r in range(flow.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        e = ti.f64(0.0)
+        for x in range(width):
+            o = occ[t, y, x]
+            if o != 0.0:
+                x0, x1, fx, y0, y1, fy = bilinear_corners(flow, t, y, x, height, width)
+                for c in range(X.shape[3]):
+                    top = (1.0 - fx) * X[t + 1, y0, x0, c] + fx * X[t + 1, y0, x1, c]
+                    bottom = (1.0 - fx) * X[t + 1, y1, x0, c] + fx * X[t + 1, y1, x1, c]
+                    d = (1.0 - fy) * top + fy * bottom - X[t, y, x, c]
+                    e += ti.cast(o * tukey(d, alpha), ti.f64)
+                    g = lam * o * tukey_derivative(d, alpha)
+                    if g != 0.0:
+                        gX[t, y, x, c] -= g
+                        gX[t + 1, y0, x0, c] += (1.0 - fx) * (1.0 - fy) * g
+                        gX[t + 1, y0, x1, c] += fx * (1.0 - fy) * g
+                        gX[t + 1, y1, x0, c] += (1.0 - fx) * fy * g
+                        gX[t + 1, y1, x1, c] += fx * fy * g
+        energy_rows[r] += ti.cast(lam, ti.f64) * e
 
 
 @ti.kernel

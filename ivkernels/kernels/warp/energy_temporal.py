@@ -60,6 +60,20 @@ def tukey_derivative(z: float, alpha: float):
     return result
 
 
+@wp.func
+def gather_channel(X: wp.array4d(dtype=float), gX: wp.array4d(dtype=float), weight: wp.array4d(dtype=float),
+                   weight_channel: int, t: int, y: int, x: int, c: int, x0: int, x1: int, fx: float,
+                   y0: int, y1: int, fy: float, o: float, lam: float, alpha: float):
+    """One channel of one pixel of the gather: ``d = X_{t+1}(x + u, c) - X_t(x, c)``;
+    stores ``lam o rho'(d)`` in ``weight[..., weight_channel]``, subtracts it from
+    ``gX_t``, and returns ``o rho(d)`` (the energy before ``lam``)."""
+    d = bilinear_at(X, t + 1, c, x0, x1, fx, y0, y1, fy) - X[t, y, x, c]
+    g = lam * o * tukey_derivative(d, alpha)
+    weight[t, y, x, weight_channel] = g
+    gX[t, y, x, c] = gX[t, y, x, c] - g
+    return o * tukey(d, alpha)
+
+
 @wp.kernel
 def temporal_gather_rows(row_begin: int, X: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
                          occ: wp.array3d(dtype=float), gX: wp.array4d(dtype=float),
@@ -80,11 +94,7 @@ def temporal_gather_rows(row_begin: int, X: wp.array4d(dtype=float), flow: wp.ar
         x0, x1, fx = clamped_corners(float(x) + flow[t, y, x, 0], width)
         y0, y1, fy = clamped_corners(float(y) + flow[t, y, x, 1], height)
         for c in range(X.shape[3]):
-            d = bilinear_at(X, t + 1, c, x0, x1, fx, y0, y1, fy) - X[t, y, x, c]
-            e += wp.float64(o * tukey(d, alpha))
-            g = lam * o * tukey_derivative(d, alpha)
-            weight[t, y, x, c] = g
-            gX[t, y, x, c] = gX[t, y, x, c] - g
+            e += wp.float64(gather_channel(X, gX, weight, c, t, y, x, c, x0, x1, fx, y0, y1, fy, o, lam, alpha))
     energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
 
 
@@ -141,16 +151,10 @@ def temporal_pair_gather_rows(row_begin: int, A: wp.array4d(dtype=float), S: wp.
         x0, x1, fx = clamped_corners(float(x) + flow[t, y, x, 0], width)
         y0, y1, fy = clamped_corners(float(y) + flow[t, y, x, 1], height)
         for c in range(3):
-            d = bilinear_at(A, t + 1, c, x0, x1, fx, y0, y1, fy) - A[t, y, x, c]
-            e_albedo += wp.float64(o * tukey(d, alpha))
-            g = lam_albedo * o * tukey_derivative(d, alpha)
-            weight[t, y, x, c] = g
-            gA[t, y, x, c] = gA[t, y, x, c] - g
-        d = bilinear_at(S, t + 1, 0, x0, x1, fx, y0, y1, fy) - S[t, y, x, 0]
-        e_shading += wp.float64(o * tukey(d, alpha))
-        g = lam_shading * o * tukey_derivative(d, alpha)
-        weight[t, y, x, 3] = g
-        gS[t, y, x, 0] = gS[t, y, x, 0] - g
+            e_albedo += wp.float64(gather_channel(A, gA, weight, c, t, y, x, c, x0, x1, fx, y0, y1, fy, o,
+                                                  lam_albedo, alpha))
+        e_shading += wp.float64(gather_channel(S, gS, weight, 3, t, y, x, 0, x0, x1, fx, y0, y1, fy, o,
+                                               lam_shading, alpha))
     energy_rows[r] = energy_rows[r] + wp.float64(lam_albedo) * e_albedo + wp.float64(lam_shading) * e_shading
 
 
