@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from ivkernels import synthetic
-from ivkernels.flow.joint import FLOW_SOURCES, joint_decompose, occlusion_iou
+from ivkernels.flow.joint import FLOW_SOURCES, MIN_GUIDE_SIZE, guide_shape, joint_decompose, occlusion_iou
 
 
 def test_occlusion_iou_hand_computed():
@@ -15,6 +15,17 @@ def test_occlusion_iou_hand_computed():
     assert occlusion_iou(occ, vis) == pytest.approx(1 / 3)
     with pytest.raises(ValueError, match="shape"):
         occlusion_iou(occ, vis[:, :1])
+
+
+def test_guide_shape_halves_the_frames_but_keeps_a_floor():
+    from ivkernels import Params
+
+    p = Params()                                             # flow_guide_scale 0.5
+    assert guide_shape(480, 640, p) == (240, 320)
+    assert guide_shape(241, 321, p) == (120, 160)            # rounded
+    assert guide_shape(20, 30, p) == (MIN_GUIDE_SIZE, 24)    # the shorter side kept at the floor
+    assert guide_shape(8, 9, p) == (8, 9)                    # smaller than the floor: full size
+    assert guide_shape(480, 640, Params(flow_guide_scale=1.0)) == (480, 640)
 
 
 def test_bad_arguments_raise():
