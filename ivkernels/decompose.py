@@ -257,7 +257,8 @@ class _Decomposer:
         Each pass re-estimates the window's flow on the albedo of a guide
         solve (:func:`ivkernels.flow.joint.guide_solve`), which obeys
         brightness constancy where the input does not (paper Sec. 5.1, 6);
-        Classic+NL starts from the previous pass's flow.  Returns the last
+        Classic+NL starts from the previous pass's flow, with
+        ``Params.flow_refine_warps`` warping steps per level.  Returns the last
         flow and the last guide's log shading (at the guide's size).
         """
         from ivkernels.flow import estimate_flow
@@ -269,7 +270,7 @@ class _Decomposer:
             albedo, guide_shading = guide_solve(self.be, frames_be, flow_np, self.params, self.prior,
                                                 log=self.log)
             t0 = time.perf_counter()
-            extra = {"init": flow_np} if classic else {}
+            extra = {"init": flow_np, "warps": int(self.params.flow_refine_warps)} if classic else {}
             flow_np = estimate_flow(albedo, method=self.flow_method, backend=self.be.name,
                                     device=self.be.device, **extra)
             self.log.add_time("flow", time.perf_counter() - t0)

@@ -186,6 +186,17 @@ class Params:
         size, for 17% less CPU time per decomposition (a third less in the
         flow); the last pass's flow EPE rises by 3-5% on the moving kinds
         (1.143 / 1.343 against 1.087 / 1.305 px).
+    flow_refine_warps
+        With ``flow_passes`` > 1 and a Classic+NL flow, the warping steps per
+        pyramid level of the passes after the first, which start from the
+        previous pass's flow (the first pass keeps the method's own: 3 for
+        ``classic_nl_fast``).  Chosen on training seed 1 (8 frames at
+        320x240, perf/RESULTS.md, "Fewer warps in the second flow pass"): at
+        2, flow EPE 1.118 / 1.348 / 0.061 / 0.195 px and LMSE 0.0059 /
+        0.0100 / 0.0105 / 0.0137 on the four kinds against 1.143 / 1.343 /
+        0.061 / 0.189 and 0.0060 / 0.0099 / 0.0105 / 0.0135 at 3, for 6% less
+        CPU time (a fifth less in the flow); one warp per level of the
+        robust stage only (``gnc_levels`` 1) raised the EPE on every kind.
 
     Long videos
     -----------
@@ -237,6 +248,7 @@ class Params:
     flow_guide_scale: float = 0.5
     start_from_guide: bool = True
     first_flow_at_guide_size: bool = True
+    flow_refine_warps: int = 2
     # long videos
     window: int = 8
     overlap: int = 2
@@ -285,6 +297,7 @@ _RULES = {
                        why="the floor of the linear input before the log"),
     "flow_guide_scale": Range(float, 0.0, 1.0, low_open=True,
                               why="the size of the guide solve relative to the frames"),
+    "flow_refine_warps": Range(int, 1, why="warping steps per pyramid level"),
     "window": Range(int, 2, why="frames per solved window"),
     "overlap": Range(int, 0),
     "boundary_threshold": Range(float, 0.0),

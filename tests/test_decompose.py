@@ -129,6 +129,25 @@ def test_flow_passes_reestimate_the_flow_on_the_guide_albedo(seq, monkeypatch):
             iv.decompose(seq.frames, flow=seq.flow, params=FAST, flow_passes=bad)
 
 
+def test_classic_flow_passes_refine_from_the_previous_flow_with_fewer_warps(seq, monkeypatch):
+    import ivkernels.flow as flow_module
+
+    calls = []
+    original = flow_module.estimate_flow
+
+    def spy(frames, method="classic_nl_fast", **options):
+        calls.append({k: v for k, v in options.items() if k in ("init", "warps")})
+        return original(frames, method=method, **options)
+
+    monkeypatch.setattr(flow_module, "estimate_flow", spy)
+    params = dataclasses.replace(FAST, flow_refine_warps=1)
+    iv.decompose(seq.frames, params=params, flow_passes=2)
+    assert len(calls) == 2 and calls[0] == {}                  # pass 1: the method's own schedule
+    assert calls[1]["warps"] == 1 and calls[1]["init"].shape == seq.flow.shape
+    with pytest.raises(ValueError, match="flow_refine_warps"):
+        Params(flow_refine_warps=0)
+
+
 def test_iteration_budget_per_level():
     """lbfgs_iterations bounds the finest level, lbfgs_iterations_coarse the others."""
     seq = synthetic.render_sequence("objects_camera", n_frames=2, size=(64, 80), seed=3)
