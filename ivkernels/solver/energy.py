@@ -123,12 +123,11 @@ class WindowEnergy:
                                                   rows, lam_albedo=p.lam_temporal_albedo,
                                                   lam_shading=p.lam_temporal_shading, alpha=p.tukey_alpha,
                                                   workspace=self.workspace)
-                albedo = shading = False
-            if albedo:
+            elif albedo:
                 be.energy_temporal.temporal_term(self.A, self.flow, self.occlusion, self.gA, rows,
                                                  lam=p.lam_temporal_albedo, alpha=p.tukey_alpha,
                                                  workspace=self.workspace)
-            if shading:
+            elif shading:
                 be.energy_temporal.temporal_term(self.S.reshape((T, h, w, 1)), self.flow,
                                                  self.occlusion, self.gS.reshape((T, h, w, 1)), rows,
                                                  lam=p.lam_temporal_shading, alpha=p.tukey_alpha,

@@ -60,6 +60,24 @@ def bilinear_corners(flow: nd4, t, y, x, height, width):
     return x0, x1, px - bx, y0, y1, py - by
 
 
+@ti.func
+def channel_term(X: ti.template(), gX: ti.template(), t, y, x, c, x0, x1, fx, y0, y1, fy, o, lam, alpha):
+    """One channel of one pixel: ``d = X_{t+1}(x + u, c) - X_t(x, c)``; adds
+    ``lam o rho'(d)`` to ``gX`` (gathered into ``X_t``, splatted onto the
+    corners in ``X_{t+1}``) and returns ``o rho(d)`` (the energy before ``lam``)."""
+    top = (1.0 - fx) * X[t + 1, y0, x0, c] + fx * X[t + 1, y0, x1, c]
+    bottom = (1.0 - fx) * X[t + 1, y1, x0, c] + fx * X[t + 1, y1, x1, c]
+    d = (1.0 - fy) * top + fy * bottom - X[t, y, x, c]
+    g = lam * o * tukey_derivative(d, alpha)
+    if g != 0.0:
+        gX[t, y, x, c] -= g
+        gX[t + 1, y0, x0, c] += (1.0 - fx) * (1.0 - fy) * g
+        gX[t + 1, y0, x1, c] += fx * (1.0 - fy) * g
+        gX[t + 1, y1, x0, c] += (1.0 - fx) * fy * g
+        gX[t + 1, y1, x1, c] += fx * fy * g
+    return o * tukey(d, alpha)
+
+
 @ti.kernel
 def temporal_rows(X: nd4, flow: nd4, occ: nd3, gX: nd4, energy_rows: nd1_f64, lam: ti.f32, alpha: ti.f32):
     height = X.shape[1]
@@ -73,25 +91,15 @@ def temporal_rows(X: nd4, flow: nd4, occ: nd3, gX: nd4, energy_rows: nd1_f64, la
             if o != 0.0:
                 x0, x1, fx, y0, y1, fy = bilinear_corners(flow, t, y, x, height, width)
                 for c in range(X.shape[3]):
-                    top = (1.0 - fx) * X[t + 1, y0, x0, c] + fx * X[t + 1, y0, x1, c]
-                    bottom = (1.0 - fx) * X[t + 1, y1, x0, c] + fx * X[t + 1, y1, x1, c]
-                    d = (1.0 - fy) * top + fy * bottom - X[t, y, x, c]
-                    e += ti.cast(o * tukey(d, alpha), ti.f64)
-                    g = lam * o * tukey_derivative(d, alpha)
-                    if g != 0.0:
-                        gX[t, y, x, c] -= g
-                        gX[t + 1, y0, x0, c] += (1.0 - fx) * (1.0 - fy) * g
-                        gX[t + 1, y0, x1, c] += fx * (1.0 - fy) * g
-                        gX[t + 1, y1, x0, c] += (1.0 - fx) * fy * g
-                        gX[t + 1, y1, x1, c] += fx * fy * g
+                    e += ti.cast(channel_term(X, gX, t, y, x, c, x0, x1, fx, y0, y1, fy, o, lam, alpha), ti.f64)
         energy_rows[r] += ti.cast(lam, ti.f64) * e
 
 
 @ti.kernel
-def temporal_pair_rows(A: nd4, S: nd3, flow: nd4, occ: nd3, gA: nd4, gS: nd3, energy_rows: nd1_f64,
+def temporal_pair_rows(A: nd4, S: nd4, flow: nd4, occ: nd3, gA: nd4, gS: nd4, energy_rows: nd1_f64,
                        lam_albedo: ti.f32, lam_shading: ti.f32, alpha: ti.f32):
-    """:func:`temporal_rows` for the albedo (3 channels) and the shading at once,
-    sharing each pixel's flow, occlusion weight and corners."""
+    """:func:`temporal_rows` for the albedo (3 channels) and the shading (a
+    (T, H, W, 1) view) at once, sharing each pixel's flow, occlusion weight and corners."""
     height = A.shape[1]
     width = A.shape[2]
     for r in range(flow.shape[0] * height):
@@ -103,31 +111,11 @@ def temporal_pair_rows(A: nd4, S: nd3, flow: nd4, occ: nd3, gA: nd4, gS: nd3, en
             o = occ[t, y, x]
             if o != 0.0:
                 x0, x1, fx, y0, y1, fy = bilinear_corners(flow, t, y, x, height, width)
-                w00 = (1.0 - fx) * (1.0 - fy)
-                w01 = fx * (1.0 - fy)
-                w10 = (1.0 - fx) * fy
-                w11 = fx * fy
                 for c in ti.static(range(3)):
-                    d = (w00 * A[t + 1, y0, x0, c] + w01 * A[t + 1, y0, x1, c]
-                         + w10 * A[t + 1, y1, x0, c] + w11 * A[t + 1, y1, x1, c]) - A[t, y, x, c]
-                    e_albedo += ti.cast(o * tukey(d, alpha), ti.f64)
-                    g = lam_albedo * o * tukey_derivative(d, alpha)
-                    if g != 0.0:
-                        gA[t, y, x, c] -= g
-                        gA[t + 1, y0, x0, c] += w00 * g
-                        gA[t + 1, y0, x1, c] += w01 * g
-                        gA[t + 1, y1, x0, c] += w10 * g
-                        gA[t + 1, y1, x1, c] += w11 * g
-                d = (w00 * S[t + 1, y0, x0] + w01 * S[t + 1, y0, x1]
-                     + w10 * S[t + 1, y1, x0] + w11 * S[t + 1, y1, x1]) - S[t, y, x]
-                e_shading += ti.cast(o * tukey(d, alpha), ti.f64)
-                g = lam_shading * o * tukey_derivative(d, alpha)
-                if g != 0.0:
-                    gS[t, y, x] -= g
-                    gS[t + 1, y0, x0] += w00 * g
-                    gS[t + 1, y0, x1] += w01 * g
-                    gS[t + 1, y1, x0] += w10 * g
-                    gS[t + 1, y1, x1] += w11 * g
+                    e_albedo += ti.cast(channel_term(A, gA, t, y, x, c, x0, x1, fx, y0, y1, fy, o, lam_albedo,
+                                                     alpha), ti.f64)
+                e_shading += ti.cast(channel_term(S, gS, t, y, x, 0, x0, x1, fx, y0, y1, fy, o, lam_shading,
+                                                  alpha), ti.f64)
         energy_rows[r] += ti.cast(lam_albedo, ti.f64) * e_albedo + ti.cast(lam_shading, ti.f64) * e_shading
 
 
@@ -176,4 +164,5 @@ def temporal_terms(A, S, flow, occ, gA, gS, energy_rows, lam_albedo: float, lam_
     check_workspace(workspace)
     if t < 2 or h * w == 0:
         return
-    temporal_pair_rows(A, S, flow, occ, gA, gS, energy_rows, float(lam_albedo), float(lam_shading), float(alpha))
+    temporal_pair_rows(A, S.reshape(t, h, w, 1), flow, occ, gA, gS.reshape(t, h, w, 1), energy_rows,
+                       float(lam_albedo), float(lam_shading), float(alpha))
