@@ -120,7 +120,11 @@ class Params:
         (b) the S~ weighted-median update.
     lbfgs_iterations
         L-BFGS iterations per alternation at the finest (full-resolution)
-        level.
+        level.  25 with the coarse basis (below): on training seed 1 (8
+        frames at 320x240, estimated flow, two passes) mean LMSE 0.0073 in
+        141 CPU s, against 0.0071 in 158 s at 30, 0.0068 in 190 s at 40, and
+        0.0100 in 157 s at 40 without the basis (perf/RESULTS.md, "Solver:
+        the edge-aware coarse basis").
     lbfgs_memory
         Correction pairs kept by L-BFGS.  Chosen: on synthetic sequences with
         seed 12 (8 frames, ground-truth flow) 4 and 6 pairs give the same mean
@@ -140,6 +144,18 @@ class Params:
         growth keeps the half-resolution level, the most expensive coarse
         one, at twice the finest budget while the small levels run to
         convergence (the L-BFGS tolerance usually stops them first).
+    coarse_basis_spacing, coarse_basis_sigma
+        L-BFGS minimises over ``S = s + P z``: the shading plus a coarse field
+        ``z`` on nodes every ``coarse_basis_spacing`` pixels, interpolated
+        with weights that fall off as ``exp(-|A(x) - A(node)|^2 / sigma^2)``
+        across the log albedo (:mod:`ivkernels.solver.coarse_basis`), on
+        every level whose shorter side holds four node spacings; 0 switches
+        it off.  It moves whole albedo regions, the direction plain L-BFGS
+        is slowest along.  Chosen by the energy reached with the default
+        budget on training seeds 12 and 13 (6 frames at 160x120,
+        ground-truth flow; perf/RESULTS.md, "Solver: the edge-aware coarse
+        basis"): spacing 4 and sigma 0.5 give the lowest energy summed over
+        the four kinds (sigma 1.0 within 0.01%, 0.2 and spacing 8 higher).
     init_blur
         Coarsest-level start: S = log luminance blurred with a Gaussian whose
         sigma is ``init_blur`` times the shorter side; A = I - S.  Chosen on
@@ -238,10 +254,12 @@ class Params:
     pyramid_scale: float = 0.5
     pyramid_min_size: int = 24
     outer_iterations: int = 2
-    lbfgs_iterations: int = 40
+    lbfgs_iterations: int = 25
     lbfgs_iterations_coarse: int = 200
     lbfgs_level_growth: float = 2.0
     lbfgs_memory: int = 4
+    coarse_basis_spacing: int = 4
+    coarse_basis_sigma: float = 0.5
     init_blur: float = 0.02
     log_floor: float = 1e-4
     # flow and intrinsic video together
@@ -293,6 +311,8 @@ _RULES = {
     "lbfgs_iterations_coarse": Range(int, 0),
     "lbfgs_level_growth": Range(float, 1.0, 16.0, why="each coarser level's budget is this times the finer one's"),
     "lbfgs_memory": Range(int, 1),
+    "coarse_basis_spacing": Range(int, 0, 64, why="pixels between the coarse basis' nodes; 0 switches it off"),
+    "coarse_basis_sigma": Range(float, 0.0, low_open=True, why="an albedo distance in log units"),
     "log_floor": Range(float, 0.0, 1.0, low_open=True, high_open=True,
                        why="the floor of the linear input before the log"),
     "flow_guide_scale": Range(float, 0.0, 1.0, low_open=True,

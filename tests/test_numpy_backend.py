@@ -10,8 +10,12 @@ from ivkernels.io import write_png_sequence
 #: A fixed iteration budget (2 outer x 15 L-BFGS steps, no early stop on this
 #: input): both backends then take the same steps.  With the default schedule
 #: the stopping tests decide on float32 (Warp) vs float64 (NumPy) rounding and
-#: the two runs may stop at different iterates of a non-convex energy.
-BUDGET = Params(outer_iterations=2, lbfgs_iterations=15)
+#: the two runs may stop at different iterates of a non-convex energy.  The
+#: coarse basis is off: its longer steps let float32 rounding move the path
+#: further (5.7e-3 in log albedo after 30 steps, measured); its kernels are
+#: checked against the references in test_kernels_coarse_basis.py and its
+#: gradient in test_solver.py.
+BUDGET = Params(outer_iterations=2, lbfgs_iterations=15, coarse_basis_spacing=0)
 
 
 @pytest.fixture(scope="module")

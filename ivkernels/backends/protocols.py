@@ -295,6 +295,19 @@ class FlowClassicFamily(Protocol):
         """Thinned edges (T, H, W) 0/1 of sobel (T, H, W, 4) above cutoff (T, 2)."""
 
 
+class CoarseBasisFamily(Protocol):
+    """``coarse_basis``: the solver's edge-aware coarse basis (nodes every ``spacing`` pixels)."""
+
+    def coarse_weights(self, A, weights, spacing: int, sigma: float) -> None:
+        """16 tap weights (T, H, W, 16) per pixel from the guide A (T, H, W, C)."""
+
+    def prolong_add(self, z, weights, out, spacing: int) -> None:
+        """``out += P z``: z (T, Hc, Wc), weights (T, H, W, 16), out (T, H, W)."""
+
+    def restrict_add(self, values, weights, out, spacing: int) -> None:
+        """``out += P^T values``: values (T, H, W), weights (T, H, W, 16), out (T, Hc, Wc)."""
+
+
 #: Family name -> its protocol; the families every backend provides.
 FAMILY_PROTOCOLS: dict[str, type] = {
     "colour": ColourFamily,
@@ -310,6 +323,7 @@ FAMILY_PROTOCOLS: dict[str, type] = {
     "energy_albedo_gsm": EnergyAlbedoGsmFamily,
     "energy_albedo_entropy": EnergyAlbedoEntropyFamily,
     "flow_classic": FlowClassicFamily,
+    "coarse_basis": CoarseBasisFamily,
 }
 FAMILIES = tuple(FAMILY_PROTOCOLS)
 
@@ -338,6 +352,7 @@ class BackendProtocol(Protocol):
     energy_albedo_gsm: EnergyAlbedoGsmFamily
     energy_albedo_entropy: EnergyAlbedoEntropyFamily
     flow_classic: FlowClassicFamily
+    coarse_basis: CoarseBasisFamily
 
     def asarray(self, a: np.ndarray):
         """A backend array holding ``a`` (a view where the backend can, else a copy)."""

@@ -3,7 +3,8 @@
 At each pyramid level, starting from the up-sampled coarser solution, the
 solver alternates (a) L-BFGS over all ``S_t`` of the window at once, with
 ``A_t = I_t - S_t`` (Eq. 3 as a constraint, :class:`ConstrainedEnergy`) and the
-coupling variable ``S~`` fixed, and (b) the ``S~`` weighted-median update
+coupling variable ``S~`` fixed (on levels large enough, over ``S = s + P z``
+with an edge-aware coarse field ``z``, :class:`CoarseBasisProblem`), and (b) the ``S~`` weighted-median update
 (Eq. 13).  The coarsest level starts from ``S`` = heavily blurred log
 luminance.
 """
@@ -15,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ivkernels.params import Params
+from ivkernels.solver.coarse_basis import CoarseBasisProblem, uses_coarse_basis
 from ivkernels.solver.energy import ConstrainedEnergy, WindowEnergy
 from ivkernels.solver.lbfgs import LBFGS
 from ivkernels.solver.motion_maps import resample_mask
@@ -160,7 +162,10 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
             be.vecops.copy(be.asarray(S_now.reshape(-1)), energy.S.reshape((energy.n,)))
         t = time.perf_counter()
         problem = ConstrainedEnergy(energy)           # sets A = I - S at each evaluation
-        lbfgs = LBFGS(be, energy.n, memory=int(params.lbfgs_memory))
+        target = problem                              # what L-BFGS minimises: S, or S = s + P z
+        if uses_coarse_basis(shape, params.coarse_basis_spacing):
+            target = CoarseBasisProblem(problem, params.coarse_basis_spacing, params.coarse_basis_sigma)
+        lbfgs = LBFGS(be, target.X.shape[0], memory=int(params.lbfgs_memory))
         iterations = level_iterations(params, level)
         reasons = []
         for outer in range(int(params.outer_iterations)):
@@ -172,7 +177,12 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
             def record(k, e, outer=outer):
                 log.energy.append((window_index, level, outer, k, e))
 
-            lbfgs.minimize(problem, problem.X, problem.G, iterations, on_iteration=record)
+            if target is problem:
+                lbfgs.minimize(problem, problem.X, problem.G, iterations, on_iteration=record)
+            else:
+                target.start()
+                lbfgs.minimize(target, target.X, target.G, iterations, on_iteration=record)
+                target.finish()
             reasons.append(lbfgs.stop_reason)
         problem.sync_albedo()
         log.levels.append({"window": window_index, "level": level, "shape": tuple(shape),

@@ -50,7 +50,7 @@ import numpy as np
 FAMILIES = (
     "colour", "sampling", "derivatives", "maps", "pyramid", "vecops", "median",
     "energy_data", "energy_temporal", "energy_shading", "energy_albedo_gsm",
-    "energy_albedo_entropy", "flow_classic",
+    "energy_albedo_entropy", "flow_classic", "coarse_basis",
 )
 
 

@@ -1,0 +1,96 @@
+"""NumPy reference of :mod:`ivkernels.kernels.warp.coarse_basis` (float64, vectorised).
+
+The edge-aware coarse basis: a grid of nodes every ``spacing`` pixels per
+frame, and for each pixel 16 interpolation weights over the 4 x 4 nodes
+around it (tent of half-width two node spacings, times an albedo affinity,
+normalised).  ``prolong`` is ``P z`` and ``restrict`` its transpose ``P^T r``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+#: Node offsets of the 4 x 4 taps along one axis, relative to ``floor(y / spacing)``.
+TAP_OFFSETS = (-1, 0, 1, 2)
+#: The affinity's exponent is clamped here, so it never underflows in float32.
+MAX_EXPONENT = 30.0
+
+
+def grid_shape(h: int, w: int, spacing: int) -> tuple[int, int]:
+    """Nodes ``(Hc, Wc)`` of a frame of ``h x w`` pixels: node ``j`` sits at pixel
+    row ``min(j * spacing, h - 1)``, and the grid reaches one node past the last pixel."""
+    return (h - 1) // spacing + 2, (w - 1) // spacing + 2
+
+
+def _taps(n: int, spacing: int, n_nodes: int):
+    """Per pixel along one axis: node index (4, n), tent weight (4, n) (0 off the grid)."""
+    p = np.arange(n, dtype=np.float64)
+    f = p / spacing
+    j0 = np.arange(n) // spacing
+    nodes, tent = [], []
+    for d in TAP_OFFSETS:
+        j = j0 + d
+        b = np.maximum(0.0, 1.0 - np.abs(f - j) / 2.0)
+        b = np.where((j >= 0) & (j < n_nodes), b, 0.0)
+        nodes.append(np.clip(j, 0, n_nodes - 1))
+        tent.append(b)
+    return np.stack(nodes), np.stack(tent)
+
+
+def coarse_weights(A: np.ndarray, spacing: int, sigma: float) -> np.ndarray:
+    """Weights (T, H, W, 16) of each pixel's 4 x 4 nodes, tap ``k = 4 * iy + ix``.
+
+    ``w_k = b_k a_k / sum_k b_k a_k`` with ``b_k`` the product of the two
+    axes' tents ``max(0, 1 - |y / spacing - j| / 2)`` (0 for a node off the
+    grid) and ``a_k = exp(-min(|A(y, x) - A(node_k)|^2 / sigma^2, 30))``, the
+    distance over the channels of ``A`` (T, H, W, C) between the pixel and the
+    pixel the node sits on.
+    """
+    A = np.asarray(A, np.float64)
+    t, h, w, _ = A.shape
+    hc, wc = grid_shape(h, w, spacing)
+    ny, by = _taps(h, spacing, hc)
+    nx, bx = _taps(w, spacing, wc)
+    py = np.minimum(ny * spacing, h - 1)
+    px = np.minimum(nx * spacing, w - 1)
+    out = np.zeros((t, h, w, 16))
+    for iy in range(4):
+        for ix in range(4):
+            node = A[:, py[iy][:, None], px[ix][None, :], :]          # (T, H, W, C)
+            d2 = ((A - node) ** 2).sum(-1) / sigma**2
+            out[..., 4 * iy + ix] = by[iy][:, None] * bx[ix][None, :] * np.exp(-np.minimum(d2, MAX_EXPONENT))
+    return out / out.sum(-1, keepdims=True)
+
+
+def _node_index(h: int, w: int, spacing: int):
+    """Flat node index (16, H, W) of each tap within a frame's grid."""
+    hc, wc = grid_shape(h, w, spacing)
+    ny, _ = _taps(h, spacing, hc)
+    nx, _ = _taps(w, spacing, wc)
+    return np.stack([ny[iy][:, None] * wc + nx[ix][None, :] for iy in range(4) for ix in range(4)])
+
+
+def prolong(z: np.ndarray, weights: np.ndarray, spacing: int) -> np.ndarray:
+    """``(P z)[t, y, x] = sum_k weights[t, y, x, k] z[t, node_k]``: z (T, Hc, Wc) -> (T, H, W)."""
+    z = np.asarray(z, np.float64)
+    weights = np.asarray(weights, np.float64)
+    t, h, w, _ = weights.shape
+    flat = z.reshape(t, -1)
+    idx = _node_index(h, w, spacing)
+    out = np.zeros((t, h, w))
+    for k in range(16):
+        out += weights[..., k] * flat[:, idx[k]]
+    return out
+
+
+def restrict(values: np.ndarray, weights: np.ndarray, spacing: int) -> np.ndarray:
+    """``P^T values``: values (T, H, W) -> (T, Hc, Wc), the transpose of :func:`prolong`."""
+    values = np.asarray(values, np.float64)
+    weights = np.asarray(weights, np.float64)
+    t, h, w, _ = weights.shape
+    hc, wc = grid_shape(h, w, spacing)
+    idx = _node_index(h, w, spacing)
+    out = np.zeros((t, hc * wc))
+    for k in range(16):
+        for f in range(t):
+            np.add.at(out[f], idx[k].ravel(), (weights[f, ..., k] * values[f]).ravel())
+    return out.reshape(t, hc, wc)

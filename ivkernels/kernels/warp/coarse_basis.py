@@ -1,0 +1,200 @@
+"""The edge-aware coarse basis of the solver: weights, prolongation and its transpose.
+
+At the finest levels, the slow modes of Eq. 2 on ``A = I - S`` are smooth
+changes of the shading that stop at albedo edges: inside a flat albedo
+region the albedo GSM (Eq. 11) is stiff, across its edges it is soft, and a
+descent method on single pixels moves a whole region only slowly.  The
+solver therefore also optimises a coarse field ``z`` on a grid of nodes every
+``spacing`` pixels, added to the shading through an interpolation ``P`` whose
+weights follow the albedo (Szeliski, "Locally adapted hierarchical basis
+preconditioning", SIGGRAPH 2006, builds the same kind of basis from the
+system's own weights):
+
+* :func:`coarse_weights`: per pixel, 16 weights over the 4 x 4 nodes around
+  it, a tent of half-width two node spacings times
+  ``exp(-|A(x) - A(node)|^2 / sigma^2)``, normalised to sum to one;
+* :func:`prolong_add`: ``out += P z`` (a gather of 16 nodes per pixel);
+* :func:`restrict_add`: ``out += P^T values``, the exact transpose, written
+  as a gather per node over the pixels whose taps reach it, so bands of node
+  rows never write the same memory.
+
+Node ``j`` of a frame sits on pixel row ``min(j * spacing, H - 1)``; the grid
+has ``(H - 1) // spacing + 2`` rows (:func:`grid_shape`), so every pixel has
+nodes on both sides.  Pixel ``y``'s taps are the nodes ``floor(y / spacing)
++ d``, ``d = -1, 0, 1, 2``; a tap off the grid has weight 0.  Tap ``k = 4 *
+(dy + 1) + (dx + 1)``.
+"""
+from __future__ import annotations
+
+import warp as wp
+
+from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.warp._checks import check_array, check_disjoint, check_int, check_positive
+
+wp.set_module_options({"enable_backward": False})
+
+#: The affinity's exponent is clamped here, so no weight underflows in float32.
+MAX_EXPONENT = 30.0
+
+
+def grid_shape(h: int, w: int, spacing: int) -> tuple[int, int]:
+    """Nodes ``(Hc, Wc)`` of an ``h x w`` frame with nodes every ``spacing`` pixels."""
+    return (h - 1) // spacing + 2, (w - 1) // spacing + 2
+
+
+@wp.func
+def tent(p: int, node: int, spacing: int):
+    """Weight along one axis of ``node`` for pixel coordinate ``p``: ``max(0, 1 - |p/spacing - node| / 2)``."""
+    return wp.max(0.0, 1.0 - wp.abs(float(p) / float(spacing) - float(node)) * 0.5)
+
+
+@wp.kernel
+def coarse_weights_rows(row_begin: int, A: wp.array4d(dtype=float), weights: wp.array4d(dtype=float),
+                        spacing: int, inv_sigma2: float, grid_h: int, grid_w: int):
+    r = row_begin + wp.tid()
+    height = A.shape[1]
+    width = A.shape[2]
+    channels = A.shape[3]
+    t = r // height
+    y = r - t * height
+    j0 = y // spacing
+    for x in range(width):
+        i0 = x // spacing
+        total = float(0.0)
+        for iy in range(4):
+            j = j0 + iy - 1
+            for ix in range(4):
+                i = i0 + ix - 1
+                wk = float(0.0)
+                if j >= 0 and j < grid_h and i >= 0 and i < grid_w:
+                    py = wp.min(j * spacing, height - 1)
+                    px = wp.min(i * spacing, width - 1)
+                    d2 = float(0.0)
+                    for c in range(channels):
+                        d = A[t, y, x, c] - A[t, py, px, c]
+                        d2 += d * d
+                    wk = tent(y, j, spacing) * tent(x, i, spacing) * wp.exp(-wp.min(d2 * inv_sigma2, MAX_EXPONENT))
+                weights[t, y, x, 4 * iy + ix] = wk
+                total += wk
+        inv = 1.0 / total
+        for k in range(16):
+            weights[t, y, x, k] = weights[t, y, x, k] * inv
+
+
+@wp.kernel
+def prolong_add_rows(row_begin: int, z: wp.array3d(dtype=float), weights: wp.array4d(dtype=float),
+                     out: wp.array3d(dtype=float), spacing: int):
+    r = row_begin + wp.tid()
+    height = out.shape[1]
+    width = out.shape[2]
+    grid_h = z.shape[1]
+    grid_w = z.shape[2]
+    t = r // height
+    y = r - t * height
+    j0 = y // spacing
+    for x in range(width):
+        i0 = x // spacing
+        acc = float(0.0)
+        for iy in range(4):
+            j = wp.clamp(j0 + iy - 1, 0, grid_h - 1)
+            for ix in range(4):
+                i = wp.clamp(i0 + ix - 1, 0, grid_w - 1)
+                acc += weights[t, y, x, 4 * iy + ix] * z[t, j, i]
+        out[t, y, x] = out[t, y, x] + acc
+
+
+@wp.kernel
+def restrict_add_rows(row_begin: int, values: wp.array3d(dtype=float), weights: wp.array4d(dtype=float),
+                      out: wp.array3d(dtype=float), spacing: int):
+    r = row_begin + wp.tid()
+    height = values.shape[1]
+    width = values.shape[2]
+    grid_h = out.shape[1]
+    grid_w = out.shape[2]
+    t = r // grid_h
+    j = r - t * grid_h
+    y_begin = wp.max(0, (j - 2) * spacing)
+    y_end = wp.min(height, (j + 2) * spacing)
+    for i in range(grid_w):
+        x_begin = wp.max(0, (i - 2) * spacing)
+        x_end = wp.min(width, (i + 2) * spacing)
+        acc = float(0.0)
+        for y in range(y_begin, y_end):
+            iy = j - y // spacing + 1
+            for x in range(x_begin, x_end):
+                ix = i - x // spacing + 1
+                acc += weights[t, y, x, 4 * iy + ix] * values[t, y, x]
+        out[t, j, i] = out[t, j, i] + acc
+
+
+# ----------------------------------------------------------------------------
+# Host functions
+# ----------------------------------------------------------------------------
+
+def coarse_weights(A, weights, spacing: int, sigma: float) -> None:
+    """Interpolation weights of the edge-aware coarse basis.
+
+    Parameters
+    ----------
+    A : wp.array float32 (T, H, W, C), the guide (the log albedo), C >= 1.
+    weights : wp.array float32 (T, H, W, 16), written: tap ``k = 4 iy + ix``
+        is node ``(floor(y / spacing) + iy - 1, floor(x / spacing) + ix - 1)``;
+        ``b_k exp(-min(|A(y, x) - A(node)|^2 / sigma^2, 30))`` normalised over
+        the 16 taps, ``b_k`` the tents of both axes (0 off the grid).
+    spacing : pixels between nodes, >= 1.
+    sigma : albedo distance (in the units of ``A``) at which the affinity
+        falls to ``1/e``; > 0.
+    """
+    check_array("A", A, (None, None, None, None), "(T, H, W, C)")
+    t, h, w, _ = A.shape
+    check_array("weights", weights, (t, h, w, 16), "(T, H, W, 16)", A.device)
+    check_disjoint("weights", weights, "A", A, "the weights are written while A is read at the nodes")
+    spacing = check_int("spacing", spacing, 1)
+    sigma = check_positive("sigma", sigma)
+    grid_h, grid_w = grid_shape(h, w, spacing)
+    launch_rows(coarse_weights_rows, t * h, [A, weights, spacing, 1.0 / (sigma * sigma), grid_h, grid_w],
+                device=A.device)
+
+
+def _check_grid(z_name: str, z, weights, spacing: int) -> int:
+    check_array("weights", weights, (None, None, None, 16), "(T, H, W, 16)")
+    t, h, w, _ = weights.shape
+    spacing = check_int("spacing", spacing, 1)
+    check_array(z_name, z, (t, *grid_shape(h, w, spacing)), "(T, Hc, Wc) = (T, (H-1)//spacing + 2, "
+                "(W-1)//spacing + 2)", weights.device)
+    return spacing
+
+
+def prolong_add(z, weights, out, spacing: int) -> None:
+    """``out += P z``: each pixel adds its 16 nodes' ``z``, weighted by ``weights``.
+
+    Parameters
+    ----------
+    z : wp.array float32 (T, Hc, Wc), the coarse field (:func:`grid_shape`).
+    weights : wp.array float32 (T, H, W, 16), from :func:`coarse_weights` (same ``spacing``).
+    out : wp.array float32 (T, H, W), added into.  Must not overlap ``z``.
+    spacing : pixels between nodes, as for the weights.
+    """
+    spacing = _check_grid("z", z, weights, spacing)
+    t, h, w, _ = weights.shape
+    check_array("out", out, (t, h, w), "(T, H, W)", weights.device)
+    check_disjoint("out", out, "z", z, "each pixel reads 16 nodes of z")
+    launch_rows(prolong_add_rows, t * h, [z, weights, out, spacing], device=weights.device)
+
+
+def restrict_add(values, weights, out, spacing: int) -> None:
+    """``out += P^T values``, the transpose of :func:`prolong_add`.
+
+    Parameters
+    ----------
+    values : wp.array float32 (T, H, W), a per-pixel field (the gradient in ``S``).
+    weights : wp.array float32 (T, H, W, 16), from :func:`coarse_weights`.
+    out : wp.array float32 (T, Hc, Wc), added into: each node sums ``weights *
+        values`` over the pixels whose taps reach it.  Must not overlap ``values``.
+    spacing : pixels between nodes, as for the weights.
+    """
+    spacing = _check_grid("out", out, weights, spacing)
+    t, h, w, _ = weights.shape
+    check_array("values", values, (t, h, w), "(T, H, W)", weights.device)
+    check_disjoint("out", out, "values", values, "each node sums values over 4 x 4 node spacings")
+    launch_rows(restrict_add_rows, t * out.shape[1], [values, weights, out, spacing], device=weights.device)
