@@ -24,19 +24,13 @@ def _make_weights(spacing, sigma, channels):
     return make
 
 
-def _make_prolong(spacing):
+def _make_transfer(spacing, prolong: bool):
+    """Inputs of ``prolong_add`` (z on the grid, out per pixel) or ``restrict_add`` (the reverse)."""
     def make(rng, T, H, W):
-        hc, wc = ref.grid_shape(H, W, spacing)
-        return {"z": normal(rng, (T, hc, wc)), "weights": _weights(rng, T, H, W, spacing),
-                "out": normal(rng, (T, H, W)), "spacing": spacing}
-    return make
-
-
-def _make_restrict(spacing):
-    def make(rng, T, H, W):
-        hc, wc = ref.grid_shape(H, W, spacing)
-        return {"values": normal(rng, (T, H, W)), "weights": _weights(rng, T, H, W, spacing),
-                "out": normal(rng, (T, hc, wc)), "spacing": spacing}
+        grid, pixels = (T, *ref.grid_shape(H, W, spacing)), (T, H, W)
+        source, out = (grid, pixels) if prolong else (pixels, grid)
+        return {"z" if prolong else "values": normal(rng, source), "weights": _weights(rng, T, H, W, spacing),
+                "out": normal(rng, out), "spacing": spacing}
     return make
 
 
@@ -48,13 +42,13 @@ def _weights_case(spacing, sigma, channels):
 
 
 def _prolong_case(spacing):
-    return Case("coarse_basis", "prolong_add", _make_prolong(spacing), ("z", "weights", "out", "spacing"),
+    return Case("coarse_basis", "prolong_add", _make_transfer(spacing, True), ("z", "weights", "out", "spacing"),
                 ("out",), lambda v: {"out": v["out"] + ref.prolong(v["z"], v["weights"], v["spacing"])},
                 variant=f"s{spacing}", updates=("out",), tol=Tol(1e-5, 1e-5))
 
 
 def _restrict_case(spacing):
-    return Case("coarse_basis", "restrict_add", _make_restrict(spacing),
+    return Case("coarse_basis", "restrict_add", _make_transfer(spacing, False),
                 ("values", "weights", "out", "spacing"), ("out",),
                 lambda v: {"out": v["out"] + ref.restrict(v["values"], v["weights"], v["spacing"])},
                 variant=f"s{spacing}", updates=("out",), tol=Tol(1e-5, 2e-5))

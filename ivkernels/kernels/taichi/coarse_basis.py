@@ -23,9 +23,8 @@ MAX_EXPONENT = 30.0
 
 
 @ti.func
-def tent(p, node, spacing):
-    """Weight along one axis of ``node`` for pixel coordinate ``p``: ``max(0, 1 - |p/spacing - node| / 2)``."""
-    f = ti.cast(p, ti.f32) / ti.cast(spacing, ti.f32)
+def tent(f, node):
+    """Weight along one axis of ``node`` for a pixel at ``f = p / spacing`` nodes: ``max(0, 1 - |f - node| / 2)``."""
     return ti.max(0.0, 1.0 - ti.abs(f - ti.cast(node, ti.f32)) * 0.5)
 
 
@@ -43,8 +42,10 @@ def coarse_weights_rows(A: nd4, weights: nd4, spacing: ti.i32, inv_sigma2: ti.f3
         t = r // height
         y = r - t * height
         j0 = y // spacing
+        fy = ti.cast(y, ti.f32) / ti.cast(spacing, ti.f32)
         for x in range(width):
             i0 = x // spacing
+            fx = ti.cast(x, ti.f32) / ti.cast(spacing, ti.f32)
             total = 0.0
             for iy in ti.static(range(4)):
                 j = j0 + iy - 1
@@ -58,7 +59,7 @@ def coarse_weights_rows(A: nd4, weights: nd4, spacing: ti.i32, inv_sigma2: ti.f3
                         for c in range(channels):
                             d = A[t, y, x, c] - A[t, py, px, c]
                             d2 += d * d
-                        wk = tent(y, j, spacing) * tent(x, i, spacing) * ti.exp(
+                        wk = tent(fy, j) * tent(fx, i) * ti.exp(
                             -ti.min(d2 * inv_sigma2, MAX_EXPONENT))
                     weights[t, y, x, 4 * iy + ix] = wk
                     total += wk
@@ -97,17 +98,17 @@ def restrict_add_rows(values: nd3, weights: nd4, out: nd3, spacing: ti.i32):
     for r in range(out.shape[0] * grid_h):
         t = r // grid_h
         j = r - t * grid_h
-        y_begin = ti.max(0, (j - 2) * spacing)
-        y_end = ti.min(height, (j + 2) * spacing)
         for i in range(grid_w):
-            x_begin = ti.max(0, (i - 2) * spacing)
-            x_end = ti.min(width, (i + 2) * spacing)
             acc = 0.0
-            for y in range(y_begin, y_end):
-                iy = j - y // spacing + 1
-                for x in range(x_begin, x_end):
-                    ix = i - x // spacing + 1
-                    acc += weights[t, y, x, 4 * iy + ix] * values[t, y, x]
+            # tap (iy, ix) of node (j, i) is read by the pixels of the block whose
+            # floor(y / spacing) = j - iy + 1 and floor(x / spacing) = i - ix + 1
+            for iy in ti.static(range(4)):
+                y_block = (j - iy + 1) * spacing
+                for y in range(ti.max(y_block, 0), ti.min(y_block + spacing, height)):
+                    for ix in ti.static(range(4)):
+                        x_block = (i - ix + 1) * spacing
+                        for x in range(ti.max(x_block, 0), ti.min(x_block + spacing, width)):
+                            acc += weights[t, y, x, 4 * iy + ix] * values[t, y, x]
             out[t, j, i] = out[t, j, i] + acc
 
 

@@ -14,9 +14,10 @@ system's own weights):
   it, a tent of half-width two node spacings times
   ``exp(-|A(x) - A(node)|^2 / sigma^2)``, normalised to sum to one;
 * :func:`prolong_add`: ``out += P z`` (a gather of 16 nodes per pixel);
-* :func:`restrict_add`: ``out += P^T values``, the exact transpose, written
-  as a gather per node over the pixels whose taps reach it, so bands of node
-  rows never write the same memory.
+* :func:`restrict_add`: ``out += P^T values``, the exact transpose: each
+  pixel scatters into its 16 nodes with atomic adds.  Nodes belong to one
+  frame, so the CPU launch is split only at frame boundaries and the sums
+  do not depend on the thread count.
 
 Node ``j`` of a frame sits on pixel row ``min(j * spacing, H - 1)``; the grid
 has ``(H - 1) // spacing + 2`` rows (:func:`grid_shape`), so every pixel has
@@ -43,9 +44,9 @@ def grid_shape(h: int, w: int, spacing: int) -> tuple[int, int]:
 
 
 @wp.func
-def tent(p: int, node: int, spacing: int):
-    """Weight along one axis of ``node`` for pixel coordinate ``p``: ``max(0, 1 - |p/spacing - node| / 2)``."""
-    return wp.max(0.0, 1.0 - wp.abs(float(p) / float(spacing) - float(node)) * 0.5)
+def tent(f: float, node: int):
+    """Weight along one axis of ``node`` for a pixel at ``f = p / spacing`` nodes: ``max(0, 1 - |f - node| / 2)``."""
+    return wp.max(0.0, 1.0 - wp.abs(f - float(node)) * 0.5)
 
 
 @wp.kernel
@@ -58,22 +59,25 @@ def coarse_weights_rows(row_begin: int, A: wp.array4d(dtype=float), weights: wp.
     t = r // height
     y = r - t * height
     j0 = y // spacing
+    fy = float(y) / float(spacing)
     for x in range(width):
         i0 = x // spacing
+        fx = float(x) / float(spacing)
         total = float(0.0)
         for iy in range(4):
             j = j0 + iy - 1
+            by = tent(fy, j)
+            py = wp.min(j * spacing, height - 1)
             for ix in range(4):
                 i = i0 + ix - 1
                 wk = float(0.0)
                 if j >= 0 and j < grid_h and i >= 0 and i < grid_w:
-                    py = wp.min(j * spacing, height - 1)
                     px = wp.min(i * spacing, width - 1)
                     d2 = float(0.0)
                     for c in range(channels):
                         d = A[t, y, x, c] - A[t, py, px, c]
                         d2 += d * d
-                    wk = tent(y, j, spacing) * tent(x, i, spacing) * wp.exp(-wp.min(d2 * inv_sigma2, MAX_EXPONENT))
+                    wk = by * tent(fx, i) * wp.exp(-wp.min(d2 * inv_sigma2, MAX_EXPONENT))
                 weights[t, y, x, 4 * iy + ix] = wk
                 total += wk
         inv = 1.0 / total
@@ -111,20 +115,19 @@ def restrict_add_rows(row_begin: int, values: wp.array3d(dtype=float), weights: 
     width = values.shape[2]
     grid_h = out.shape[1]
     grid_w = out.shape[2]
-    t = r // grid_h
-    j = r - t * grid_h
-    y_begin = wp.max(0, (j - 2) * spacing)
-    y_end = wp.min(height, (j + 2) * spacing)
-    for i in range(grid_w):
-        x_begin = wp.max(0, (i - 2) * spacing)
-        x_end = wp.min(width, (i + 2) * spacing)
-        acc = float(0.0)
-        for y in range(y_begin, y_end):
-            iy = j - y // spacing + 1
-            for x in range(x_begin, x_end):
-                ix = i - x // spacing + 1
-                acc += weights[t, y, x, 4 * iy + ix] * values[t, y, x]
-        out[t, j, i] = out[t, j, i] + acc
+    t = r // height
+    y = r - t * height
+    j0 = y // spacing
+    for x in range(width):
+        i0 = x // spacing
+        v = values[t, y, x]
+        for iy in range(4):
+            j = j0 + iy - 1
+            if j >= 0 and j < grid_h:
+                for ix in range(4):
+                    i = i0 + ix - 1
+                    if i >= 0 and i < grid_w:
+                        wp.atomic_add(out, t, j, i, weights[t, y, x, 4 * iy + ix] * v)
 
 
 # ----------------------------------------------------------------------------
@@ -189,12 +192,12 @@ def restrict_add(values, weights, out, spacing: int) -> None:
     ----------
     values : wp.array float32 (T, H, W), a per-pixel field (the gradient in ``S``).
     weights : wp.array float32 (T, H, W, 16), from :func:`coarse_weights`.
-    out : wp.array float32 (T, Hc, Wc), added into: each node sums ``weights *
-        values`` over the pixels whose taps reach it.  Must not overlap ``values``.
+    out : wp.array float32 (T, Hc, Wc), added into: each node gets ``weights *
+        values`` of every pixel whose taps reach it.  Must not overlap ``values``.
     spacing : pixels between nodes, as for the weights.
     """
     spacing = _check_grid("out", out, weights, spacing)
     t, h, w, _ = weights.shape
     check_array("values", values, (t, h, w), "(T, H, W)", weights.device)
     check_disjoint("out", out, "values", values, "each node sums values over 4 x 4 node spacings")
-    launch_rows(restrict_add_rows, t * out.shape[1], [values, weights, out, spacing], device=weights.device)
+    launch_rows(restrict_add_rows, t * h, [values, weights, out, spacing], device=weights.device, align=h)
