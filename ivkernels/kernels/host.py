@@ -16,6 +16,7 @@ Contents
 * ``median``: :data:`KMEANS_ITERATIONS`, :data:`MIN_SEPARATION`,
   :func:`median_network`, :func:`spatial_weights`,
   :func:`shading_scratch_shape`, :func:`flow_scratch_shape`.
+* ``coarse_basis``: :func:`grid_shape`, :data:`MAX_EXPONENT`.
 """
 from __future__ import annotations
 
@@ -174,3 +175,18 @@ def shading_scratch_shape(S_shape: tuple, radius: int) -> tuple:
 def flow_scratch_shape(flow_shape: tuple, radius: int) -> tuple:
     """Shape of the float32 scratch of ``weighted_median_flow``: ``(T*H, 3*(2r+1)^2)``."""
     return (flow_shape[0] * flow_shape[1], 3 * (2 * radius + 1) ** 2)
+
+
+# ----------------------------------------------------------------------------
+# coarse_basis
+# ----------------------------------------------------------------------------
+
+#: The affinity's exponent is clamped here, so no weight underflows in float32.
+MAX_EXPONENT = 30.0
+
+
+def grid_shape(h: int, w: int, spacing: int) -> tuple[int, int]:
+    """Nodes ``(Hc, Wc)`` of an ``h x w`` frame with nodes every ``spacing`` pixels: node
+    ``j`` sits on pixel row ``min(j * spacing, h - 1)``, and the grid reaches one node past
+    the last pixel, so every pixel has nodes on both sides."""
+    return (h - 1) // spacing + 2, (w - 1) // spacing + 2

@@ -21,7 +21,7 @@ current albedo.
 """
 from __future__ import annotations
 
-from ivkernels.kernels.reference.coarse_basis import grid_shape
+from ivkernels.kernels.host import grid_shape
 from ivkernels.solver.energy import ConstrainedEnergy
 
 

@@ -4,8 +4,8 @@ At each pyramid level, starting from the up-sampled coarser solution, the
 solver alternates (a) L-BFGS over all ``S_t`` of the window at once, with
 ``A_t = I_t - S_t`` (Eq. 3 as a constraint, :class:`ConstrainedEnergy`) and the
 coupling variable ``S~`` fixed (on levels large enough, over ``S = s + P z``
-with an edge-aware coarse field ``z``, :class:`CoarseBasisProblem`), and (b) the ``S~`` weighted-median update
-(Eq. 13).  The coarsest level starts from ``S`` = heavily blurred log
+with an edge-aware coarse field ``z``, :class:`CoarseBasisProblem`), and (b)
+the ``S~`` weighted-median update (Eq. 13).  The coarsest level starts from ``S`` = heavily blurred log
 luminance.
 """
 from __future__ import annotations
@@ -177,12 +177,11 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
             def record(k, e, outer=outer):
                 log.energy.append((window_index, level, outer, k, e))
 
-            if target is problem:
-                lbfgs.minimize(problem, problem.X, problem.G, iterations, on_iteration=record)
-            else:
-                target.start()
-                lbfgs.minimize(target, target.X, target.G, iterations, on_iteration=record)
-                target.finish()
+            if target is not problem:
+                target.start()                        # s = S, z = 0, weights from the albedo
+            lbfgs.minimize(target, target.X, target.G, iterations, on_iteration=record)
+            if target is not problem:
+                target.finish()                       # S = s + P z
             reasons.append(lbfgs.stop_reason)
         problem.sync_albedo()
         log.levels.append({"window": window_index, "level": level, "shape": tuple(shape),

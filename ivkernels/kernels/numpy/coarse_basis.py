@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from ivkernels.kernels.checks import check_int, check_positive
+from ivkernels.kernels.host import grid_shape  # noqa: F401  (part of the family)
 from ivkernels.kernels.numpy._adapt import add, arrays, check_disjoint, write
 from ivkernels.kernels.reference import coarse_basis as ref
 
@@ -21,7 +22,7 @@ def _grid(z_name: str, z, weights, spacing: int) -> int:
     if weights.ndim != 4 or weights.shape[3] != 16:
         raise ValueError(f"weights must have shape (T, H, W, 16), got {weights.shape}")
     t, h, w, _ = weights.shape
-    want = (t, *ref.grid_shape(h, w, spacing))
+    want = (t, *grid_shape(h, w, spacing))
     if z.shape != want:
         raise ValueError(f"{z_name} must have shape (T, Hc, Wc) = {want} for spacing {spacing}, got {z.shape}")
     return spacing

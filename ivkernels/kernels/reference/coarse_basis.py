@@ -9,16 +9,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ivkernels.kernels.host import MAX_EXPONENT, grid_shape  # noqa: F401  (grid_shape: part of the family)
+
 #: Node offsets of the 4 x 4 taps along one axis, relative to ``floor(y / spacing)``.
 TAP_OFFSETS = (-1, 0, 1, 2)
-#: The affinity's exponent is clamped here, so it never underflows in float32.
-MAX_EXPONENT = 30.0
-
-
-def grid_shape(h: int, w: int, spacing: int) -> tuple[int, int]:
-    """Nodes ``(Hc, Wc)`` of a frame of ``h x w`` pixels: node ``j`` sits at pixel
-    row ``min(j * spacing, h - 1)``, and the grid reaches one node past the last pixel."""
-    return (h - 1) // spacing + 2, (w - 1) // spacing + 2
 
 
 def _taps(n: int, spacing: int, n_nodes: int):

@@ -29,19 +29,11 @@ from __future__ import annotations
 
 import warp as wp
 
+from ivkernels.kernels.host import MAX_EXPONENT, grid_shape  # noqa: F401  (grid_shape: part of the family)
 from ivkernels.kernels.launch import launch_rows
 from ivkernels.kernels.warp._checks import check_array, check_disjoint, check_int, check_positive
 
 wp.set_module_options({"enable_backward": False})
-
-#: The affinity's exponent is clamped here, so no weight underflows in float32.
-MAX_EXPONENT = 30.0
-
-
-def grid_shape(h: int, w: int, spacing: int) -> tuple[int, int]:
-    """Nodes ``(Hc, Wc)`` of an ``h x w`` frame with nodes every ``spacing`` pixels."""
-    return (h - 1) // spacing + 2, (w - 1) // spacing + 2
-
 
 @wp.func
 def tent(f: float, node: int):
