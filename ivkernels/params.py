@@ -120,11 +120,14 @@ class Params:
         (b) the S~ weighted-median update.
     lbfgs_iterations
         L-BFGS iterations per alternation at the finest (full-resolution)
-        level.  25 with the coarse basis (below): on training seed 1 (8
-        frames at 320x240, estimated flow, two passes) mean LMSE 0.0073 in
-        141 CPU s, against 0.0071 in 158 s at 30, 0.0068 in 190 s at 40, and
-        0.0100 in 157 s at 40 without the basis (perf/RESULTS.md, "Solver:
-        the edge-aware coarse basis").
+        level.  35: the smallest budget that reaches 99% of the drop from
+        the start energy to a 1000-iteration reference on the training
+        sequences with a margin (seed 12, 8 frames at 320x240, ground-truth
+        flow: static_moving_light / free_camera 98.82 / 98.45% at 25, 99.15
+        / 98.91% at 30, 99.37 / 99.20% at 35, 99.50 / 99.38% at 40).  On
+        training seed 1 (estimated flow, two passes) mean LMSE 0.0063
+        against 0.0073 at 25 (perf/RESULTS.md, "Solver: converging at the
+        default budget").
     lbfgs_memory
         Correction pairs kept by L-BFGS.  Chosen: on synthetic sequences with
         seed 12 (8 frames, ground-truth flow) 4 and 6 pairs give the same mean
@@ -135,15 +138,13 @@ class Params:
         L-BFGS iterations per alternation at pyramid level ``l >= 1``:
         ``min(lbfgs_iterations_coarse, round(lbfgs_iterations *
         lbfgs_level_growth ** l))``.  A level costs a quarter of the finer
-        one per iteration, and the coarse levels are where the solver moves
-        whole albedo regions and the shading's low frequencies, which the
-        finest level does slowly.  Measured (training seed 12, 8 frames at
-        320x240, static_moving_light and free_camera, 40 at the finest
-        level; perf/RESULTS.md, "Solver"): mean LMSE 0.0067 / 0.0042 /
-        0.0040 with 10 / 100 / 200 iterations at every coarse level.  The
-        growth keeps the half-resolution level, the most expensive coarse
-        one, at twice the finest budget while the small levels run to
-        convergence (the L-BFGS tolerance usually stops them first).
+        one per iteration.  Growth 1 (every level gets the finest budget):
+        with the coarse basis the finest level's energy does not improve
+        with longer coarse solves (training seed 12, 6 frames at 160x120,
+        ground-truth flow, 35 at the finest level: static_moving_light /
+        free_camera reach 99.36 / 99.34% of the drop to the reference with
+        growth 1, 99.31 / 99.31% with 1.5, 99.29 / 99.14% with 2; at 25,
+        growth 3 and 4 gain nothing over 2), and growth 1 is the cheapest.
     coarse_basis_spacing, coarse_basis_sigma
         L-BFGS minimises over ``S = s + P z``: the shading plus a coarse field
         ``z`` on nodes every ``coarse_basis_spacing`` pixels, interpolated
@@ -254,9 +255,9 @@ class Params:
     pyramid_scale: float = 0.5
     pyramid_min_size: int = 24
     outer_iterations: int = 2
-    lbfgs_iterations: int = 25
+    lbfgs_iterations: int = 35
     lbfgs_iterations_coarse: int = 200
-    lbfgs_level_growth: float = 2.0
+    lbfgs_level_growth: float = 1.0
     lbfgs_memory: int = 4
     coarse_basis_spacing: int = 4
     coarse_basis_sigma: float = 0.5
