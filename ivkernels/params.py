@@ -179,6 +179,16 @@ class Params:
         the four kinds 1.087 / 1.305 / 0.054 / 0.186 against 1.085 / 1.249 /
         0.001 / 0.170, from 1.173 / 1.295 / 0.168 / 0.527 with one pass) for
         a quarter of its cost.
+    guide_lbfgs_iterations
+        L-BFGS iterations per alternation at every level of the guide solve,
+        capped by ``lbfgs_iterations``.  The guide only feeds the next flow
+        pass and the last solve's start, and a short guide serves both as
+        well as a converged one, or better.  Measured with ``perf/eval_flow_passes.py
+        --passes 2`` (8 frames at 320x240; perf/RESULTS.md, "A shorter guide
+        solve"): mean LMSE on training seed 1 0.0060 / 0.0058 / 0.0061 /
+        0.0063 with 8 / 15 / 25 / 35 iterations, on seed 2 0.0055 with both
+        15 and 35; flow EPE within 0.04 px; the guide takes half the time
+        at 15.
     start_from_guide
         With ``flow_passes`` > 1, the window's last solve starts from the
         last guide's log shading at the guide's pyramid level
@@ -265,6 +275,7 @@ class Params:
     log_floor: float = 1e-4
     # flow and intrinsic video together
     flow_guide_scale: float = 0.5
+    guide_lbfgs_iterations: int = 15
     start_from_guide: bool = True
     first_flow_at_guide_size: bool = True
     flow_refine_warps: int = 2
@@ -319,6 +330,7 @@ _RULES = {
     "flow_guide_scale": Range(float, 0.0, 1.0, low_open=True,
                               why="the size of the guide solve relative to the frames"),
     "flow_refine_warps": Range(int, 1, why="warping steps per pyramid level"),
+    "guide_lbfgs_iterations": Range(int, 1),
     "window": Range(int, 2, why="frames per solved window"),
     "overlap": Range(int, 0),
     "boundary_threshold": Range(float, 0.0),

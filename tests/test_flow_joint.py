@@ -156,3 +156,30 @@ def test_decompose_starts_the_last_solve_from_the_guide():
     # without temporal terms (the ablation) the guide, a temporal solve, is not used
     ablation = iv.decompose(seq.frames, flow="dis", temporal=False, params=params, flow_passes=2)
     assert [e["level"] for e in ablation.diagnostics["levels"]] == [2, 1, 0]
+
+
+@pytest.mark.parametrize("solve_budget, guide_budget, expected", [(35, 15, 15), (4, 15, 4), (6, 2, 2)])
+def test_the_guide_runs_its_own_budget_capped_by_the_solve(monkeypatch, solve_budget, guide_budget,
+                                                            expected):
+    import ivkernels as iv
+    from ivkernels.backends.registry import get_backend
+    from ivkernels.flow.joint import guide_solve
+    from ivkernels.priors import load_albedo_prior
+    from ivkernels.solver import window_solver
+
+    seq = synthetic.render_sequence("objects_camera", n_frames=2, size=(48, 64), seed=4)
+    params = iv.Params(lbfgs_iterations=solve_budget, guide_lbfgs_iterations=guide_budget)
+    seen = []
+    real = window_solver.solve_window
+
+    def spy(be, frames, flow, occlusion, boundary, p, prior, **kw):
+        seen.append(p)
+        return real(be, frames, flow, occlusion, boundary, p, prior, **kw)
+
+    monkeypatch.setattr(window_solver, "solve_window", spy)
+    be = get_backend("warp")
+    albedo, shading = guide_solve(be, be.asarray(seq.frames), seq.flow, params, load_albedo_prior())
+    assert [p.lbfgs_iterations for p in seen] == [expected]
+    # every other field is the caller's
+    assert seen[0].replace(lbfgs_iterations=solve_budget) == params
+    assert albedo.shape == seq.frames.shape and shading.shape == (2, 24, 32)

@@ -87,6 +87,7 @@ def test_params_numpy_numbers_are_stored_as_python_numbers():
     ({"log_floor": 0.0}, "log_floor"),
     ({"outer_iterations": 0}, "outer_iterations must be >= 1"),
     ({"lbfgs_iterations": 0}, "lbfgs_iterations must be >= 1"),
+    ({"guide_lbfgs_iterations": 0}, "guide_lbfgs_iterations must be >= 1"),
     ({"nonlocal_radius": 0}, "nonlocal_radius"),
     ({"nonlocal_radius": 10_000}, "nonlocal_radius"),
     ({"boundary_radius": 10_000}, "boundary_radius"),

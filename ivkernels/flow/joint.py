@@ -126,7 +126,8 @@ def guide_solve(be, frames, flow, params, prior, *, log=None) -> tuple[np.ndarra
     times their size (antialiased; the shorter side kept at
     :data:`MIN_GUIDE_SIZE` pixels or the frames' own, if smaller), the motion
     maps are made there and Eq. 2 is minimised there
-    (:func:`ivkernels.solver.window_solver.solve_window`).  The guide's log
+    (:func:`ivkernels.solver.window_solver.solve_window`) with
+    ``min(lbfgs_iterations, guide_lbfgs_iterations)`` iterations per alternation.  The guide's log
     shading is up-sampled bilinearly to full size, and the albedo is
     ``I - S`` at full size: shading is smooth and survives the resampling,
     while the albedo keeps the input's finest texture, which the flow needs.
@@ -162,7 +163,9 @@ def guide_solve(be, frames, flow, params, prior, *, log=None) -> tuple[np.ndarra
         small = downsample(be, frames, shape)
         small_flow = resize_flow(be, be.asarray(np.ascontiguousarray(flow, np.float32)), shape)
     occlusion, boundary = motion_maps(be, small, small_flow, params)
-    _, S_small = solve_window(be, small, small_flow, occlusion, boundary, params, prior, log=SolveLog())
+    iterations = min(int(params.lbfgs_iterations), int(params.guide_lbfgs_iterations))
+    _, S_small = solve_window(be, small, small_flow, occlusion, boundary,
+                              params.replace(lbfgs_iterations=iterations), prior, log=SolveLog())
     S = S_small
     if shape != (H, W):
         S = be.numpy(resize(be, be.asarray(np.ascontiguousarray(S_small[..., None])), (H, W)))[..., 0]
