@@ -183,9 +183,9 @@ class Params:
         L-BFGS iterations per alternation at every level of the guide solve,
         capped by ``lbfgs_iterations``.  The guide only feeds the next flow
         pass and the last solve's start, and a short guide serves both as
-        well as a converged one, or better.  Measured with ``perf/eval_flow_passes.py
-        --passes 2`` (8 frames at 320x240; perf/RESULTS.md, "A shorter guide
-        solve"): mean LMSE on training seed 1 0.0060 / 0.0058 / 0.0061 /
+        well as a converged one, or better.  Measured with
+        ``perf/eval_flow_passes.py --passes 2`` (8 frames at 320x240;
+        perf/RESULTS.md, "A shorter guide solve"): mean LMSE on training seed 1 0.0060 / 0.0058 / 0.0061 /
         0.0063 with 8 / 15 / 25 / 35 iterations, on seed 2 0.0055 with both
         15 and 35; flow EPE within 0.04 px; the guide takes half the time
         at 15.

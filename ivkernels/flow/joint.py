@@ -127,10 +127,11 @@ def guide_solve(be, frames, flow, params, prior, *, log=None) -> tuple[np.ndarra
     :data:`MIN_GUIDE_SIZE` pixels or the frames' own, if smaller), the motion
     maps are made there and Eq. 2 is minimised there
     (:func:`ivkernels.solver.window_solver.solve_window`) with
-    ``min(lbfgs_iterations, guide_lbfgs_iterations)`` iterations per alternation.  The guide's log
-    shading is up-sampled bilinearly to full size, and the albedo is
-    ``I - S`` at full size: shading is smooth and survives the resampling,
-    while the albedo keeps the input's finest texture, which the flow needs.
+    ``min(lbfgs_iterations, guide_lbfgs_iterations)`` L-BFGS iterations per
+    alternation.  The guide's log shading is up-sampled bilinearly to full
+    size, and the albedo is ``I - S`` at full size: shading is smooth and
+    survives the resampling, while the albedo keeps the input's finest
+    texture, which the flow needs.
     The albedo is scaled so that its 99th percentile is 1 and clipped to
     [0, 1], as the flow expects.
 
