@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from ivkernels.kernels.checks import check_int, check_positive
-from ivkernels.kernels.host import grid_shape  # noqa: F401  (part of the family)
+from ivkernels.kernels.host import grid_shape
 from ivkernels.kernels.numpy._adapt import add, arrays, check_disjoint, write
 from ivkernels.kernels.reference import coarse_basis as ref
 

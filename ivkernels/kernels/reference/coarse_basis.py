@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.kernels.host import MAX_EXPONENT, grid_shape  # noqa: F401  (grid_shape: part of the family)
+from ivkernels.kernels.host import MAX_EXPONENT, grid_shape
 
 #: Node offsets of the 4 x 4 taps along one axis, relative to ``floor(y / spacing)``.
 TAP_OFFSETS = (-1, 0, 1, 2)

@@ -12,7 +12,7 @@ no two iterations write the same memory and no atomics are needed.
 """
 import taichi as ti
 
-from ivkernels.kernels.host import MAX_EXPONENT, grid_shape  # noqa: F401  (grid_shape: part of the family)
+from ivkernels.kernels.host import MAX_EXPONENT, grid_shape
 from ivkernels.kernels.taichi._checks import check_array, check_disjoint, check_int, check_positive
 
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)

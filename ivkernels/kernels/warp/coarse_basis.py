@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import warp as wp
 
-from ivkernels.kernels.host import MAX_EXPONENT, grid_shape  # noqa: F401  (grid_shape: part of the family)
+from ivkernels.kernels.host import MAX_EXPONENT, grid_shape
 from ivkernels.kernels.launch import launch_rows
 from ivkernels.kernels.warp._checks import check_array, check_disjoint, check_int, check_positive
 
