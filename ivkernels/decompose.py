@@ -45,7 +45,9 @@ class IntrinsicVideo:
         iteration, L-BFGS iteration, energy), ``terms`` (each term's energy
         after each level), ``levels`` (per window and level: why each L-BFGS
         run stopped and ``converged``, i.e. stopped on its tolerance rather than
-        its iteration budget), ``seconds`` (per stage), ``windows`` (frame ranges).
+        its iteration budget), ``seconds`` (per stage), ``windows`` (frame ranges),
+        ``independent_shadings`` (per window, the number its albedo priors
+        were divided by; ``Params.independent_shading_gain``).
     """
 
     albedo: np.ndarray
@@ -443,6 +445,7 @@ def _collect(job: _Decomposer) -> IntrinsicVideo:
         windows.append((res.start, res.stop))
     diagnostics = {"energy": job.log.energy, "terms": job.log.terms, "levels": job.log.levels,
                    "seconds": dict(job.log.seconds), "windows": windows,
+                   "independent_shadings": [n for _, n in job.log.shadings],
                    "flow_method": _flow_label(job),
                    "albedo_scale": job.scale}
     return IntrinsicVideo(albedo, shading, flow_out, occ_out, bnd_out, diagnostics)

@@ -109,6 +109,26 @@ class Params:
         same sequences 10 and 100 changed mean LMSE by +0.3% and -0.6% while
         making each solve 3-4x slower (histogram splat, 3-D blur and slice per
         evaluation).  Set it > 0 to use the term.
+    independent_shading_gain
+        With temporal terms, both albedo priors (Eq. 11, 12) of a window are
+        divided by its number of independent shadings ``n = 1 + gain * (T -
+        1) * r`` (:mod:`ivkernels.solver.independent_shadings`): the window
+        holds one albedo, tied over its frames by Eq. 4, but up to ``T``
+        shadings when the light changes between frames, and Eq. 2's sum
+        over frames counts the albedo prior ``T`` times.  ``r`` in [0, 1] is
+        how far consecutive shadings are from being the same field, read
+        off the input along the flow; it understates that, as the blurred
+        input it divides by holds the albedo's coarse variation too, and
+        the gain makes up for it.  0 switches it off (every frame's prior
+        counts, as in the paper).  Chosen on training data (perf/RESULTS.md,
+        "The albedo prior counted once per scene point"; ``python
+        perf/calibrate.py --kinds --mit --no-ablation --grid
+        independent_shading_gain=...`` and ``--seeds 12 13 --frames 6 --size
+        120 160``): gain 0 / 1 / 2 / 3 / 5 give MIT mean albedo LMSE 0.0601 /
+        0.0455 / 0.0381 / 0.0361 / 0.0349 and synthetic mean LMSE 0.0109 /
+        0.0112 / 0.0116 / 0.0117 / 0.0121; 3 and 5 tie on the geometric mean
+        of the two (0.0206), the smaller is taken.  ``n`` is 1.0-1.2 on the
+        synthetic sequences, whose light is one lamp or moves slowly.
 
     Optimiser (Sec. 4)
     ------------------
@@ -261,6 +281,7 @@ class Params:
     # Eq. 11, 12
     lam_albedo_smooth: float = 1.0
     lam_albedo_sparsity: float = 0.0
+    independent_shading_gain: float = 3.0
     # optimiser
     pyramid_scale: float = 0.5
     pyramid_min_size: int = 24

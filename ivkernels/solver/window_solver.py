@@ -18,6 +18,7 @@ import numpy as np
 from ivkernels.params import Params
 from ivkernels.solver.coarse_basis import CoarseBasisProblem, uses_coarse_basis
 from ivkernels.solver.energy import ConstrainedEnergy, WindowEnergy
+from ivkernels.solver.independent_shadings import independent_shadings, with_albedo_priors_divided
 from ivkernels.solver.lbfgs import LBFGS
 from ivkernels.solver.motion_maps import resample_mask
 from ivkernels.solver.pyramid import (coarse_to_fine, image_pyramid, level_shapes, resize,
@@ -31,6 +32,7 @@ class SolveLog:
     energy: list = field(default_factory=list)     # (window, level, outer, iteration, E)
     levels: list = field(default_factory=list)     # one dict per (window, level): see solve_window
     terms: list = field(default_factory=list)      # (window, level, {term: E}) after each level
+    shadings: list = field(default_factory=list)   # (window, n): independent shadings, see solve_window
     seconds: dict = field(default_factory=dict)    # stage -> seconds
 
     def add_time(self, stage: str, seconds: float) -> None:
@@ -94,7 +96,9 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
         albedo and shading for the first ``k`` frames, solved by the previous
         window; they are held fixed and carry albedo forward (their albedo is
         ``I - S`` of the same frames, so ``S`` alone is used).
-    log : :class:`SolveLog` collecting energies and timings, and per level
+    log : :class:`SolveLog` collecting energies and timings, the window's
+        number of independent shadings ``n`` (``log.shadings``; both albedo
+        priors are divided by it, ``Params.independent_shading_gain``), and per level
         (``log.levels``) why each L-BFGS run stopped and whether all of them
         converged (stopped on the tolerance, not on the iteration budget).
     progress : optional callable ``progress(n_done_levels)``.
@@ -120,6 +124,13 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
     if carried is not None:
         carried_shading = image_pyramid(be, be.asarray(carried[1][..., None]), shapes)
     log.add_time("pyramid", time.perf_counter() - t0)
+    # A window that carries frames continues the previous, full window's albedo.
+    n_shadings = independent_shadings(be, frames_linear, flow, params.independent_shading_gain,
+                                      params.log_floor,
+                                      n_frames=T if carried is None else max(T, int(params.window)))
+    log.shadings.append((window_index, n_shadings))
+    # One albedo, n independent shadings: the albedo priors count once per scene point.
+    params = with_albedo_priors_divided(params, n_shadings)
 
     def make_energy(level, shape):
         t = time.perf_counter()

@@ -1,0 +1,136 @@
+"""How many independent shadings a window holds: the weight of its albedo prior.
+
+Eq. 2 sums every term over the frames of a window.  For the shading priors
+that is right when each frame's shading is a new draw; for the albedo prior
+it is not: the temporal albedo term (Eq. 4) ties a scene point's albedo over
+the window, so the window holds one albedo, and summing its prior over ``T``
+frames counts it ``T`` times.  When the light does not change (one light, a
+moving camera) the ``T`` shadings are one draw too, the two over-counts
+cancel, and the single-image balance of ``lambda_As`` against ``lambda_Ss``
+holds.  When the light changes between frames (a static object under a
+moving lamp) each frame adds evidence about the shading that the albedo
+prior does not share; this is what lets the temporal median of Weiss (ICCV
+2001) read an albedo edge off many lights.  Dividing the albedo prior by the
+window's number of independent shadings ``n`` restores the single-image
+balance in both cases:
+
+    n = 1 + gain * (T - 1) * r,   r = mean over pairs t of min(1, r_t),
+    r_t = Var(S_{t+1}(x + u) - S_t(x)) / (2 Var(S_t))
+
+``r_t`` is ``1 - rho`` for two shading fields of variance ``Var(S)`` and
+correlation ``rho``: 0 for the same shading, 1 for unrelated ones.  Both
+variances are read off the input, before any solve:
+
+- along the flow, where the albedo is constant, the change of the log
+  luminance *is* the change of the log shading; its median is taken out (a
+  global change of the light's strength is no new shading), and the variance
+  is the squared MAD scaled by 1.4826.  Every pixel whose ``x + u`` lies in
+  the image counts: the occlusion map ``w_occ`` is not used, because its
+  colour test (Eq. 7) marks as occluded exactly the pixels whose light
+  changes most (7-28% of each MIT object at its exact zero flow), while
+  true occlusions are a minority the median ignores;
+- ``Var(S)`` is that of the log luminance blurred with a Gaussian of
+  ``SHADING_BLUR`` times the shorter side: shading varies slowly and most
+  albedo texture is finer, so the blurred image stands in for the shading.
+
+Only lit pixels count (luminance of at least ``LIT_LUMINANCE`` in both
+frames): in black backgrounds and deep shadows the log is noise.
+``r`` understates ``1 - rho``: the blurred input holds the albedo's coarse
+variation as well as the shading's, so ``Var(S)`` is overstated; the gain
+(``Params.independent_shading_gain``) makes up for it and is chosen on
+training data.  At gain 1 ``n`` is 1.00-1.21 on the synthetic training
+sequences (one lamp, or a lamp moving slowly; 6 frames, true flow) and
+1.28-3.48 on the MIT objects (8 frames of ten very different lights, zero
+flow); perf/RESULTS.md, "The albedo prior counted once per scene point".
+"""
+from __future__ import annotations
+
+import numpy as np
+
+#: Gaussian sigma of the shading stand-in, as a fraction of the shorter side.
+SHADING_BLUR = 0.04
+#: Pixels darker than this linear luminance in either frame of a pair are left out.
+LIT_LUMINANCE = 0.02
+#: A pair with fewer usable pixels than this says nothing and is skipped.
+MIN_PIXELS = 64
+#: Scales a median absolute deviation to a standard deviation (Gaussian).
+MAD_TO_STD = 1.4826
+
+
+def _robust_variance(values: np.ndarray) -> float:
+    """``(1.4826 * MAD)^2`` of a 1-D array: a variance that ignores outliers."""
+    return float((MAD_TO_STD * np.median(np.abs(values - np.median(values)))) ** 2)
+
+
+def shading_change_ratios(be, frames_linear, flow, log_floor: float) -> np.ndarray:
+    """``r_t`` of each frame pair (module docstring), NaN where a pair has too few pixels.
+
+    Parameters
+    ----------
+    be : backend.
+    frames_linear : (T, H, W, 3) backend array, linear RGB in [0, 1].
+    flow : (T-1, H, W, 2) backend array, forward flow in pixels.
+    log_floor : floor of the luminance before the log.
+
+    Returns
+    -------
+    (T-1,) float64 NumPy array, unclipped ``r_t >= 0``.
+    """
+    T, H, W, _ = frames_linear.shape
+    lum = be.empty((T, H, W))
+    be.colour.luminance(frames_linear, lum)
+    log_lum = be.empty((T, H, W, 1))
+    be.colour.log_floor(lum.reshape((T, H, W, 1)), log_lum, log_floor)
+    next_log = be.asarray(np.ascontiguousarray(be.numpy(log_lum)[1:]))
+    warped = be.empty((T - 1, H, W, 1))
+    inside = be.empty((T - 1, H, W))
+    be.sampling.warp_bilinear(next_log, flow, warped, inside)
+    blurred, scratch = be.empty((T, H, W, 1)), be.empty((T, H, W, 1))
+    be.pyramid.gaussian_blur(log_lum, blurred, scratch, SHADING_BLUR * min(H, W))
+
+    L = be.numpy(log_lum)[..., 0]
+    L_next = be.numpy(warped)[..., 0]
+    B = be.numpy(blurred)[..., 0]
+    valid = be.numpy(inside) > 0.5
+    lit = np.log(LIT_LUMINANCE)
+    ratios = np.full(T - 1, np.nan)
+    for t in range(T - 1):
+        use = valid[t] & (L[t] >= lit) & (L_next[t] >= lit)
+        if np.count_nonzero(use) < MIN_PIXELS:
+            continue
+        change = _robust_variance((L_next[t] - L[t])[use])
+        spread = _robust_variance(B[t][use])
+        ratios[t] = change / (2.0 * spread) if spread > 0 else (1.0 if change > 0 else 0.0)
+    return ratios
+
+
+def independent_shadings(be, frames_linear, flow, gain: float, log_floor: float,
+                         n_frames: int | None = None) -> float:
+    """``n`` in ``[1, n_frames]``: the window's number of independent shadings (module docstring).
+
+    ``r`` is read off the window's own frame pairs; ``n_frames`` (default:
+    the window's ``T``) is the ``T`` of the count.  A window that carries
+    frames continues an albedo the previous, full window estimated, and
+    passes that window's length (``Params.window``).  1 without a flow (each
+    frame is then solved on its own, and its albedo prior counts once), with
+    ``gain`` 0, or when no pair has enough lit, visible pixels.  Shapes as
+    :func:`shading_change_ratios`; ``flow`` may be ``None``.
+    """
+    T = frames_linear.shape[0]
+    if flow is None or gain == 0 or T < 2:
+        return 1.0
+    ratios = shading_change_ratios(be, frames_linear, flow, log_floor)
+    ratios = ratios[np.isfinite(ratios)]
+    if ratios.size == 0:
+        return 1.0
+    n_frames = T if n_frames is None else int(n_frames)
+    r = float(np.mean(np.minimum(ratios, 1.0)))
+    return float(min(n_frames, 1.0 + gain * (n_frames - 1) * r))
+
+
+def with_albedo_priors_divided(params, n: float):
+    """``params`` with both albedo priors (Eq. 11, 12) divided by ``n`` (unchanged at 1)."""
+    if n == 1.0:
+        return params
+    return params.replace(lam_albedo_smooth=params.lam_albedo_smooth / n,
+                          lam_albedo_sparsity=params.lam_albedo_sparsity / n)
