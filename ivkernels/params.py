@@ -36,6 +36,20 @@ class Params:
     sigma_e, sigma_d, occlusion_threshold
         Eq. 6-7: occlusion from Lab difference (sigma_e, Lab units) and the
         negative part of the flow divergence (sigma_d, pixels / pixel).
+    occlusion_colour
+        Whether Eq. 7's colour term (sigma_e) is used.  Off by default: it
+        assumes the colour of a surface point stays the same from frame to
+        frame, and where the light changes it marks the pixels whose
+        shading changes most as occluded, which switches the temporal terms
+        off exactly where they carry the most (7-28% of each MIT object at
+        its exact zero flow).  The divergence term, the image border and
+        ``warp_spread_max`` still mark occlusions.  Measured with the
+        estimated flow of the default path (perf/RESULTS.md, "Eq. 7's
+        colour term under a changing light"; ``python perf/accuracy.py
+        --seed 1 --no-mit --methods IV GT --iv-param sigma_e=1000``, which
+        makes the term 1 everywhere): training seed 1 mean LMSE 0.0053
+        against 0.0057 with it, every kind better; MIT mean albedo LMSE
+        (``--kinds --methods IV``) 0.0388 against 0.0475.
     warp_spread_max
         The temporal terms are also switched off (w_occ = 0) where the
         bilinear sample ``X_{t+1}(x + u)`` straddles an image edge: where the
@@ -263,6 +277,7 @@ class Params:
     tukey_alpha: float = 1.0
     # Eq. 6-7
     sigma_e: float = 20.0
+    occlusion_colour: bool = False
     sigma_d: float = 0.3
     occlusion_threshold: float = 0.5
     warp_spread_max: float = 0.05

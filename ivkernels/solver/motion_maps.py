@@ -5,6 +5,8 @@ resampled per pyramid level.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ivkernels.params import Params
@@ -25,7 +27,8 @@ def motion_maps(be, frames_linear, flow, params: Params, *, workspace=None):
     Returns
     -------
     occlusion : (T-1, H, W) backend array, Eq. 6: 1 where ``x + u`` stays in
-        the image, ``o(x) >= params.occlusion_threshold`` (Eq. 7) and the
+        the image, ``o(x) >= params.occlusion_threshold`` (Eq. 7; its colour
+        term only with ``params.occlusion_colour``) and the
         bilinear warp there is reliable (``maps.warp_reliability`` with
         ``params.warp_spread_max``), else 0.
     boundary : (T-1, H, W) backend array, 1 within ``params.boundary_radius``
@@ -38,7 +41,9 @@ def motion_maps(be, frames_linear, flow, params: Params, *, workspace=None):
     div_neg = be.empty((n, H, W))
     be.derivatives.divergence_negative(flow, div_neg)
     occlusion = be.empty((n, H, W))
-    be.maps.occlusion_binary(lab, flow, div_neg, occlusion, sigma_e=params.sigma_e,
+    # Without Eq. 7's colour term (Params.occlusion_colour) its factor is exp(0) = 1.
+    sigma_e = params.sigma_e if params.occlusion_colour else math.inf
+    be.maps.occlusion_binary(lab, flow, div_neg, occlusion, sigma_e=sigma_e,
                              sigma_d=params.sigma_d, threshold=params.occlusion_threshold)
     log_image = be.empty((T, H, W, 3))
     be.colour.log_floor(frames_linear, log_image, params.log_floor)

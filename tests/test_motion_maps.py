@@ -1,0 +1,53 @@
+"""The window's motion maps (ivkernels.solver.motion_maps): w_occ under a changing light.
+
+A static scene (zero flow) whose light changes strongly between two frames
+has no occlusion.  Eq. 7's colour term reads the light change as one; with
+``Params.occlusion_colour`` off (the default) only the divergence of the
+flow, the image border and the warp's reliability mark occlusions.
+"""
+import numpy as np
+import pytest
+
+import ivkernels as iv
+from ivkernels.backends import get_backend
+from ivkernels.solver.motion_maps import motion_maps
+
+H, W = 21, 27
+
+
+def maps(backend, frames, flow, **fields):
+    be = get_backend(backend)
+    occ, bnd = motion_maps(be, be.asarray(frames), be.asarray(flow), iv.Params(**fields))
+    return be.numpy(occ), be.numpy(bnd)
+
+
+@pytest.fixture
+def relit():
+    """A flat grey scene, the second frame lit 4x as strongly on its right half."""
+    frames = np.full((2, H, W, 3), 0.1, np.float32)
+    frames[1, :, W // 2:] = 0.4
+    return frames
+
+
+def test_a_changing_light_is_no_occlusion_by_default(any_backend, relit):
+    occ, bnd = maps(any_backend.name, relit, np.zeros((1, H, W, 2), np.float32))
+    assert np.all(occ == 1.0) and np.all(bnd == 0.0)
+
+
+def test_the_colour_term_reads_the_light_change_as_occlusion(any_backend, relit):
+    occ, _ = maps(any_backend.name, relit, np.zeros((1, H, W, 2), np.float32), occlusion_colour=True)
+    assert np.all(occ[0, :, : W // 2 - 1] == 1.0)
+    assert np.all(occ[0, :, W // 2 + 1:] == 0.0)       # Lab L* differs by ~33 > sigma_e = 20
+
+
+def test_without_the_colour_term_flow_still_marks_occlusions(any_backend, relit):
+    """A flow that converges (negative divergence) and one that leaves the image."""
+    flow = np.zeros((1, H, W, 2), np.float32)
+    flow[0, :, : W // 2, 0] = 3.0                      # the left half runs into the right half
+    occ, _ = maps(any_backend.name, relit, flow)
+    assert np.any(occ[0, :, W // 2 - 3: W // 2 + 1] == 0.0)   # the compressed band
+    right = np.zeros((1, H, W, 2), np.float32)
+    right[..., 0] = 5.0
+    occ, _ = maps(any_backend.name, relit, right)
+    assert np.all(occ[0, :, W - 5:] == 0.0)            # x + u leaves the image
+    assert np.all(occ[0, :, : W - 6] == 1.0)
