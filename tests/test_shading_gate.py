@@ -48,9 +48,12 @@ def test_moving_shadow_stays_in_the_shading_albedo_edges_in_the_albedo():
     T, H, W, _ = frames.shape
     truth = np.log(albedo).mean(-1)
 
-    def errors(tau):
+    def errors(tau, occlusion_colour=True):
+        # With Eq. 7's colour term the moving shadow's edge is marked occluded and the
+        # temporal terms leave it to the local smoothness: the case the gate is for.
         video = iv.decompose(frames, flow=np.zeros((T - 1, H, W, 2), np.float32),
-                             params=Params(lam_shading_local=100.0, shading_gate_tau=tau))
+                             params=Params(lam_shading_local=100.0, shading_gate_tau=tau,
+                                           occlusion_colour=occlusion_colour))
         A = np.log(video.albedo).mean(-1)
         across_shadow = np.mean([np.abs((A[t, r] - A[t, r - 1]) - (truth[r] - truth[r - 1])).mean()
                                  for t, r in enumerate(rows)])
@@ -64,3 +67,7 @@ def test_moving_shadow_stays_in_the_shading_albedo_edges_in_the_albedo():
     # the shadow's log step is 0.92: with the gate at most 4% of it reaches the albedo
     assert shadow_gated < 0.04 < shadow_plain
     assert albedo_gated < 0.05
+    # Without the colour term (the default) the temporal albedo term holds at the
+    # shadow's edge, and the ungated smoothness keeps the shadow out of the albedo too.
+    shadow_default, _ = errors(0.0, occlusion_colour=False)
+    assert shadow_default < 0.04
