@@ -81,10 +81,9 @@ def shading_change_ratios(be, frames_linear, flow, log_floor: float) -> np.ndarr
     be.colour.luminance(frames_linear, lum)
     log_lum = be.empty((T, H, W, 1))
     be.colour.log_floor(lum.reshape((T, H, W, 1)), log_lum, log_floor)
-    next_log = be.asarray(np.ascontiguousarray(be.numpy(log_lum)[1:]))
     warped = be.empty((T - 1, H, W, 1))
     inside = be.empty((T - 1, H, W))
-    be.sampling.warp_bilinear(next_log, flow, warped, inside)
+    be.sampling.warp_bilinear(log_lum[1:], flow, warped, inside)
     blurred, scratch = be.empty((T, H, W, 1)), be.empty((T, H, W, 1))
     be.pyramid.gaussian_blur(log_lum, blurred, scratch, SHADING_BLUR * min(H, W))
 
