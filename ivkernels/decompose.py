@@ -303,6 +303,12 @@ class _Decomposer:
                 guide_shading = None
                 if flow_np is not None and self.joint:
                     flow_np, guide_shading = self._joint_flow(frames_be, flow_np)
+                elif self.flow is not None and self.temporal and p.start_from_guide \
+                        and flow_np is not None and len(flow_np):
+                    # A given flow is final: one guide solve with it, the last solve's start.
+                    from ivkernels.flow.joint import guide_solve
+
+                    _, guide_shading = guide_solve(be, frames_be, flow_np, p, self.prior, log=self.log)
                 t0 = time.perf_counter()
                 flow_be = occ_be = bnd_be = None
                 if flow_np is not None:

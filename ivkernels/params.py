@@ -224,7 +224,8 @@ class Params:
         15 and 35; flow EPE within 0.04 px; the guide takes half the time
         at 15.
     start_from_guide
-        With ``flow_passes`` > 1, the window's last solve starts from the
+        With ``flow_passes`` > 1, or with a given flow (one guide solve with
+        it), the window's last solve starts from the
         last guide's log shading at the guide's pyramid level
         (:func:`ivkernels.solver.window_solver.start_level_for`) instead of
         from blurred luminance at the coarsest level: the levels below the
@@ -235,7 +236,10 @@ class Params:
         0.0061 / 0.0108 / 0.0113 / 0.0140 from the coarsest level, for 9%
         less CPU time per decomposition.  Starting at the finest level
         instead (the guide's shading up-sampled) saves more time but raised
-        the error on every kind (mean 0.0126).
+        the error on every kind (mean 0.0126).  With the ground-truth flow
+        given (perf/RESULTS.md, "A guide solve for a given flow"), mean LMSE
+        0.0059 against 0.0066 on training seed 1 and 0.0053 against 0.0056
+        on seed 2, lower on all eight sequences.
     first_flow_at_guide_size
         With ``flow_passes`` > 1 and an estimated flow, the first pass's
         flow only feeds the guide solve, which works at the guide's size

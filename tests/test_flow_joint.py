@@ -156,6 +156,15 @@ def test_decompose_starts_the_last_solve_from_the_guide():
     # without temporal terms (the ablation) the guide, a temporal solve, is not used
     ablation = iv.decompose(seq.frames, flow="dis", temporal=False, params=params, flow_passes=2)
     assert [e["level"] for e in ablation.diagnostics["levels"]] == [2, 1, 0]
+    # a given flow gets one guide solve with it, and the last solve starts from that guide
+    given = iv.decompose(seq.frames, flow=seq.flow, params=params)
+    assert [e["level"] for e in given.diagnostics["levels"]] == [1, 0]
+    assert "guide" in given.diagnostics["seconds"] and np.isfinite(given.albedo).all()
+    given_plain = iv.decompose(seq.frames, flow=seq.flow, params=params.replace(start_from_guide=False))
+    assert [e["level"] for e in given_plain.diagnostics["levels"]] == [2, 1, 0]
+    assert "guide" not in given_plain.diagnostics["seconds"]
+    given_ablation = iv.decompose(seq.frames, flow=seq.flow, temporal=False, params=params)
+    assert "guide" not in given_ablation.diagnostics["seconds"]
 
 
 @pytest.mark.parametrize("solve_budget, guide_budget, expected", [(35, 15, 15), (4, 15, 4), (6, 2, 2)])
