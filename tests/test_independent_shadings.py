@@ -12,7 +12,7 @@ import pytest
 
 import ivkernels as iv
 from ivkernels.backends import get_backend
-from ivkernels.solver.independent_shadings import (LIT_LUMINANCE, MAD_TO_STD, SHADING_BLUR,
+from ivkernels.solver.independent_shadings import (LIT_LUMINANCE, MAD_TO_STD, SHADING_CHANGE_FLOOR,
                                                    independent_shadings, shading_change_ratios)
 
 H, W = 45, 61          # odd sizes
@@ -79,24 +79,30 @@ def test_a_moving_camera_under_one_light_is_one_shading_once_the_flow_is_followe
 
 def test_ratios_match_a_direct_computation(any_backend, rng, scene):
     """r_t against the formula on NumPy arrays (zero flow, a dark corner left out)."""
-    from ivkernels.kernels.reference.pyramid import gaussian_blur
-
     T = 4
-    S = np.stack([smooth_field(rng, scale=0.5) for _ in range(T)])
+    S = np.stack([smooth_field(rng, scale=s) for s in (0.5, 0.2, 0.05, 0.3)])
     frames = frames_from(scene, S)
     frames[:, :10, :12] = 0.001                              # below LIT_LUMINANCE
     be = get_backend(any_backend.name)
     got = shading_change_ratios(be, be.asarray(frames), be.zeros((T - 1, H, W, 2)), 1e-4)
     L = np.log(np.maximum(frames.astype(np.float64) @ [0.2126, 0.7152, 0.0722], 1e-4))
-    blurred = gaussian_blur(L[..., None], SHADING_BLUR * H)[..., 0]
 
     def robust_var(v):
         return (MAD_TO_STD * np.median(np.abs(v - np.median(v)))) ** 2
 
     for t in range(T - 1):
         use = (L[t] >= np.log(LIT_LUMINANCE)) & (L[t + 1] >= np.log(LIT_LUMINANCE))
-        want = robust_var((L[t + 1] - L[t])[use]) / (2 * robust_var(blurred[t][use]))
-        assert got[t] == pytest.approx(want, rel=0.05)
+        want = max(0.0, 1.0 - SHADING_CHANGE_FLOOR / robust_var((L[t + 1] - L[t])[use]))
+        assert got[t] == pytest.approx(want, rel=0.05, abs=1e-3)
+    assert got.max() > 0.5                                   # the case holds a large change
+
+
+def test_a_change_below_the_floor_is_no_new_shading(any_backend, rng, scene):
+    """Shadings that differ by less than flow error and a slow lamp give count once."""
+    base = smooth_field(rng)
+    floor_std = np.sqrt(SHADING_CHANGE_FLOOR)
+    S = np.stack([base + 0.3 * floor_std * smooth_field(rng) for _ in range(5)])
+    assert count(any_backend.name, frames_from(scene, S)) == pytest.approx(1.0, abs=1e-6)
 
 
 @pytest.mark.parametrize("case", ["no flow", "gain 0", "one frame", "all dark"])
@@ -146,7 +152,8 @@ def test_decompose_divides_both_albedo_priors_by_the_count(rng, scene, monkeypat
     video = iv.decompose(frames, flow=zero, params=params)
     (n,) = video.diagnostics["independent_shadings"]
     assert n > 1.5
-    assert seen and all(s == pytest.approx((0.9 / n, 0.5 / n)) for s in seen)
+    # The guide solve counts on its own, half-size frames: the same count to a fraction of a percent.
+    assert seen and all(s == pytest.approx((0.9 / n, 0.5 / n), rel=0.01) for s in seen)
 
     for kwargs in ({"temporal": False}, {"flow": zero, "params": params.replace(independent_shading_gain=0.0)}):
         seen.clear()
