@@ -122,3 +122,15 @@ def test_energy_at_truth_refuses_the_evaluation_seed():
     proc = subprocess.run([sys.executable, str(PERF / "energy_at_truth.py"), "--seeds", "0"],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode != 0 and "seed 0" in proc.stderr
+
+
+def test_light_change_separates_one_lamp_from_a_changing_light():
+    """One lamp followed along its true flow counts once; the static scene's lamp moves a little."""
+    proc = subprocess.run(
+        [sys.executable, str(PERF / "light_change.py"), "--seeds", "3", "--frames", "3", "--size", "40", "56",
+         "--kinds", "objects_camera", "static_moving_light"],
+        capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    rows = {line.split()[0]: line.split() for line in proc.stdout.splitlines() if "/3 " in line}
+    assert set(rows) == {"objects_camera/3", "static_moving_light/3"}
+    assert float(rows["objects_camera/3"][-1]) == pytest.approx(1.0)

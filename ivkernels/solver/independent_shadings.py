@@ -66,8 +66,8 @@ def _robust_variance(values: np.ndarray) -> float:
     return float((MAD_TO_STD * np.median(np.abs(values - np.median(values)))) ** 2)
 
 
-def shading_change_ratios(be, frames_linear, flow, log_floor: float) -> np.ndarray:
-    """``r_t`` of each frame pair (module docstring), NaN where a pair has too few pixels.
+def shading_changes(be, frames_linear, flow, log_floor: float) -> np.ndarray:
+    """``c_t`` of each frame pair (module docstring), NaN where a pair has too few pixels.
 
     Parameters
     ----------
@@ -78,7 +78,7 @@ def shading_change_ratios(be, frames_linear, flow, log_floor: float) -> np.ndarr
 
     Returns
     -------
-    (T-1,) float64 NumPy array, ``r_t`` in ``[0, 1)``.
+    (T-1,) float64 NumPy array, ``c_t >= 0`` in squared log units.
     """
     T, H, W, _ = frames_linear.shape
     lum = be.empty((T, H, W))
@@ -93,13 +93,20 @@ def shading_change_ratios(be, frames_linear, flow, log_floor: float) -> np.ndarr
     L_next = be.numpy(warped)[..., 0]
     valid = be.numpy(inside) > 0.5
     lit = np.log(LIT_LUMINANCE)
-    ratios = np.full(T - 1, np.nan)
+    changes = np.full(T - 1, np.nan)
     for t in range(T - 1):
         use = valid[t] & (L[t] >= lit) & (L_next[t] >= lit)
-        if np.count_nonzero(use) < MIN_PIXELS:
-            continue
-        change = _robust_variance((L_next[t] - L[t])[use])
-        ratios[t] = max(0.0, 1.0 - SHADING_CHANGE_FLOOR / change) if change > 0 else 0.0
+        if np.count_nonzero(use) >= MIN_PIXELS:
+            changes[t] = _robust_variance((L_next[t] - L[t])[use])
+    return changes
+
+
+def shading_change_ratios(be, frames_linear, flow, log_floor: float) -> np.ndarray:
+    """``r_t`` in ``[0, 1)`` of each frame pair, NaN where ``c_t`` is; arguments as :func:`shading_changes`."""
+    changes = shading_changes(be, frames_linear, flow, log_floor)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratios = np.maximum(0.0, 1.0 - SHADING_CHANGE_FLOOR / changes)
+    ratios[changes == 0] = 0.0
     return ratios
 
 

@@ -1,0 +1,70 @@
+"""How much the light changes between frames: the input to the albedo prior's count.
+
+Prints, per sequence, the change of the log shading between consecutive
+frames along the flow (``c_t`` of :mod:`ivkernels.solver.independent_shadings`,
+mean and largest over the pairs), the share above the floor ``r`` and the
+count ``n`` a window of those frames gets at the default gain.  The floor
+``SHADING_CHANGE_FLOOR`` is chosen to lie above every pair of the synthetic
+training sequences (one lamp, or a lamp moving slowly) and below the MIT
+training objects (ten very different lights); this script shows where the
+sequences fall.
+
+    python perf/light_change.py --seeds 12 13 --frames 6 --size 120 160
+    python perf/light_change.py --seeds 1 2 --flow estimated
+    python perf/light_change.py --kinds --mit
+"""
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+import ivkernels as iv
+from ivkernels import synthetic
+from ivkernels.backends import get_backend
+from ivkernels.solver.independent_shadings import (SHADING_CHANGE_FLOOR, independent_shadings,
+                                                   shading_change_ratios, shading_changes)
+
+
+def report(label: str, frames: np.ndarray, flow: np.ndarray, params) -> None:
+    be = get_backend("warp")
+    args = (be, be.asarray(np.ascontiguousarray(frames, np.float32)),
+            be.asarray(np.ascontiguousarray(flow, np.float32)), params.log_floor)
+    changes = shading_changes(*args)
+    r = float(np.nanmean(shading_change_ratios(*args)))
+    n = independent_shadings(args[0], args[1], args[2], params.independent_shading_gain, params.log_floor)
+    print(f"{label:<34} {np.nanmean(changes):10.4f} {np.nanmax(changes):10.4f} {r:8.3f} {n:7.2f}", flush=True)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, nargs="*", default=[12])
+    parser.add_argument("--frames", type=int, default=8)
+    parser.add_argument("--size", type=int, nargs=2, default=(240, 320), metavar=("H", "W"))
+    parser.add_argument("--kinds", nargs="*", default=list(synthetic.KINDS))
+    parser.add_argument("--flow", choices=("true", "estimated"), default="true",
+                        help="the synthetic sequences' flow: ground truth or the default estimator's")
+    parser.add_argument("--mit", action="store_true", help="also the MIT-Berkeley training objects (zero flow)")
+    parser.add_argument("--mit-scale", type=float, default=0.5)
+    args = parser.parse_args(argv)
+    params = iv.Params()
+    print(f"floor {SHADING_CHANGE_FLOOR}, gain {params.independent_shading_gain}")
+    print(f"{'sequence':<34} {'c_t mean':>10} {'c_t max':>10} {'r':>8} {'n':>7}")
+    for seed in args.seeds:
+        for kind in args.kinds:
+            seq = synthetic.render_sequence(kind, n_frames=args.frames, size=tuple(args.size), seed=seed)
+            flow = seq.flow if args.flow == "true" else iv.estimate_flow(seq.frames)
+            report(f"{kind}/{seed} ({args.flow} flow)", seq.frames, flow, params)
+    if args.mit:
+        from ivkernels import datasets
+
+        for name in datasets.available_mit_objects():
+            obj = datasets.load_mit_object(name, scale=args.mit_scale)
+            frames = obj.frames[:params.window]
+            t, h, w, _ = frames.shape
+            report(f"MIT {name} ({t} frames)", frames, np.zeros((t - 1, h, w, 2), np.float32), params)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
