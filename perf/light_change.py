@@ -33,7 +33,7 @@ def report(label: str, frames: np.ndarray, flow: np.ndarray, params) -> None:
     changes = shading_changes(*args)
     r = float(np.nanmean(shading_change_ratios(*args)))
     n = independent_shadings(args[0], args[1], args[2], params.independent_shading_gain, params.log_floor)
-    print(f"{label:<34} {np.nanmean(changes):10.4f} {np.nanmax(changes):10.4f} {r:8.3f} {n:7.2f}", flush=True)
+    print(f"{label:<42} {np.nanmean(changes):10.4f} {np.nanmax(changes):10.4f} {r:8.3f} {n:7.2f}", flush=True)
 
 
 def main(argv=None) -> int:
@@ -49,7 +49,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     params = iv.Params()
     print(f"floor {SHADING_CHANGE_FLOOR}, gain {params.independent_shading_gain}")
-    print(f"{'sequence':<34} {'c_t mean':>10} {'c_t max':>10} {'r':>8} {'n':>7}")
+    print(f"{'sequence':<42} {'c_t mean':>10} {'c_t max':>10} {'r':>8} {'n':>7}")
     for seed in args.seeds:
         for kind in args.kinds:
             seq = synthetic.render_sequence(kind, n_frames=args.frames, size=tuple(args.size), seed=seed)
