@@ -133,7 +133,7 @@ class Params:
         the share of the change of the log shading between consecutive
         frames, read off the input along the flow, above the change that
         flow error and a slowly moving lamp give (``SHADING_CHANGE_FLOOR`` =
-        0.025): 0 under one lamp, 0.7-0.95 for an object under ten lights.
+        0.025): 0 under one lamp, 0.5-0.9 for an object under ten lights.
         0 switches the count off (every frame's prior counts, as in the
         paper).  Chosen on training data (perf/RESULTS.md, "The count
         against a fixed floor"; ``python perf/calibrate.py --kinds --mit
