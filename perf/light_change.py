@@ -12,6 +12,7 @@ sequences fall.
     python perf/light_change.py --seeds 12 13 --frames 6 --size 120 160
     python perf/light_change.py --seeds 1 2 --flow estimated
     python perf/light_change.py --kinds --mit
+    python perf/light_change.py --kinds objects_camera free_camera --brightness 0.3 --noise 0.01
 """
 from __future__ import annotations
 
@@ -44,17 +45,26 @@ def main(argv=None) -> int:
     parser.add_argument("--kinds", nargs="*", default=list(synthetic.KINDS))
     parser.add_argument("--flow", choices=("true", "estimated"), default="true",
                         help="the synthetic sequences' flow: ground truth or the default estimator's")
+    parser.add_argument("--brightness", type=float, default=1.0,
+                        help="scale the synthetic frames by this (a dim scene)")
+    parser.add_argument("--noise", type=float, default=0.0,
+                        help="add Gaussian pixel noise of this standard deviation (linear, 1 = white)")
     parser.add_argument("--mit", action="store_true", help="also the MIT-Berkeley training objects (zero flow)")
     parser.add_argument("--mit-scale", type=float, default=0.5)
     args = parser.parse_args(argv)
     params = iv.Params()
-    print(f"floor {SHADING_CHANGE_FLOOR}, gain {params.independent_shading_gain}")
+    rng = np.random.default_rng(0)
+    print(f"floor {SHADING_CHANGE_FLOOR}, gain {params.independent_shading_gain}, "
+          f"brightness {args.brightness}, noise {args.noise}")
     print(f"{'sequence':<42} {'c_t mean':>10} {'c_t max':>10} {'r':>8} {'n':>7}")
     for seed in args.seeds:
         for kind in args.kinds:
             seq = synthetic.render_sequence(kind, n_frames=args.frames, size=tuple(args.size), seed=seed)
-            flow = seq.flow if args.flow == "true" else iv.estimate_flow(seq.frames)
-            report(f"{kind}/{seed} ({args.flow} flow)", seq.frames, flow, params)
+            frames = args.brightness * seq.frames
+            if args.noise > 0:
+                frames = np.clip(frames + rng.normal(0.0, args.noise, frames.shape), 0.0, 1.0)
+            flow = seq.flow if args.flow == "true" else iv.estimate_flow(frames)
+            report(f"{kind}/{seed} ({args.flow} flow)", frames, flow, params)
     if args.mit:
         from ivkernels import datasets
 

@@ -12,8 +12,9 @@ import pytest
 
 import ivkernels as iv
 from ivkernels.backends import get_backend
-from ivkernels.solver.independent_shadings import (LIT_LUMINANCE, MAD_TO_STD, SHADING_CHANGE_FLOOR,
-                                                   independent_shadings, shading_change_ratios)
+from ivkernels.solver.independent_shadings import (CHANGE_BLUR_PX, LIT_LUMINANCE, MAD_TO_STD,
+                                                   SHADING_CHANGE_FLOOR, independent_shadings,
+                                                   shading_change_ratios)
 
 H, W = 45, 61          # odd sizes
 
@@ -79,6 +80,8 @@ def test_a_moving_camera_under_one_light_is_one_shading_once_the_flow_is_followe
 
 def test_ratios_match_a_direct_computation(any_backend, rng, scene):
     """r_t against the formula on NumPy arrays (zero flow, a dark corner left out)."""
+    from ivkernels.kernels.reference.pyramid import gaussian_blur
+
     T = 4
     S = np.stack([smooth_field(rng, scale=s) for s in (0.5, 0.2, 0.05, 0.3)])
     frames = frames_from(scene, S)
@@ -86,15 +89,24 @@ def test_ratios_match_a_direct_computation(any_backend, rng, scene):
     be = get_backend(any_backend.name)
     got = shading_change_ratios(be, be.asarray(frames), be.zeros((T - 1, H, W, 2)), 1e-4)
     L = np.log(np.maximum(frames.astype(np.float64) @ [0.2126, 0.7152, 0.0722], 1e-4))
+    B = gaussian_blur(L[..., None], CHANGE_BLUR_PX)[..., 0]
 
     def robust_var(v):
         return (MAD_TO_STD * np.median(np.abs(v - np.median(v)))) ** 2
 
     for t in range(T - 1):
-        use = (L[t] >= np.log(LIT_LUMINANCE)) & (L[t + 1] >= np.log(LIT_LUMINANCE))
-        want = max(0.0, 1.0 - SHADING_CHANGE_FLOOR / robust_var((L[t + 1] - L[t])[use]))
+        use = (B[t] >= np.log(LIT_LUMINANCE)) & (B[t + 1] >= np.log(LIT_LUMINANCE))
+        want = max(0.0, 1.0 - SHADING_CHANGE_FLOOR / robust_var((B[t + 1] - B[t])[use]))
         assert got[t] == pytest.approx(want, rel=0.05, abs=1e-3)
     assert got.max() > 0.5                                   # the case holds a large change
+
+
+def test_pixel_noise_is_no_new_shading(any_backend, rng, scene):
+    """One lamp seen through a noisy camera (2% of white on a dim scene, about 0.1) counts once."""
+    S = np.repeat(smooth_field(rng, scale=0.3)[None], 5, axis=0)
+    frames = 0.3 * frames_from(scene, S)
+    noisy = np.clip(frames + rng.normal(0.0, 0.02, frames.shape), 0.0, 1.0).astype(np.float32)
+    assert count(any_backend.name, noisy) == pytest.approx(1.0, abs=0.05)
 
 
 def test_a_change_below_the_floor_is_no_new_shading(any_backend, rng, scene):
