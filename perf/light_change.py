@@ -23,17 +23,17 @@ import numpy as np
 import ivkernels as iv
 from ivkernels import synthetic
 from ivkernels.backends import get_backend
-from ivkernels.solver.independent_shadings import (SHADING_CHANGE_FLOOR, independent_shadings,
-                                                   shading_change_ratios, shading_changes)
+from ivkernels.solver.independent_shadings import (SHADING_CHANGE_FLOOR, count_from_ratios,
+                                                   ratios_from_changes, shading_changes)
 
 
 def report(label: str, frames: np.ndarray, flow: np.ndarray, params) -> None:
     be = get_backend("warp")
-    args = (be, be.asarray(np.ascontiguousarray(frames, np.float32)),
-            be.asarray(np.ascontiguousarray(flow, np.float32)), params.log_floor)
-    changes = shading_changes(*args)
-    r = float(np.nanmean(shading_change_ratios(*args)))
-    n = independent_shadings(args[0], args[1], args[2], params.independent_shading_gain, params.log_floor)
+    changes = shading_changes(be, be.asarray(np.ascontiguousarray(frames, np.float32)),
+                              be.asarray(np.ascontiguousarray(flow, np.float32)), params.log_floor)
+    ratios = ratios_from_changes(changes)
+    r = float(np.nanmean(ratios))
+    n = count_from_ratios(ratios, params.independent_shading_gain, len(frames))
     print(f"{label:<42} {np.nanmean(changes):10.4f} {np.nanmax(changes):10.4f} {r:8.3f} {n:7.2f}", flush=True)
 
 

@@ -25,10 +25,10 @@ strength is no new shading), and the variance is the squared MAD scaled by
 change of the shading is smooth, a camera's pixel noise is not, and
 unblurred, a noise of 1% of white alone gives ``c_t`` of 0.02-0.12 on a
 scene under one lamp (0.001-0.016 blurred; perf/RESULTS.md).  Every pixel
-whose ``x + u`` lies in the image counts: the
-occlusion map ``w_occ`` is not used, because its colour test (Eq. 7) marks
-as occluded exactly the pixels whose light changes most, while true
-occlusions are a minority the median ignores.
+whose ``x + u`` lies in the image counts: the occlusion map ``w_occ`` is
+not used, because its colour test (Eq. 7) marks as occluded exactly the
+pixels whose light changes most, while true occlusions are a minority the
+median ignores.
 
 ``r_t`` is the share of that change above ``c_0``
 (``SHADING_CHANGE_FLOOR``), the change that flow error and a lamp's slow
@@ -110,13 +110,27 @@ def shading_changes(be, frames_linear, flow, log_floor: float) -> np.ndarray:
     return changes
 
 
-def shading_change_ratios(be, frames_linear, flow, log_floor: float) -> np.ndarray:
-    """``r_t`` in ``[0, 1)`` of each frame pair, NaN where ``c_t`` is; arguments as :func:`shading_changes`."""
-    changes = shading_changes(be, frames_linear, flow, log_floor)
+def ratios_from_changes(changes: np.ndarray) -> np.ndarray:
+    """``r_t = max(0, 1 - c_0 / c_t)`` in ``[0, 1)`` of the ``(T-1,)`` changes ``c_t``, NaN where ``c_t`` is."""
+    changes = np.asarray(changes, np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratios = np.maximum(0.0, 1.0 - SHADING_CHANGE_FLOOR / changes)
     ratios[changes == 0] = 0.0
     return ratios
+
+
+def shading_change_ratios(be, frames_linear, flow, log_floor: float) -> np.ndarray:
+    """``r_t`` in ``[0, 1)`` of each frame pair, NaN where ``c_t`` is; arguments as :func:`shading_changes`."""
+    return ratios_from_changes(shading_changes(be, frames_linear, flow, log_floor))
+
+
+def count_from_ratios(ratios: np.ndarray, gain: float, n_frames: int) -> float:
+    """``n = min(T, 1 + gain (T - 1) r)`` with ``r`` the mean of the finite ``r_t``; 1 when none is."""
+    ratios = np.asarray(ratios, np.float64)
+    ratios = ratios[np.isfinite(ratios)]
+    if ratios.size == 0 or gain == 0:
+        return 1.0
+    return float(min(n_frames, 1.0 + gain * (n_frames - 1) * float(np.mean(ratios))))
 
 
 def independent_shadings(be, frames_linear, flow, gain: float, log_floor: float,
@@ -135,12 +149,7 @@ def independent_shadings(be, frames_linear, flow, gain: float, log_floor: float,
     if flow is None or gain == 0 or T < 2:
         return 1.0
     ratios = shading_change_ratios(be, frames_linear, flow, log_floor)
-    ratios = ratios[np.isfinite(ratios)]
-    if ratios.size == 0:
-        return 1.0
-    n_frames = T if n_frames is None else int(n_frames)
-    r = float(np.mean(ratios))
-    return float(min(n_frames, 1.0 + gain * (n_frames - 1) * r))
+    return count_from_ratios(ratios, gain, T if n_frames is None else int(n_frames))
 
 
 def with_albedo_priors_divided(params, n: float):
