@@ -134,3 +134,26 @@ def test_light_change_prints_a_row_per_sequence():
     rows = {line.split()[0]: line.split() for line in proc.stdout.splitlines() if "/3 " in line}
     assert set(rows) == {"objects_camera/3", "static_moving_light/3"}
     assert float(rows["objects_camera/3"][-1]) == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("flow", ["truth", "estimated"])
+def test_convergence_prints_every_budget_and_the_reference(flow):
+    """A row per budget (the default first, the reference last, at 100% of the drop)."""
+    proc = subprocess.run(
+        [sys.executable, str(PERF / "convergence.py"), "--seeds", "3", "--frames", "3", "--size", "32", "48",
+         "--kinds", "objects_camera", "--budgets", "3", "--reference", "12", "--flow", flow,
+         "--set", "lbfgs_iterations=6"],
+        capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    rows = [line.split() for line in proc.stdout.splitlines() if line.startswith("objects_camera/3")]
+    iters = [int(row[-6]) for row in rows]
+    assert iters == [6, 3, 12]
+    assert "(default)" in rows[0]
+    assert float(rows[-1][-2]) == pytest.approx(100.0)
+    assert all(0.0 < float(row[-1]) < 1.0 for row in rows)           # LMSE
+
+
+def test_convergence_refuses_the_evaluation_seed():
+    proc = subprocess.run([sys.executable, str(PERF / "convergence.py"), "--seeds", "0"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode != 0 and "seed 0" in proc.stderr
