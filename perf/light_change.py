@@ -43,7 +43,7 @@ def main(argv=None) -> int:
     parser.add_argument("--frames", type=int, default=8)
     parser.add_argument("--size", type=int, nargs=2, default=(240, 320), metavar=("H", "W"))
     parser.add_argument("--kinds", nargs="*", default=list(synthetic.KINDS))
-    parser.add_argument("--flow", choices=("true", "estimated"), default="true",
+    parser.add_argument("--flow", choices=("truth", "estimated"), default="truth",
                         help="the synthetic sequences' flow: ground truth or the default estimator's")
     parser.add_argument("--brightness", type=float, default=1.0,
                         help="scale the synthetic frames by this (a dim scene)")
@@ -63,8 +63,9 @@ def main(argv=None) -> int:
             frames = args.brightness * seq.frames
             if args.noise > 0:
                 frames = np.clip(frames + rng.normal(0.0, args.noise, frames.shape), 0.0, 1.0)
-            flow = seq.flow if args.flow == "true" else iv.estimate_flow(frames)
-            report(f"{kind}/{seed} ({args.flow} flow)", frames, flow, params)
+            truth = args.flow == "truth"
+            flow = seq.flow if truth else iv.estimate_flow(frames)
+            report(f"{kind}/{seed} ({'true' if truth else 'estimated'} flow)", frames, flow, params)
     if args.mit:
         from ivkernels import datasets
 

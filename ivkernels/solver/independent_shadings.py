@@ -114,9 +114,7 @@ def ratios_from_changes(changes: np.ndarray) -> np.ndarray:
     """``r_t = max(0, 1 - c_0 / c_t)`` in ``[0, 1)`` of the ``(T-1,)`` changes ``c_t``, NaN where ``c_t`` is."""
     changes = np.asarray(changes, np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):
-        ratios = np.maximum(0.0, 1.0 - SHADING_CHANGE_FLOOR / changes)
-    ratios[changes == 0] = 0.0
-    return ratios
+        return np.maximum(0.0, 1.0 - SHADING_CHANGE_FLOOR / changes)     # c_t = 0: 1 - inf -> 0
 
 
 def shading_change_ratios(be, frames_linear, flow, log_floor: float) -> np.ndarray:
