@@ -197,6 +197,16 @@ class Params:
         ground-truth flow; perf/RESULTS.md, "Solver: the edge-aware coarse
         basis"): spacing 4 and sigma 0.5 give the lowest energy summed over
         the four kinds (sigma 1.0 within 0.01%, 0.2 and spacing 8 higher).
+    coarse_basis_levels
+        Coarse fields in the basis: level ``k`` has nodes every
+        ``coarse_basis_spacing * 3^k`` pixels and enters ``S`` scaled by
+        ``3^-k`` (a node's field covers ``spacing^2`` times more pixels, so
+        unscaled the coarser fields would be far stiffer than the finer
+        ones for L-BFGS's one scalar scaling); a level is used where the
+        shorter side holds four of its node spacings.  Chosen by the energy
+        reached with the default budget on training seed 1 (8 frames at
+        320x240, ground-truth flow; perf/RESULTS.md, "Solver: a second,
+        scaled coarse level"): two levels end lower than one on every kind.
     init_blur
         Coarsest-level start: S = log luminance blurred with a Gaussian whose
         sigma is ``init_blur`` times the shorter side; A = I - S.  Chosen on
@@ -316,6 +326,7 @@ class Params:
     lbfgs_level_growth: float = 1.0
     lbfgs_memory: int = 4
     coarse_basis_spacing: int = 4
+    coarse_basis_levels: int = 2
     coarse_basis_sigma: float = 0.5
     init_blur: float = 0.02
     log_floor: float = 1e-4
@@ -370,6 +381,7 @@ _RULES = {
     "lbfgs_level_growth": Range(float, 1.0, 16.0, why="each coarser level's budget is this times the finer one's"),
     "lbfgs_memory": Range(int, 1),
     "coarse_basis_spacing": Range(int, 0, 64, why="pixels between the coarse basis' nodes; 0 switches it off"),
+    "coarse_basis_levels": Range(int, 1, 8, why="coarse fields, each 3 times coarser than the last"),
     "coarse_basis_sigma": Range(float, 0.0, low_open=True, why="an albedo distance in log units"),
     "log_floor": Range(float, 0.0, 1.0, low_open=True, high_open=True,
                        why="the floor of the linear input before the log"),

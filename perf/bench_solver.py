@@ -16,7 +16,11 @@ Prints, in one run:
 With ``--device cuda`` it prints instead, per size, Warp on the CPU (2
 threads) beside Warp on the CUDA device, and their time ratio.
 
+``--set NAME=VALUE ...`` changes Params fields in every configuration, so two
+settings can be timed one after the other on the same machine.
+
     python perf/bench_solver.py [--quick] [--flow classic_nl_fast] [--device cuda]
+    python perf/bench_solver.py --sizes 480 640 --set coarse_basis_levels=1
 """
 from __future__ import annotations
 
@@ -33,10 +37,12 @@ def run_one(args) -> dict:
     import numpy as np
 
     import ivkernels as iv
+    from calibrate import parse_grid
     from ivkernels import synthetic
     from ivkernels.kernels.launch import set_threads
 
     set_threads(args.threads)
+    params = iv.Params(**parse_grid(args.set)[0])
     if args.stream:
         return run_stream(args)
     tiny = synthetic.render_sequence("objects_camera", n_frames=2, size=(32, 40), seed=1)
@@ -48,7 +54,7 @@ def run_one(args) -> dict:
     rss_before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     t0 = time.perf_counter()
     video = iv.decompose(seq.frames, flow=args.flow, backend=args.backend, device=args.device,
-                         flow_passes=args.flow_passes)
+                         flow_passes=args.flow_passes, params=params)
     total = time.perf_counter() - t0
     assert np.isfinite(video.albedo).all()
     peak_kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
@@ -83,12 +89,14 @@ def run_stream(args) -> dict:
 
 
 def spawn(backend: str, threads: int, frames: int, height: int, width: int, flow: str,
-          stream: bool = False, flow_passes: int = 2, device: str = "cpu") -> dict:
+          stream: bool = False, flow_passes: int = 2, device: str = "cpu", settings=()) -> dict:
     cmd = [sys.executable, __file__, "--one", "--backend", backend, "--device", device, "--threads", str(threads),
            "--frames", str(frames), "--height", str(height), "--width", str(width), "--flow", flow,
            "--flow-passes", str(flow_passes)]
     if stream:
         cmd.append("--stream")
+    if settings:
+        cmd += ["--set", *settings]
     out = subprocess.run(cmd, capture_output=True, text=True)
     if out.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} failed:\n{out.stderr[-3000:]}")
@@ -102,7 +110,8 @@ def compare_devices(args, sizes) -> int:
     for h, w in sizes:
         totals = {}
         for device in ("cpu", args.device):
-            r = spawn("warp", 2, 8, h, w, args.flow, flow_passes=args.flow_passes, device=device)
+            r = spawn("warp", 2, 8, h, w, args.flow, flow_passes=args.flow_passes, device=device,
+                      settings=args.set)
             totals[device] = r["total"]
             s = r["stages"]
             print(f"{w}x{h:<5} {device:>8} {s.get('flow', 0):6.2f} {s.get('guide', 0):6.2f} "
@@ -131,6 +140,8 @@ def main(argv=None) -> int:
     parser.add_argument("--scaling-size", type=int, nargs=2, default=None, metavar=("H", "W"),
                         help="size of section 2; default the first of --sizes")
     parser.add_argument("--stream", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--set", nargs="*", default=[], metavar="NAME=VALUE",
+                        help="Params fields for every configuration but the streamed ones")
     args = parser.parse_args(argv)
     if args.one:
         print(json.dumps(run_one(args)))
@@ -152,7 +163,7 @@ def main(argv=None) -> int:
     for h, w in sizes:
         results = {}
         for backend, threads in configs:
-            r = spawn(backend, threads, 8, h, w, args.flow, flow_passes=args.flow_passes)
+            r = spawn(backend, threads, 8, h, w, args.flow, flow_passes=args.flow_passes, settings=args.set)
             results[(backend, threads)] = r
             s = r["stages"]
             print(f"{w}x{h:<5} {backend:>8} {threads:>3} {s.get('flow', 0):6.2f} {s.get('maps', 0):6.2f} "
@@ -170,7 +181,7 @@ def main(argv=None) -> int:
     print(f"{'frames':>6} {'total s':>8} {'s/frame':>8} {'peak MiB':>9}")
     base = None
     for n in counts:
-        r = spawn("warp", 2, n, h, w, args.flow, flow_passes=args.flow_passes)
+        r = spawn("warp", 2, n, h, w, args.flow, flow_passes=args.flow_passes, settings=args.set)
         per = r["total"] / n
         base = base or per
         print(f"{n:6d} {r['total']:8.2f} {per:8.3f} {r['peak_mib']:9.0f}   (s/frame vs first: {per / base:.2f})")

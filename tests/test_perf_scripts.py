@@ -157,3 +157,18 @@ def test_convergence_refuses_the_evaluation_seed():
     proc = subprocess.run([sys.executable, str(PERF / "convergence.py"), "--seeds", "0"],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode != 0 and "seed 0" in proc.stderr
+
+
+def test_bench_solver_one_configuration_takes_params_settings():
+    """``--one --set`` times one decomposition with the given Params fields and prints its stages."""
+    import json
+
+    base = [sys.executable, str(PERF / "bench_solver.py"), "--one", "--frames", "3", "--height", "32",
+            "--width", "40", "--threads", "1", "--flow-passes", "1"]
+    proc = subprocess.run(base + ["--set", "coarse_basis_levels=1", "lbfgs_iterations=5"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert result["total"] > 0 and result["stages"]["solve"] > 0
+    proc = subprocess.run(base + ["--set", "coarse_basis_levels=0"], capture_output=True, text=True, timeout=300)
+    assert proc.returncode != 0 and "coarse_basis_levels" in proc.stderr

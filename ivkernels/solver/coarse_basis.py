@@ -13,75 +13,131 @@ every ``spacing`` pixels, interpolated by weights that follow the albedo
     S = s + P z,    dE/ds = dE/dS,    dE/dz = P^T dE/dS.
 
 This is hierarchical-basis preconditioning (Szeliski, "Locally adapted
-hierarchical basis preconditioning", SIGGRAPH 2006) with one coarse level
-and the albedo as the guide of the interpolation.  The minimum over ``S`` is
-the same; only the path to it changes.  Each alternation of the solver
-:meth:`start` s afresh: ``s`` = the current shading, ``z = 0``, weights from the
-current albedo.
+hierarchical basis preconditioning", SIGGRAPH 2006) with the albedo as the
+guide of the interpolation, over one or more coarse levels: level ``k`` has
+nodes every ``spacing * LEVEL_RATIO^k`` pixels, interpolated onto the pixels
+by the same rule, and enters scaled by ``c_k = LEVEL_RATIO^-k``:
+
+    S = s + sum_k c_k P_k z_k,    dE/ds = dE/dS,    dE/dz_k = c_k P_k^T dE/dS.
+
+The scale keeps the levels' curvatures alike for L-BFGS's one scalar
+scaling: a node's field covers ``LEVEL_RATIO^2`` times more pixels than a
+node of the level below, so the per-pixel terms (temporal, coupling)
+stiffen it by that much, and ``c_k`` brings it back (perf/RESULTS.md,
+"Solver: a second, scaled coarse level"; unscaled, a second level raises
+the energy reached).  The minimum over ``S`` is the same; only the path to
+it changes.  Each alternation of the solver :meth:`start` s afresh: ``s`` =
+the current shading, every ``z_k = 0``, weights from the current albedo.
 """
 from __future__ import annotations
 
 from ivkernels.kernels.host import grid_shape
 from ivkernels.solver.energy import ConstrainedEnergy
 
+#: Each coarse level's node spacing over the finer one's; level ``k`` is scaled by ``LEVEL_RATIO^-k``.
+LEVEL_RATIO = 3
+
 
 def uses_coarse_basis(shape: tuple[int, int], spacing: int) -> bool:
-    """Whether a level of ``shape`` (h, w) gets the coarse basis: ``spacing > 0`` and at
-    least four node spacings on its shorter side."""
+    """Whether a level of ``shape`` (h, w) gets a coarse field of node ``spacing``:
+    ``spacing > 0`` and at least four node spacings on its shorter side."""
     return spacing > 0 and min(shape) >= 4 * spacing
 
 
+def coarse_spacings(shape: tuple[int, int], spacing: int, levels: int) -> list[int]:
+    """Node spacings of the coarse levels a pyramid level of ``shape`` (h, w) gets:
+    ``spacing * LEVEL_RATIO^k`` for ``k < levels``, those with four node spacings on
+    the shorter side (empty: no basis)."""
+    spacings = [spacing * LEVEL_RATIO ** k for k in range(max(0, int(levels)))]
+    return [s for s in spacings if uses_coarse_basis(shape, s)]
+
+
+class CoarseField:
+    """One coarse level: node ``spacing`` (pixels), ``scale`` ``c_k``, its unknowns ``z``
+    and gradient ``g_z`` (views of the problem's ``X`` and ``G``, (T, Hc, Wc)) and the
+    per-pixel interpolation ``weights`` (T, h, w, 16)."""
+
+    def __init__(self, be, shape: tuple[int, int, int], spacing: int, scale: float, X, G, offset: int):
+        T, h, w = shape
+        hc, wc = grid_shape(h, w, spacing)
+        m = T * hc * wc
+        self.spacing, self.scale, self.size = int(spacing), float(scale), m
+        self.z_flat, self.g_flat = X[offset: offset + m], G[offset: offset + m]
+        self.z, self.g_z = self.z_flat.reshape((T, hc, wc)), self.g_flat.reshape((T, hc, wc))
+        self.weights = be.empty((T, h, w, 16))
+
+
 class CoarseBasisProblem:
-    """The objective of :class:`ConstrainedEnergy` over ``X = [s, z]`` (flat, ``n + T Hc Wc``).
+    """The objective of :class:`ConstrainedEnergy` over ``X = [s, z_0, z_1, ...]`` (flat,
+    ``n + sum_k T Hc_k Wc_k``).
 
     Parameters
     ----------
     problem : the :class:`ConstrainedEnergy` of the level (its ``X`` is the shading ``S``).
-    spacing : pixels between coarse nodes.
+    spacings : node spacing (pixels) of each coarse level, finest first (an int: one
+        level); level ``k`` is scaled by ``LEVEL_RATIO^-k``.
     sigma : albedo distance (log units) at which a node's weight falls to ``1/e``.
     """
 
-    def __init__(self, problem: ConstrainedEnergy, spacing: int, sigma: float):
+    def __init__(self, problem: ConstrainedEnergy, spacings, sigma: float):
         energy = problem.energy
         be = energy.be
+        spacings = [int(spacings)] if isinstance(spacings, int) else [int(s) for s in spacings]
+        if not spacings:
+            raise ValueError("CoarseBasisProblem needs at least one coarse level")
+        self.problem, self.be, self.sigma = problem, be, float(sigma)
+        n = energy.n
         T, h, w = energy.shape
-        self.problem, self.be, self.spacing, self.sigma = problem, be, int(spacing), float(sigma)
-        hc, wc = grid_shape(h, w, self.spacing)
-        n, m = energy.n, T * hc * wc
-        self.X = be.zeros((n + m,))
-        self.G = be.zeros((n + m,))
-        self.s = self.X[:n]
-        self.z = self.X[n:].reshape((T, hc, wc))
-        self.g_s = self.G[:n]
-        self.g_z = self.G[n:].reshape((T, hc, wc))
-        self.weights = be.empty((T, h, w, 16))
+        total = n + sum(T * grid_shape(h, w, s)[0] * grid_shape(h, w, s)[1] for s in spacings)
+        self.X = be.zeros((total,))
+        self.G = be.zeros((total,))
+        self.s, self.g_s = self.X[:n], self.G[:n]
+        self.fields = []
+        offset = n
+        for k, spacing in enumerate(spacings):
+            field = CoarseField(be, energy.shape, spacing, float(LEVEL_RATIO) ** -k, self.X, self.G, offset)
+            self.fields.append(field)
+            offset += field.size
+        self._scaled = be.empty((max(f.size for f in self.fields),))     # c_k z_k, prolonged
 
     def start(self) -> None:
-        """``s`` = the current shading, ``z = 0``, and the weights from the albedo ``I - S``."""
+        """``s`` = the current shading, every ``z_k = 0``, and the weights from the albedo ``I - S``."""
         p, be = self.problem, self.be
         p.sync_albedo()
-        be.coarse_basis.coarse_weights(p.energy.A, self.weights, self.spacing, self.sigma)
+        for f in self.fields:
+            be.coarse_basis.coarse_weights(p.energy.A, f.weights, f.spacing, self.sigma)
+            be.zero(f.z_flat)
         be.vecops.copy(p.X, self.s)
-        be.zero(self.z)
 
     def finish(self) -> None:
-        """Leave ``S = s + P z`` of the current ``X`` in the energy's shading (and ``A = I - S``)."""
+        """Leave ``S = s + sum_k c_k P_k z_k`` of the current ``X`` in the energy's shading
+        (and ``A = I - S``)."""
         self._set_shading()
         self.problem.sync_albedo()
 
     def _set_shading(self) -> None:
         p, be = self.problem, self.be
         be.vecops.copy(self.s, p.X)
-        be.coarse_basis.prolong_add(self.z, self.weights, p.energy.S, self.spacing)
+        for f in self.fields:
+            z = f.z
+            if f.scale != 1.0:
+                scaled = self._scaled[: f.size]
+                be.vecops.lincomb(scaled, f.scale, f.z_flat, 0.0, f.z_flat)
+                z = scaled.reshape(f.z.shape)
+            be.coarse_basis.prolong_add(z, f.weights, p.energy.S, f.spacing)
 
     def __call__(self, X, G) -> float:
-        """Energy at ``S = s + P z``; writes ``dE/ds`` and ``dE/dz = P^T dE/dS`` into ``G``."""
+        """Energy at ``S = s + sum_k c_k P_k z_k``; writes ``dE/ds`` and
+        ``dE/dz_k = c_k P_k^T dE/dS`` into ``G``."""
         if X is not self.X or G is not self.G:
             raise ValueError("CoarseBasisProblem evaluates its own buffers X and G only")
         p, be = self.problem, self.be
         self._set_shading()
         value = p(p.X, p.G)
         be.vecops.copy(p.G, self.g_s)
-        be.zero(self.g_z)
-        be.coarse_basis.restrict_add(p.energy.gS, self.weights, self.g_z, self.spacing)
+        for f in self.fields:
+            be.zero(f.g_flat)
+            be.coarse_basis.restrict_add(p.energy.gS, f.weights, f.g_z, f.spacing)
+            if f.scale != 1.0:
+                be.vecops.scale(f.scale, f.g_flat)
         return value

@@ -3,8 +3,8 @@
 At each pyramid level, starting from the up-sampled coarser solution, the
 solver alternates (a) L-BFGS over all ``S_t`` of the window at once, with
 ``A_t = I_t - S_t`` (Eq. 3 as a constraint, :class:`ConstrainedEnergy`) and the
-coupling variable ``S~`` fixed (on levels large enough, over ``S = s + P z``
-with an edge-aware coarse field ``z``, :class:`CoarseBasisProblem`), and (b)
+coupling variable ``S~`` fixed (on levels large enough, over ``S = s + sum_k c_k P_k z_k``
+with edge-aware coarse fields ``z_k``, :class:`CoarseBasisProblem`), and (b)
 the ``S~`` weighted-median update (Eq. 13).  The coarsest level starts from ``S`` = heavily blurred log
 luminance.
 """
@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ivkernels.params import Params
-from ivkernels.solver.coarse_basis import CoarseBasisProblem, uses_coarse_basis
+from ivkernels.solver.coarse_basis import CoarseBasisProblem, coarse_spacings
 from ivkernels.solver.energy import ConstrainedEnergy, WindowEnergy
 from ivkernels.solver.independent_shadings import independent_shadings, with_albedo_priors_divided
 from ivkernels.solver.lbfgs import LBFGS
@@ -173,9 +173,10 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
             be.vecops.copy(be.asarray(S_now.reshape(-1)), energy.S.reshape((energy.n,)))
         t = time.perf_counter()
         problem = ConstrainedEnergy(energy)           # sets A = I - S at each evaluation
-        target = problem                              # what L-BFGS minimises: S, or S = s + P z
-        if uses_coarse_basis(shape, params.coarse_basis_spacing):
-            target = CoarseBasisProblem(problem, params.coarse_basis_spacing, params.coarse_basis_sigma)
+        target = problem                              # what L-BFGS minimises: S, or S = s + sum_k c_k P_k z_k
+        spacings = coarse_spacings(shape, params.coarse_basis_spacing, params.coarse_basis_levels)
+        if spacings:
+            target = CoarseBasisProblem(problem, spacings, params.coarse_basis_sigma)
         lbfgs = LBFGS(be, target.X.shape[0], memory=int(params.lbfgs_memory))
         iterations = level_iterations(params, level)
         reasons = []
@@ -192,7 +193,7 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
                 target.start()                        # s = S, z = 0, weights from the albedo
             lbfgs.minimize(target, target.X, target.G, iterations, on_iteration=record)
             if target is not problem:
-                target.finish()                       # S = s + P z
+                target.finish()                       # S = s + sum_k c_k P_k z_k
             reasons.append(lbfgs.stop_reason)
         problem.sync_albedo()
         log.levels.append({"window": window_index, "level": level, "shape": tuple(shape),
