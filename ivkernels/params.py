@@ -200,13 +200,16 @@ class Params:
     coarse_basis_levels
         Coarse fields in the basis: level ``k`` has nodes every
         ``coarse_basis_spacing * 3^k`` pixels and enters ``S`` scaled by
-        ``3^-k`` (a node's field covers ``spacing^2`` times more pixels, so
-        unscaled the coarser fields would be far stiffer than the finer
-        ones for L-BFGS's one scalar scaling); a level is used where the
-        shorter side holds four of its node spacings.  Chosen by the energy
-        reached with the default budget on training seed 1 (8 frames at
-        320x240, ground-truth flow; perf/RESULTS.md, "Solver: a second,
-        scaled coarse level"): two levels end lower than one on every kind.
+        ``3^-k`` (a node's field covers 9 times more pixels than one of the
+        level below, so unscaled the coarser fields would be far stiffer
+        than the finer ones for L-BFGS's one scalar scaling); a level is
+        used where the shorter side holds four of its node spacings.
+        Chosen by the energy reached with the default budget on training
+        seeds 1 and 12 (8 frames at 320x240, ground-truth flow;
+        perf/RESULTS.md, "Solver: a second, scaled coarse level"): two
+        levels end lower than one on seven of the eight sequences (the
+        eighth 0.002% higher) and lower than three; the error falls with
+        the energy (seed 1: 10-15% per kind).
     init_blur
         Coarsest-level start: S = log luminance blurred with a Gaussian whose
         sigma is ``init_blur`` times the shorter side; A = I - S.  Chosen on

@@ -1,4 +1,4 @@
-"""Eq. 2 over ``S = s + P z``: the shading plus an edge-aware coarse field.
+"""Eq. 2 over ``S = s + sum_k c_k P_k z_k``: the shading plus edge-aware coarse fields.
 
 L-BFGS on the per-pixel shading alone moves slowly along one kind of
 direction: smooth changes of ``S`` that stop at albedo edges.  Inside a flat
@@ -8,9 +8,8 @@ very uneven weights, and a scalar-scaled quasi-Newton method needs hundreds
 of iterations to shift a region as a whole (perf/RESULTS.md, "Solver: the
 edge-aware coarse basis").  This problem adds a coarse field ``z`` on nodes
 every ``spacing`` pixels, interpolated by weights that follow the albedo
-(:mod:`ivkernels.kernels.warp.coarse_basis`), and lets L-BFGS optimise both:
-
-    S = s + P z,    dE/ds = dE/dS,    dE/dz = P^T dE/dS.
+(:mod:`ivkernels.kernels.warp.coarse_basis`), and lets L-BFGS optimise both,
+``S = s + P z``, ``dE/ds = dE/dS``, ``dE/dz = P^T dE/dS``.
 
 This is hierarchical-basis preconditioning (Szeliski, "Locally adapted
 hierarchical basis preconditioning", SIGGRAPH 2006) with the albedo as the
