@@ -30,6 +30,10 @@ the current shading, every ``z_k = 0``, weights from the current albedo.
 """
 from __future__ import annotations
 
+import math
+
+import numpy as np
+
 from ivkernels.kernels.host import grid_shape
 from ivkernels.solver.energy import ConstrainedEnergy
 
@@ -73,30 +77,27 @@ class CoarseBasisProblem:
     Parameters
     ----------
     problem : the :class:`ConstrainedEnergy` of the level (its ``X`` is the shading ``S``).
-    spacings : node spacing (pixels) of each coarse level, finest first (an int: one
-        level); level ``k`` is scaled by ``LEVEL_RATIO^-k``.
+    spacings : node spacing (pixels) of each coarse level, finest first
+        (:func:`coarse_spacings`); level ``k`` is scaled by ``LEVEL_RATIO^-k``.
     sigma : albedo distance (log units) at which a node's weight falls to ``1/e``.
     """
 
     def __init__(self, problem: ConstrainedEnergy, spacings, sigma: float):
         energy = problem.energy
         be = energy.be
-        spacings = [int(spacings)] if isinstance(spacings, int) else [int(s) for s in spacings]
         if not spacings:
             raise ValueError("CoarseBasisProblem needs at least one coarse level")
         self.problem, self.be, self.sigma = problem, be, float(sigma)
         n = energy.n
         T, h, w = energy.shape
-        total = n + sum(T * grid_shape(h, w, s)[0] * grid_shape(h, w, s)[1] for s in spacings)
-        self.X = be.zeros((total,))
-        self.G = be.zeros((total,))
+        sizes = [T * math.prod(grid_shape(h, w, int(spacing))) for spacing in spacings]
+        self.X = be.zeros((n + sum(sizes),))
+        self.G = be.zeros((n + sum(sizes),))
         self.s, self.g_s = self.X[:n], self.G[:n]
-        self.fields = []
-        offset = n
-        for k, spacing in enumerate(spacings):
-            field = CoarseField(be, energy.shape, spacing, float(LEVEL_RATIO) ** -k, self.X, self.G, offset)
-            self.fields.append(field)
-            offset += field.size
+        offsets = n + np.cumsum([0] + sizes[:-1])
+        self.fields = [CoarseField(be, energy.shape, int(spacing), float(LEVEL_RATIO) ** -k, self.X, self.G,
+                                   int(offset))
+                       for k, (spacing, offset) in enumerate(zip(spacings, offsets))]
         self._scaled = be.empty((max(f.size for f in self.fields),))     # c_k z_k, prolonged
 
     def start(self) -> None:
