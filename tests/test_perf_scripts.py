@@ -172,3 +172,44 @@ def test_bench_solver_one_configuration_takes_params_settings():
     assert result["total"] > 0 and result["stages"]["solve"] > 0
     proc = subprocess.run(base + ["--set", "coarse_basis_levels=0"], capture_output=True, text=True, timeout=300)
     assert proc.returncode != 0 and "coarse_basis_levels" in proc.stderr
+
+
+def test_flow_by_object_swaps_only_the_objects_pixels():
+    """The swapped flow is the estimated one exactly on object k's pixels of frame t."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("flow_by_object", PERF / "flow_by_object.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.path.insert(0, str(PERF))
+    try:
+        spec.loader.exec_module(module)
+    finally:
+        sys.path.remove(str(PERF))
+    rng = np.random.default_rng(0)
+    ids = rng.integers(0, 3, size=(3, 5, 7))
+    truth = rng.normal(size=(2, 5, 7, 2)).astype(np.float32)
+    estimated = rng.normal(size=(2, 5, 7, 2)).astype(np.float32)
+    out = module.swapped_flow(truth, estimated, ids, 1)
+    on = ids[:-1] == 1
+    assert on.any() and (~on).any()
+    np.testing.assert_array_equal(out[on], estimated[on])
+    np.testing.assert_array_equal(out[~on], truth[~on])
+
+
+def test_flow_by_object_prints_a_row_per_object():
+    proc = subprocess.run(
+        [sys.executable, str(PERF / "flow_by_object.py"), "--seeds", "3", "--frames", "3", "--size", "32", "48",
+         "--kinds", "objects_camera", "--min-share", "0.05", "--set", "lbfgs_iterations=4"],
+        capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    assert "objects_camera/3: LMSE mean" in proc.stdout
+    rows = [line.split() for line in proc.stdout.splitlines() if line.strip()[:1].isdigit()]
+    assert len(rows) >= 2 and {int(row[0]) for row in rows} >= {0}      # the floor at least
+    assert all(float(row[1]) >= 0.05 for row in rows)                   # --min-share
+    assert all(0.0 <= float(cell) < 1.0 for row in rows for cell in row[4:])
+
+
+def test_flow_by_object_refuses_the_evaluation_seed():
+    proc = subprocess.run([sys.executable, str(PERF / "flow_by_object.py"), "--seeds", "0"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode != 0 and "seed 0" in proc.stderr
