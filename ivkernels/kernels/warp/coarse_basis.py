@@ -15,9 +15,16 @@ system's own weights):
   ``exp(-|A(x) - A(node)|^2 / sigma^2)``, normalised to sum to one;
 * :func:`prolong_add`: ``out += P z`` (a gather of 16 nodes per pixel);
 * :func:`restrict_add`: ``out += P^T values``, the exact transpose: each
-  pixel scatters into its 16 nodes with atomic adds.  Nodes belong to one
-  frame, so the CPU launch is split only at frame boundaries and the sums
-  do not depend on the thread count.
+  pixel scatters into its 16 nodes.  Nodes belong to one frame, so the CPU
+  launch is split only at frame boundaries and the sums do not depend on
+  the thread count.
+
+The pixels of a row between two node columns (a run of ``spacing``
+pixels) share their 16 nodes, so both transfers work run by run: the
+prolongation reads the run's nodes once, and the restriction sums the
+run's contributions to each node locally and adds them to the node once
+(at 640x480, 8 frames, spacing 4, 2 threads: 31 -> 20 ms and 40 -> 20 ms
+against one node access per pixel and tap; ``perf/RESULTS.md``).
 
 Node ``j`` of a frame sits on pixel row ``min(j * spacing, H - 1)``; the grid
 has ``(H - 1) // spacing + 2`` rows (:func:`grid_shape`), so every pixel has
@@ -80,6 +87,8 @@ def coarse_weights_rows(row_begin: int, A: wp.array4d(dtype=float), weights: wp.
 @wp.kernel
 def prolong_add_rows(row_begin: int, z: wp.array3d(dtype=float), weights: wp.array4d(dtype=float),
                      out: wp.array3d(dtype=float), spacing: int):
+    # The pixels of a row between two node columns share their 4 x 4 nodes: read them
+    # once per run of ``spacing`` pixels (clamped reads; off-grid taps have weight 0).
     r = row_begin + wp.tid()
     height = out.shape[1]
     width = out.shape[2]
@@ -88,20 +97,25 @@ def prolong_add_rows(row_begin: int, z: wp.array3d(dtype=float), weights: wp.arr
     t = r // height
     y = r - t * height
     j0 = y // spacing
-    for x in range(width):
-        i0 = x // spacing
-        acc = float(0.0)
+    for i0 in range((width - 1) // spacing + 1):
+        nodes = wp.mat44()
         for iy in range(4):
             j = wp.clamp(j0 + iy - 1, 0, grid_h - 1)
             for ix in range(4):
-                i = wp.clamp(i0 + ix - 1, 0, grid_w - 1)
-                acc += weights[t, y, x, 4 * iy + ix] * z[t, j, i]
-        out[t, y, x] = out[t, y, x] + acc
+                nodes[iy, ix] = z[t, j, wp.clamp(i0 + ix - 1, 0, grid_w - 1)]
+        for x in range(i0 * spacing, wp.min((i0 + 1) * spacing, width)):
+            acc = float(0.0)
+            for iy in range(4):
+                for ix in range(4):
+                    acc += weights[t, y, x, 4 * iy + ix] * nodes[iy, ix]
+            out[t, y, x] = out[t, y, x] + acc
 
 
 @wp.kernel
 def restrict_add_rows(row_begin: int, values: wp.array3d(dtype=float), weights: wp.array4d(dtype=float),
                       out: wp.array3d(dtype=float), spacing: int):
+    # Each run of ``spacing`` pixels between two node columns sums its 16 node
+    # contributions locally and adds them to the nodes once.
     r = row_begin + wp.tid()
     height = values.shape[1]
     width = values.shape[2]
@@ -110,16 +124,20 @@ def restrict_add_rows(row_begin: int, values: wp.array3d(dtype=float), weights: 
     t = r // height
     y = r - t * height
     j0 = y // spacing
-    for x in range(width):
-        i0 = x // spacing
-        v = values[t, y, x]
+    for i0 in range((width - 1) // spacing + 1):
+        sums = wp.mat44()
+        for x in range(i0 * spacing, wp.min((i0 + 1) * spacing, width)):
+            v = values[t, y, x]
+            for iy in range(4):
+                for ix in range(4):
+                    sums[iy, ix] = sums[iy, ix] + weights[t, y, x, 4 * iy + ix] * v
         for iy in range(4):
             j = j0 + iy - 1
             if j >= 0 and j < grid_h:
                 for ix in range(4):
                     i = i0 + ix - 1
                     if i >= 0 and i < grid_w:
-                        wp.atomic_add(out, t, j, i, weights[t, y, x, 4 * iy + ix] * v)
+                        wp.atomic_add(out, t, j, i, sums[iy, ix])
 
 
 # ----------------------------------------------------------------------------
