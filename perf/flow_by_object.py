@@ -39,6 +39,11 @@ def object_lmse(albedo: np.ndarray, truth: np.ndarray, object_id: np.ndarray, k:
     return metrics.lmse(albedo, truth, mask=object_id == k)
 
 
+def mean_lmse(video, seq) -> float:
+    """LMSE mean (albedo and shading) of a decomposition against its sequence's truth."""
+    return metrics.intrinsic_lmse(video.albedo, video.shading, seq.albedo, seq.shading)["mean"]
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, nargs="+", default=[1])
@@ -61,11 +66,8 @@ def main(argv=None) -> int:
             true = iv.decompose(seq.frames, flow=seq.flow, params=params)
             est_flow = np.asarray(estimated.flow, dtype=np.float32)
 
-            def mean_lmse(video) -> float:
-                return metrics.intrinsic_lmse(video.albedo, video.shading, seq.albedo, seq.shading)["mean"]
-
-            print(f"\n{kind}/{seed}: LMSE mean, estimated flow {mean_lmse(estimated):.4f}, "
-                  f"ground-truth flow {mean_lmse(true):.4f}")
+            print(f"\n{kind}/{seed}: LMSE mean, estimated flow {mean_lmse(estimated, seq):.4f}, "
+                  f"ground-truth flow {mean_lmse(true, seq):.4f}")
             print(f"{'object':>6} {'share':>6} {'|u| px':>7} {'EPE px':>7} {'A est':>7} {'A true':>7} "
                   f"{'A swap':>7} {'mean swap':>9}")
             for k in np.unique(ids):
@@ -78,7 +80,7 @@ def main(argv=None) -> int:
                 swap = iv.decompose(seq.frames, flow=swapped_flow(seq.flow, est_flow, ids, k), params=params)
                 cells = [object_lmse(v.albedo, seq.albedo, ids, k) for v in (estimated, true, swap)]
                 print(f"{k:6d} {share:6.3f} {length:7.2f} {epe:7.2f} "
-                      + " ".join(f"{c:7.4f}" for c in cells) + f" {mean_lmse(swap):9.4f}", flush=True)
+                      + " ".join(f"{c:7.4f}" for c in cells) + f" {mean_lmse(swap, seq):9.4f}", flush=True)
     return 0
 
 
