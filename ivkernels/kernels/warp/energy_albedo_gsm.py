@@ -130,7 +130,10 @@ def _pair_kernels_for(radius: int):
     are unrolled and the test that picks the forward half is resolved at
     compile time: 1.7x faster than a loop over a runtime radius on the CPU
     (640x480, 8 frames, radius 2, both alternated in one process: 129
-    against 223 ms on 2 threads), with bitwise the same results.  One module
+    against 223 ms on 2 threads), with bitwise the same results.  Pixels whose
+    half window lies inside the image take a branch without the bounds tests
+    (the same sums in the same order, so bitwise the same again): the call
+    goes from 230 to 202 ms at 640x480, 8 frames, 2 threads.  One module
     per radius, built on first use and kept (``functools.lru_cache``).
     """
     R = int(radius)
@@ -152,23 +155,36 @@ def _pair_kernels_for(radius: int):
         y = r - t * height
         row0 = t * height
         e = wp.float64(0.0)
+        inside_rows = y + R < height
         for x in range(width):
             b = B[r, x]
             acc = wp.vec3(0.0, 0.0, 0.0)
             e_x = float(0.0)
             k = int(0)
-            for dy in range(wp.static(R + 1)):
-                yy = y + dy
-                for dx in range(wp.static(-R), wp.static(R + 1)):
-                    if dy > 0 or dx > 0:
-                        xx = x + dx
-                        if yy < height and xx >= 0 and xx < width:
-                            d = b - B[row0 + yy, xx]
+            if inside_rows and x >= R and x + R < width:
+                # the whole forward half lies in the image: no bounds tests
+                for dy in range(wp.static(R + 1)):
+                    for dx in range(wp.static(-R), wp.static(R + 1)):
+                        if wp.static(dy > 0 or dx > 0):
+                            d = b - B[r + dy, x + dx]
                             g, dg = gsm_lookup(wp.dot(d, d), coef, cells_per_root)
                             pairs[r, x, k] = wp.vec2(g, dg)
                             acc += dg * d
                             e_x += g
-                        k += 1
+                            k += 1
+            else:
+                for dy in range(wp.static(R + 1)):
+                    yy = y + dy
+                    for dx in range(wp.static(-R), wp.static(R + 1)):
+                        if dy > 0 or dx > 0:
+                            xx = x + dx
+                            if yy < height and xx >= 0 and xx < width:
+                                d = b - B[row0 + yy, xx]
+                                g, dg = gsm_lookup(wp.dot(d, d), coef, cells_per_root)
+                                pairs[r, x, k] = wp.vec2(g, dg)
+                                acc += dg * d
+                                e_x += g
+                            k += 1
             acc_out[r, x] = acc
             e += wp.float64(e_x)
         energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
@@ -188,21 +204,32 @@ def _pair_kernels_for(radius: int):
         row0 = t * height
         Lt = wp.transpose(precision_factor(sigma_inv))
         e = wp.float64(0.0)
+        inside_rows = y >= R
         for x in range(width):
             b = B[r, x]
             acc = acc_in[r, x]
             e_x = float(0.0)
             k = int(0)
-            for dy in range(wp.static(R + 1)):
-                yy = y - dy
-                for dx in range(wp.static(-R), wp.static(R + 1)):
-                    if dy > 0 or dx > 0:
-                        xx = x - dx
-                        if yy >= 0 and xx >= 0 and xx < width:
-                            p = pairs[row0 + yy, xx, k]
-                            acc += p[1] * (b - B[row0 + yy, xx])
+            if inside_rows and x >= R and x + R < width:
+                # the whole backward half lies in the image: no bounds tests
+                for dy in range(wp.static(R + 1)):
+                    for dx in range(wp.static(-R), wp.static(R + 1)):
+                        if wp.static(dy > 0 or dx > 0):
+                            p = pairs[r - dy, x - dx, k]
+                            acc += p[1] * (b - B[r - dy, x - dx])
                             e_x += p[0]
-                        k += 1
+                            k += 1
+            else:
+                for dy in range(wp.static(R + 1)):
+                    yy = y - dy
+                    for dx in range(wp.static(-R), wp.static(R + 1)):
+                        if dy > 0 or dx > 0:
+                            xx = x - dx
+                            if yy >= 0 and xx >= 0 and xx < width:
+                                p = pairs[row0 + yy, xx, k]
+                                acc += p[1] * (b - B[row0 + yy, xx])
+                                e_x += p[0]
+                            k += 1
             grad = (4.0 * lam) * (Lt * acc)
             gA[t, y, x, 0] = gA[t, y, x, 0] + grad[0]
             gA[t, y, x, 1] = gA[t, y, x, 1] + grad[1]
