@@ -37,10 +37,9 @@ wp.set_module_options({"enable_backward": False})
 # ----------------------------------------------------------------------------
 
 @wp.func
-def swap_entries(buf: wp.array2d(dtype=float), row: int, base: int, i: int, j: int):
-    """Swap the (value, weight) pairs ``i`` and ``j`` of ``buf[row, base:]``."""
-    v = buf[row, base + 2 * i]
-    w = buf[row, base + 2 * i + 1]
+def move_entry(buf: wp.array2d(dtype=float), row: int, base: int, i: int, j: int, v: float, w: float):
+    """Swap the (value, weight) pairs ``i`` and ``j`` of ``buf[row, base:]``, given
+    ``(v, w)``, the pair now at ``i``: entry ``j`` moves to ``i`` and ``(v, w)`` to ``j``."""
     buf[row, base + 2 * i] = buf[row, base + 2 * j]
     buf[row, base + 2 * i + 1] = buf[row, base + 2 * j + 1]
     buf[row, base + 2 * j] = v
@@ -80,13 +79,14 @@ def l1_quadratic_select(buf: wp.array2d(dtype=float), row: int, base: int, n: in
             v = buf[row, base + 2 * i]
             w = buf[row, base + 2 * i + 1]
             if v < pivot:
-                swap_entries(buf, row, base, lt, i)
+                if lt != i:                       # an entry equal to the pivot sits at lt
+                    move_entry(buf, row, base, i, lt, v, w)
                 w_lt += w
                 lt += 1
                 i += 1
             elif v > pivot:
                 gt -= 1
-                swap_entries(buf, row, base, i, gt)
+                move_entry(buf, row, base, i, gt, v, w)
                 w_gt += w
             else:
                 w_eq += w
