@@ -9,6 +9,8 @@ term's Charbonnier penalty is the data term's (:mod:`ivkernels.kernels.warp.ener
 """
 from __future__ import annotations
 
+import functools
+
 import warp as wp
 
 from ivkernels.kernels.launch import launch_rows
@@ -18,39 +20,74 @@ from ivkernels.kernels.warp.energy_data import charbonnier
 wp.set_module_options({"enable_backward": False})
 
 
-@wp.kernel
-def shading_smoothness_rows(row_begin: int, S: wp.array3d(dtype=float), gate: wp.array3d(dtype=float),
-                            gated: int, gS: wp.array3d(dtype=float), energy_rows: wp.array(dtype=wp.float64),
-                            lam: float, eps: float):
-    """Eq. 9's local term; with ``gated`` each pair is weighted by the mean of
-    its two ``gate`` values (``gate`` is not read otherwise)."""
-    r = row_begin + wp.tid()
-    height = S.shape[1]
-    width = S.shape[2]
-    t = r // height
-    y = r - t * height
-    e = wp.float64(0.0)
-    for x in range(width):
-        s = S[t, y, x]
-        g = float(0.0)
-        for j in range(3):
-            yy = y + j - 1
-            if yy >= 0 and yy < height:
-                for i in range(3):
-                    xx = x + i - 1
-                    if xx >= 0 and xx < width and (i != 1 or j != 1):
-                        d = s - S[t, yy, xx]
-                        rho = charbonnier(d, eps)
-                        if gated != 0:
-                            wgt = 0.5 * (gate[t, y, x] + gate[t, yy, xx])      # the pair's weight, symmetric
-                            e += wp.float64(wgt * rho)
-                            g += wgt * d / rho
-                        else:
-                            e += wp.float64(rho)
-                            g += d / rho
-        # S(x) appears in the pair (x, y) and in (y, x): twice the derivative
-        gS[t, y, x] = gS[t, y, x] + 2.0 * lam * g
-    energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
+@wp.func
+def local_pair(s: float, s_y: float, eps: float, gated: int, gate_x: float, gate_y: float):
+    """One pair of Eq. 9's local term: ``(energy, d energy / d S(x))`` of
+    ``w rho(S(x) - S(y))``, ``w = (gate(x) + gate(y)) / 2`` when ``gated``, else 1."""
+    d = s - s_y
+    rho = charbonnier(d, eps)
+    if gated != 0:
+        wgt = 0.5 * (gate_x + gate_y)      # the pair's weight, symmetric
+        return wgt * rho, wgt * d / rho
+    return rho, d / rho
+
+
+@functools.lru_cache(maxsize=None)
+def _local_kernel_for(gated: bool):
+    """Eq. 9's local term with ``gated`` compiled in (one module each, built on first
+    use): the 3x3 loops are unrolled, and pixels whose 8 neighbours all lie in
+    the image skip the bounds tests.  The pairs are visited in the same order
+    on both branches, so the sums are bitwise those of one general loop
+    (640x480, 8 frames, 2 threads: 39 -> 27 ms plain, 49 -> 31-38 ms gated)."""
+    G = 1 if gated else 0
+
+    @wp.kernel(module="unique")
+    def shading_smoothness_rows(row_begin: int, S: wp.array3d(dtype=float), gate: wp.array3d(dtype=float),
+                                gS: wp.array3d(dtype=float), energy_rows: wp.array(dtype=wp.float64),
+                                lam: float, eps: float):
+        """Eq. 9's local term; gated: each pair is weighted by the mean of its two
+        ``gate`` values (``gate`` is not read otherwise)."""
+        r = row_begin + wp.tid()
+        height = S.shape[1]
+        width = S.shape[2]
+        t = r // height
+        y = r - t * height
+        e = wp.float64(0.0)
+        inside_rows = y >= 1 and y + 1 < height
+        for x in range(width):
+            s = S[t, y, x]
+            gx = float(1.0)
+            if wp.static(G != 0):
+                gx = gate[t, y, x]
+            g = float(0.0)
+            if inside_rows and x >= 1 and x + 1 < width:
+                for j in range(wp.static(3)):
+                    for i in range(wp.static(3)):
+                        if wp.static(i != 1 or j != 1):
+                            gy = float(1.0)
+                            if wp.static(G != 0):
+                                gy = gate[t, y + j - 1, x + i - 1]
+                            pe, pg = local_pair(s, S[t, y + j - 1, x + i - 1], eps, G, gx, gy)
+                            e += wp.float64(pe)
+                            g += pg
+            else:
+                for j in range(wp.static(3)):
+                    yy = y + j - 1
+                    if yy >= 0 and yy < height:
+                        for i in range(wp.static(3)):
+                            xx = x + i - 1
+                            if xx >= 0 and xx < width and (i != 1 or j != 1):
+                                gy = float(1.0)
+                                if wp.static(G != 0):
+                                    gy = gate[t, yy, xx]
+                                pe, pg = local_pair(s, S[t, yy, xx], eps, G, gx, gy)
+                                e += wp.float64(pe)
+                                g += pg
+            # S(x) appears in the pair (x, y) and in (y, x): twice the derivative
+            gS[t, y, x] = gS[t, y, x] + 2.0 * lam * g
+        energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
+
+    return shading_smoothness_rows
 
 
 @wp.kernel
@@ -120,9 +157,8 @@ def _local_term(S, gate, gS, energy_rows, lam: float, eps: float) -> None:
     check_disjoint("gS", gS, "S", S, "the gradient is scattered into gS while S is read")
     if gate is not None:
         check_disjoint("gS", gS, "gate", gate, "the gradient is scattered into gS while gate is read")
-    launch_rows(shading_smoothness_rows, t * h,
-                [S, S if gate is None else gate, int(gate is not None), gS, energy_rows, float(lam), float(eps)],
-                device=S.device)
+    launch_rows(_local_kernel_for(gate is not None), t * h,
+                [S, S if gate is None else gate, gS, energy_rows, float(lam), float(eps)], device=S.device)
 
 
 def coupling_term(S, S_tilde, w_bnd, gS, energy_rows, lam: float = 10.0) -> None:
