@@ -112,6 +112,10 @@ class Params:
         the stronger smoothness those objects need: mean albedo LMSE of
         those five objects 0.0836 / 0.0631 at tau = 0.1 / 0.2 against 0.0406
         without the gate at lambda_Ss = 30 and 0.0694 at 10.
+        With the current defaults it is worse on the synthetic sequences
+        too (perf/RESULTS.md, "The edge-aware local shading term with the
+        current defaults"): training seed 1 mean LMSE 0.0062 against
+        0.0047 (only the static kind gains, 0.0022 against 0.0043).
     shading_gate_chroma
         With the gate on and this > 0, a contrast change where the
         input's log chromaticity changes by about this much or more is not
