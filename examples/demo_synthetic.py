@@ -24,7 +24,7 @@ from ivkernels.io import write_png_sequence
 from ivkernels.viz import albedo_to_srgb8, contact_sheet, shading_to_srgb8
 
 
-def main(argv=None) -> None:
+def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="out/demo", help="output folder")
     parser.add_argument("--kind", default="free_camera", choices=synthetic.KINDS)
@@ -38,8 +38,10 @@ def main(argv=None) -> None:
     seq = synthetic.render_sequence(args.kind, n_frames=args.frames, size=tuple(args.size), seed=0)
     write_png_sequence(out / "input", seq.frames_srgb8())
     result = out / "result"
-    cli.main(["decompose", str(out / "input"), "-o", str(result), "--force",
-              "--backend", args.backend])
+    status = cli.main(["decompose", str(out / "input"), "-o", str(result), "--force",
+                       "--backend", args.backend])
+    if status != 0:
+        return status               # the command line has said what went wrong
 
     data = np.load(result / "intrinsics.npz")
     albedo, shading = data["albedo"], data["shading"]
@@ -59,7 +61,8 @@ def main(argv=None) -> None:
             ("shading (true)", shading_to_srgb8(seq.shading / np.percentile(seq.shading, 99)))]
     imageio.imwrite(out / "comparison.png", contact_sheet(rows))
     print(f"wrote {out / 'comparison.png'} and {result}/")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

@@ -7,9 +7,10 @@ unchanged shading keeps the object's lighting, shadows included::
     python examples/recolour.py --out out/recolour
 
 Uses a synthetic sequence, selects the pixels whose albedo is close to the
-albedo under a chosen point of frame 0 (in every frame, so the selection
-follows the object), rotates their hue, and writes before/after videos and
-a contact sheet.
+albedo under a chosen point of frame 0 (``--point``; by default a green
+stripe of the large cylinder in front), in every frame, so the selection
+follows the material as it moves, rotates their hue, and writes before/after
+videos and a contact sheet.
 """
 from __future__ import annotations
 
@@ -44,14 +45,18 @@ def main(argv=None) -> int:
     parser.add_argument("--hue", type=float, default=120.0, help="hue rotation in degrees")
     parser.add_argument("--tolerance", type=float, default=0.15,
                         help="largest log-albedo distance to the picked colour that is recoloured")
+    parser.add_argument("--point", type=int, nargs=2, default=(40, 60), metavar=("X", "Y"),
+                        help="pixel of frame 0 (column, row) whose material is recoloured")
     args = parser.parse_args(argv)
+    seq = synthetic.render_sequence("objects_camera", n_frames=6, size=(120, 160), seed=4)
+    T, H, W, _ = seq.frames.shape
+    x, y = args.point
+    if not (0 <= x < W and 0 <= y < H):
+        parser.error(f"--point {x} {y} lies outside the {W}x{H} frames")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-
-    seq = synthetic.render_sequence("objects_camera", n_frames=6, size=(120, 160), seed=4)
     video = iv.decompose(seq.frames)
-    T, H, W, _ = video.albedo.shape
-    picked = np.log(video.albedo[0, H // 2, W // 2] + 1e-4)
+    picked = np.log(video.albedo[0, y, x] + 1e-4)
     distance = np.linalg.norm(np.log(video.albedo + 1e-4) - picked, axis=-1)
     mask = (distance < args.tolerance)[..., None]
     edited = np.where(mask, rotate_hue(video.albedo, args.hue), video.albedo)
