@@ -23,8 +23,10 @@ import numpy as np
 
 import ivkernels as iv
 from ivkernels import synthetic
-from ivkernels.io import linear_to_srgb, write_video
+from ivkernels.io import linear_to_srgb, srgb_to_linear, write_video
 from ivkernels.viz import albedo_to_srgb8, contact_sheet
+
+SIZE = (120, 160)       # (H, W) of the rendered sequence
 
 
 def rotate_hue(albedo: np.ndarray, degrees: float) -> np.ndarray:
@@ -34,8 +36,6 @@ def rotate_hue(albedo: np.ndarray, degrees: float) -> np.ndarray:
     hsv = cv2.cvtColor(flat, cv2.COLOR_RGB2HSV)
     hsv[..., 0] = ((hsv[..., 0].astype(int) + int(round(degrees / 2))) % 180).astype(np.uint8)
     out = cv2.cvtColor(hsv, cv2.COLOR_HSV2RGB).reshape(albedo.shape)
-    from ivkernels.io import srgb_to_linear
-
     return srgb_to_linear(out.astype(np.float32) / 255.0)
 
 
@@ -48,13 +48,14 @@ def main(argv=None) -> int:
     parser.add_argument("--point", type=int, nargs=2, default=(40, 60), metavar=("X", "Y"),
                         help="pixel of frame 0 (column, row) whose material is recoloured")
     args = parser.parse_args(argv)
-    seq = synthetic.render_sequence("objects_camera", n_frames=6, size=(120, 160), seed=4)
-    T, H, W, _ = seq.frames.shape
+    H, W = SIZE
     x, y = args.point
     if not (0 <= x < W and 0 <= y < H):
         parser.error(f"--point {x} {y} lies outside the {W}x{H} frames")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+
+    seq = synthetic.render_sequence("objects_camera", n_frames=6, size=SIZE, seed=4)
     video = iv.decompose(seq.frames)
     picked = np.log(video.albedo[0, y, x] + 1e-4)
     distance = np.linalg.norm(np.log(video.albedo + 1e-4) - picked, axis=-1)
