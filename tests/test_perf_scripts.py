@@ -213,3 +213,34 @@ def test_flow_by_object_refuses_the_evaluation_seed():
     proc = subprocess.run([sys.executable, str(PERF / "flow_by_object.py"), "--seeds", "0"],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode != 0 and "seed 0" in proc.stderr
+
+
+def test_seed_spread_keeps_the_evaluation_seed_out_of_the_summary():
+    proc = subprocess.run(
+        [sys.executable, str(PERF / "seed_spread.py"), "--seeds", "0", "3", "4", "--size", "32", "48",
+         "--frames", "3", "--kinds", "static_moving_light", "objects_camera", "--ratio", "CRET", "CRET-tuned"],
+        capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    out = proc.stdout
+    rows = {line.split()[0]: [float(v) for v in line.split()[1:]] for line in out.splitlines()
+            if line.split() and line.split()[0] in ("0*", "3", "4")}
+    assert set(rows) == {"0*", "3", "4"}
+    for num, den, ratio, static, objects in rows.values():
+        assert ratio == pytest.approx(num / den, abs=2e-3)
+        # the ratio of the means is a weighted mean of the per-kind ratios
+        assert min(static, objects) - 2e-3 <= ratio <= max(static, objects) + 2e-3
+    training = [rows["3"][2], rows["4"][2]]
+    assert f"range {min(training):.3f}-{max(training):.3f}" in out
+    assert "of 2 seeds" in out and "not in the summary" in out
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--ratio", "IV", "GT"], "not a method to compare"),
+    (["--ratio", "IV", "IV"], "must differ"),
+    (["--seeds", "1", "1"], "distinct seeds"),
+    (["--ratio", "CRET", "Weiss", "--iv-param", "lam_data=3"], "IV methods only"),
+])
+def test_seed_spread_refuses_bad_arguments(argv, message):
+    proc = subprocess.run([sys.executable, str(PERF / "seed_spread.py"), *argv],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 2 and message in proc.stderr
