@@ -5,7 +5,7 @@ estimated flow (the default method), against the renderer's ground truth:
 flow end-point error (all pixels, and pixels visible in the next frame),
 occlusion IoU against the visibility (:func:`ivkernels.flow.joint.occlusion_iou`),
 LMSE of albedo / shading / mean, and the seconds of the flow, the guide
-solves and the final solve, with the process's CPU seconds.  Choose on
+solves ("-" where none ran) and the final solve, with the process's CPU seconds.  Choose on
 training seeds (not 0); report on seed 0.
 
     python perf/eval_flow_passes.py --seed 1 --passes 1 2
@@ -49,11 +49,12 @@ def main(argv=None) -> int:
             cpu = time.process_time() - cpu
             s = video.diagnostics["seconds"]
             lmse = metrics.intrinsic_lmse(video.albedo, video.shading, seq.albedo, seq.shading)
+            guide = f"{s['guide']:7.1f}" if "guide" in s else f"{'-':>7s}"      # "-": no guide solve ran
             print(f"{kind:20s} {passes:6d} {metrics.endpoint_error(video.flow, seq.flow):6.3f} "
                   f"{metrics.endpoint_error(video.flow, seq.flow, mask=seq.visibility > 0.5):7.3f} "
                   f"{occlusion_iou(video.occlusion, seq.visibility):7.3f} {lmse['albedo']:7.4f} "
                   f"{lmse['shading']:7.4f} {lmse['mean']:7.4f} {s.get('flow', 0.0):6.1f} "
-                  f"{s.get('guide', 0.0):7.1f} {s.get('solve', 0.0):7.1f} {cpu:6.1f}", flush=True)
+                  f"{guide} {s.get('solve', 0.0):7.1f} {cpu:6.1f}", flush=True)
     return 0
 
 

