@@ -206,6 +206,16 @@ def _key_values(items, name: str) -> dict:
     return out
 
 
+def iv_params_from(parser, items):
+    """``ivkernels.Params`` with the ``--iv-param NAME=VALUE`` settings, or None without any;
+    a bad name or value ends in ``parser.error``."""
+    changes = _key_values(items, "--iv-param")
+    try:
+        return iv.Params().replace(**changes) if changes else None
+    except (TypeError, ValueError) as exc:
+        parser.error(f"--iv-param: {exc}")
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=8)
@@ -230,11 +240,7 @@ def main(argv=None) -> int:
                         help="a keyword argument of decompose for every IV row (repeatable)")
     args = parser.parse_args(argv)
     methods = [m for m in METHODS if m in args.methods]
-    iv_params = _key_values(args.iv_param, "--iv-param")
-    try:
-        args.iv_params = iv.Params().replace(**iv_params) if iv_params else None
-    except (TypeError, ValueError) as exc:
-        parser.error(f"--iv-param: {exc}")
+    args.iv_params = iv_params_from(parser, args.iv_param)
     args.iv_options = _key_values(args.iv_option, "--iv-option")
     if args.seed != EVAL_SEED:
         print(f"note: seed {args.seed} is a training seed, not the evaluation seed {EVAL_SEED}")

@@ -21,9 +21,8 @@ from __future__ import annotations
 import argparse
 import statistics
 
-from accuracy import EVAL_SEED, IV_METHODS, METHODS, _key_values, evaluate_kind, mean_rows
+from accuracy import EVAL_SEED, IV_METHODS, METHODS, evaluate_kind, iv_params_from, mean_rows
 
-import ivkernels as iv
 from ivkernels import synthetic
 
 TRAINING_SEEDS = tuple(range(1, 14))
@@ -71,11 +70,7 @@ def main(argv=None) -> int:
         parser.error("--ratio: NUM and DEN must differ")
     if len(set(args.seeds)) != len(args.seeds) or min(args.seeds) < 0:
         parser.error("--seeds: give distinct seeds >= 0")
-    iv_params = _key_values(args.iv_param, "--iv-param")
-    try:
-        args.iv_params = iv.Params().replace(**iv_params) if iv_params else None
-    except (TypeError, ValueError) as exc:
-        parser.error(f"--iv-param: {exc}")
+    args.iv_params = iv_params_from(parser, args.iv_param)
     if args.iv_params is not None and not ({num, den} & set(IV_METHODS)):
         parser.error("--iv-param applies to IV methods only, and neither method is one")
     args.iv_options = {}
@@ -83,7 +78,7 @@ def main(argv=None) -> int:
     kinds = list(args.kinds)
     short = {kind: kind.split("_")[0][:8] for kind in kinds}
     print(f"{num} / {den}, LMSE mean, {args.frames} frames at {args.size[1]}x{args.size[0]}"
-          + (f", Params changes {iv_params}" if iv_params else ""))
+          + (f", Params changes {' '.join(args.iv_param)}" if args.iv_param else ""))
     print(f"{'seed':>6} {num:>10} {den:>10} {'ratio':>7}  " + " ".join(f"{short[k]:>8}" for k in kinds))
     training, evaluation = [], None
     for seed in args.seeds:
