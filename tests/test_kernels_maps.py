@@ -107,6 +107,54 @@ def test_warp_reliability_bad_input(kernel_backend):
         kernel_backend.maps.warp_reliability(img, flow, kernel_backend.asarray(np.zeros((1, 4, 4), np.float32)), 0.0)
 
 
+# ------------------------------------------------ chromaticity along the flow (temporal terms' weight)
+def chroma_check(be, log_image, flow, occ, max_change):
+    out = be.asarray(occ.copy())
+    be.maps.chroma_consistency(be.asarray(log_image), be.asarray(flow), out, max_change)
+    return be.numpy(out).copy()
+
+
+def test_chroma_consistency_hand_cases(kernel_backend):
+    """A grey light change keeps w_occ, a flow onto another colour clears it, whatever the
+    brightness; already-cleared pixels stay cleared."""
+    t, h, w = 2, 9, 12
+    red, green = np.log([0.6, 0.1, 0.1]), np.log([0.1, 0.5, 0.1])
+    img = np.empty((t, h, w, 3), np.float32)
+    img[:, :, :6] = red
+    img[:, :, 6:] = green
+    img[1] += np.linspace(-2.0, 1.0, w, dtype=np.float32)[None, :, None]   # grey light ramp, x-dependent
+    occ = np.ones((t - 1, h, w), np.float32)
+    occ[0, 0, 0] = 0.0
+    still = np.zeros((t - 1, h, w, 2), np.float32)
+    got = chroma_check(kernel_backend, img, still, occ, 0.05)
+    np.testing.assert_array_equal(got, occ)                 # same surfaces: the light alone changed
+    right = np.zeros((t - 1, h, w, 2), np.float32)
+    right[..., 0] = 3.0
+    got = chroma_check(kernel_backend, img, right, occ, 0.05)
+    assert not got[:, :, 3:6].any()                          # red at x lands on green at x + 3
+    np.testing.assert_array_equal(got[:, :, :3], occ[:, :, :3])
+    np.testing.assert_array_equal(got[:, :, 6:], occ[:, :, 6:])   # green stays green (clamped border)
+    half = np.zeros((t - 1, h, w, 2), np.float32)
+    half[..., 0] = 0.25                                       # x = 5.25: a quarter of the way into green
+    change = ref.chroma_change(img, half)[0, 0, 5]
+    assert 0.05 < change < 1.0
+    assert chroma_check(kernel_backend, img, half, occ, change * 1.01)[0, 0, 5] == 1.0
+    assert chroma_check(kernel_backend, img, half, occ, change * 0.99)[0, 0, 5] == 0.0
+
+
+def test_chroma_consistency_bad_input(kernel_backend):
+    img = kernel_backend.asarray(np.zeros((2, 4, 4, 3), np.float32))
+    flow = kernel_backend.asarray(np.zeros((1, 4, 4, 2), np.float32))
+    occ = kernel_backend.asarray(np.zeros((1, 4, 4), np.float32))
+    with pytest.raises(ValueError, match="occ must have shape"):
+        kernel_backend.maps.chroma_consistency(img, flow, kernel_backend.asarray(np.zeros((2, 4, 4), np.float32)), 0.1)
+    with pytest.raises(ValueError, match="max_change"):
+        kernel_backend.maps.chroma_consistency(img, flow, occ, 0.0)
+    with pytest.raises(ValueError, match="log_image"):
+        kernel_backend.maps.chroma_consistency(kernel_backend.asarray(np.zeros((2, 4, 4, 1), np.float32)), flow,
+                                               occ, 0.1)
+
+
 def test_motion_boundary_workspace_reused_across_shapes(kernel_backend, rng):
     mags = [rng.random(shape, dtype=np.float32) ** 8 for shape in ((T, H, W), (1, 9, 11))]
     ws = Workspace()

@@ -3,7 +3,8 @@
 A static scene (zero flow) whose light changes strongly between two frames
 has no occlusion.  Eq. 7's colour term reads the light change as one; with
 ``Params.occlusion_colour`` off (the default) only the divergence of the
-flow, the image border and the warp's reliability mark occlusions.
+flow, the image border, the warp's reliability and the chromaticity along
+the flow (``Params.chroma_change_max``) mark occlusions.
 """
 import numpy as np
 import pytest
@@ -51,3 +52,30 @@ def test_without_the_colour_term_flow_still_marks_occlusions(any_backend, relit)
     occ, _ = maps(any_backend.name, relit, right)
     assert np.all(occ[0, :, W - 5:] == 0.0)            # x + u leaves the image
     assert np.all(occ[0, :, : W - 6] == 1.0)
+
+
+@pytest.fixture
+def striped():
+    """Horizontal red and green stripes, 4 rows each; the second frame lit 2.5x as strongly."""
+    frames = np.empty((2, H, W, 3), np.float32)
+    rows = (np.arange(H) // 4) % 2 == 0
+    frames[:, rows] = [0.4, 0.05, 0.05]
+    frames[:, ~rows] = [0.05, 0.3, 0.05]
+    frames[1] *= 4.0 / 1.6
+    return np.clip(frames, 0.0, 1.0), rows
+
+
+def test_a_flow_onto_another_colour_is_an_occlusion(any_backend, striped):
+    """Sliding along a stripe keeps the surface; moving across onto the other stripe
+    does not, whatever the light does, unless the test is switched off."""
+    frames, rows = striped
+    along = np.zeros((1, H, W, 2), np.float32)
+    along[..., 0] = 2.0
+    occ, _ = maps(any_backend.name, frames, along)
+    assert np.all(occ[0, :, : W - 3] == 1.0)
+    across = np.zeros((1, H, W, 2), np.float32)
+    across[..., 1] = 4.0                                # each stripe lands on the next one
+    occ, _ = maps(any_backend.name, frames, across)
+    assert np.all(occ[0, : H - 5] == 0.0)
+    occ, _ = maps(any_backend.name, frames, across, chroma_change_max=0.0)
+    assert np.all(occ[0, : H - 5] == 1.0)

@@ -83,6 +83,9 @@ class MapsFamily(Protocol):
     def warp_reliability(self, log_image, flow, occ, max_spread: float) -> None:
         """Clear occ (T, H, W) where the warp of log_image (T+1, H, W, C) by flow straddles an edge."""
 
+    def chroma_consistency(self, log_image, flow, occ, max_change: float) -> None:
+        """Clear occ (T, H, W) where the log chromaticity of log_image (T+1, H, W, 3) changes along flow."""
+
     def shading_gate(self, log_image, flow, gate, tau: float, tau_chroma: float = 0.0) -> None:
         """Gate (T, H, W) of Eq. 9's local term: log_image (T, H, W, 3), flow (T-1, H, W, 2), tau > 0."""
 

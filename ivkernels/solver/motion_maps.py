@@ -30,7 +30,9 @@ def motion_maps(be, frames_linear, flow, params: Params, *, workspace=None):
         the image, ``o(x) >= params.occlusion_threshold`` (Eq. 7; its colour
         term only with ``params.occlusion_colour``) and the
         bilinear warp there is reliable (``maps.warp_reliability`` with
-        ``params.warp_spread_max``), else 0.
+        ``params.warp_spread_max``) and the input's chromaticity stays the
+        same along the flow (``maps.chroma_consistency`` with
+        ``params.chroma_change_max``; skipped where that is 0), else 0.
     boundary : (T-1, H, W) backend array, 1 within ``params.boundary_radius``
         pixels of a flow Sobel magnitude above ``params.boundary_threshold``.
     """
@@ -48,6 +50,8 @@ def motion_maps(be, frames_linear, flow, params: Params, *, workspace=None):
     log_image = be.empty((T, H, W, 3))
     be.colour.log_floor(frames_linear, log_image, params.log_floor)
     be.maps.warp_reliability(log_image, flow, occlusion, params.warp_spread_max)
+    if params.chroma_change_max > 0.0:
+        be.maps.chroma_consistency(log_image, flow, occlusion, params.chroma_change_max)
     sobel = be.empty((n, H, W))
     be.derivatives.flow_sobel_magnitude(flow, sobel)
     boundary = be.empty((n, H, W))

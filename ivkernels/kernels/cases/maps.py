@@ -1,5 +1,5 @@
-"""Cases of :mod:`ivkernels.kernels.warp.maps` (occlusion, warp reliability, motion boundaries,
-shading gate)."""
+"""Cases of :mod:`ivkernels.kernels.warp.maps` (occlusion, warp reliability, chromaticity
+consistency, motion boundaries, shading gate)."""
 from __future__ import annotations
 
 import numpy as np
@@ -62,6 +62,26 @@ def _reliability(max_spread):
                 variant=f"max_spread={max_spread:g}", updates=("occ",), tol=EXACT, ignore=tied)
 
 
+def _chroma(max_change, static):
+    def make(rng, T, H, W):
+        img = normal(rng, (1, H, W, 3), -1.0, 0.3) + normal(rng, (T, H, W, 1), 0.0, 0.3)  # a grey light change
+        img[1:, H // 3: H // 2 + 1, W // 3:] += normal(rng, (pairs(T), H // 2 + 1 - H // 3, W - W // 3, 3), 0.0, 0.3)
+        f = np.zeros((pairs(T), H, W, 2), F32) if static else flow(rng, pairs(T), H, W)
+        return {"log_image": img.astype(F32), "flow": f, "occ": mask(rng, (pairs(T), H, W), 0.8),
+                "max_change": max_change}
+
+    def reference(v):
+        return {"occ": ref.chroma_consistency(v["log_image"], v["flow"], v["occ"], v["max_change"])}
+
+    def tied(v):
+        """Changes within float32 rounding of ``max_change``."""
+        return {"occ": np.abs(ref.chroma_change(v["log_image"], v["flow"]) - v["max_change"]) <= 1e-4}
+
+    return Case("maps", "chroma_consistency", make, ("log_image", "flow", "occ", "max_change"), ("occ",),
+                reference, variant=f"max_change={max_change:g},{'static' if static else 'moving'}",
+                updates=("occ",), tol=EXACT, ignore=tied)
+
+
 def _boundary(radius):
     def make(rng, T, H, W):
         P = pairs(T)
@@ -93,6 +113,8 @@ CASES = (
     _occlusion_binary(40.0, 1.0),
     _reliability(0.05),
     _reliability(0.3),
+    _chroma(0.3, False),
+    _chroma(0.05, True),
     _boundary(0),
     _boundary(1),
     _boundary(3),

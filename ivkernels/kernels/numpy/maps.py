@@ -28,6 +28,15 @@ def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
     write("occ", occ, ref.warp_reliability(log_image, flow, occ, float(max_spread)))
 
 
+def chroma_consistency(log_image, flow, occ, max_change: float) -> None:
+    """Clear ``occ`` (T, H, W) in place where the log chromaticity of ``log_image`` (T+1, H, W, 3)
+    changes along ``flow`` by ``max_change`` or more."""
+    arrays(log_image=log_image, flow=flow, occ=occ)
+    if log_image.ndim != 4 or log_image.shape[3] != 3:
+        raise ValueError(f"log_image must have shape (T, H, W, 3), got {log_image.shape}")
+    write("occ", occ, ref.chroma_consistency(log_image, flow, occ, check_positive("max_change", max_change)))
+
+
 def shading_gate(log_image, flow, gate, tau: float, tau_chroma: float = 0.0) -> None:
     """The gate (T, H, W) of Eq. 9's local term from log_image (T, H, W, 3) and flow (T-1, H, W, 2)."""
     arrays(log_image=log_image, flow=flow)

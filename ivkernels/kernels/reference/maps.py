@@ -43,6 +43,20 @@ def warp_reliability(log_image, flow, occ, max_spread: float) -> np.ndarray:
     return np.where(corner_spread(log_image, flow) >= max_spread, 0.0, np.asarray(occ, np.float64))
 
 
+def chroma_change(log_image, flow) -> np.ndarray:
+    """(T-1, H, W): ``max_c |C_{t+1}(x + u)_c - C_t(x)_c|``, ``C`` the log chromaticity
+    ``log_image - mean over channels``, ``C_{t+1}`` sampled bilinearly (clamped corners)."""
+    img = np.asarray(log_image, np.float64)
+    C = img - img.mean(-1, keepdims=True)
+    warped, _ = warp_bilinear(C[1:], np.asarray(flow, np.float64))
+    return np.abs(warped - C[:-1]).max(-1)
+
+
+def chroma_consistency(log_image, flow, occ, max_change: float) -> np.ndarray:
+    """``occ`` with 0 where :func:`chroma_change` reaches ``max_change``."""
+    return np.where(chroma_change(log_image, flow) >= max_change, 0.0, np.asarray(occ, np.float64))
+
+
 def motion_boundary(sobel_mag, threshold: float, radius: int) -> np.ndarray:
     """1 where the (2r+1)^2 window (clipped to the image) holds a magnitude above threshold."""
     edge = np.asarray(sobel_mag) > threshold

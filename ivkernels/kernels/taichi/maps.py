@@ -90,6 +90,29 @@ def warp_reliability_rows(img: nd4, flow: nd4, occ: nd3, max_spread: ti.f32):
 
 
 @ti.func
+def chroma_change_at(img: ti.template(), flow: ti.template(), t, y, x):
+    """``max_c |C_{t+1}(x + u)_c - C_t(x)_c|``, ``C`` the log chromaticity (see the Warp module)."""
+    x0, x1, fx = clamped_corners(ti.cast(x, ti.f32) + flow[t, y, x, 0], img.shape[2])
+    y0, y1, fy = clamped_corners(ti.cast(y, ti.f32) + flow[t, y, x, 1], img.shape[1])
+    d0 = bilinear_at(img, t + 1, 0, x0, x1, fx, y0, y1, fy) - img[t, y, x, 0]
+    d1 = bilinear_at(img, t + 1, 1, x0, x1, fx, y0, y1, fy) - img[t, y, x, 1]
+    d2 = bilinear_at(img, t + 1, 2, x0, x1, fx, y0, y1, fy) - img[t, y, x, 2]
+    mean = (d0 + d1 + d2) / 3.0
+    return ti.max(ti.abs(d0 - mean), ti.abs(d1 - mean), ti.abs(d2 - mean))
+
+
+@ti.kernel
+def chroma_consistency_rows(img: nd4, flow: nd4, occ: nd3, max_change: ti.f32):
+    height = flow.shape[1]
+    for r in range(flow.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for x in range(flow.shape[2]):
+            if chroma_change_at(img, flow, t, y, x) >= max_change:
+                occ[t, y, x] = 0.0
+
+
+@ti.func
 def log_change_at(img: ti.template(), flow: ti.template(), p, y, x):
     """``(L_{p+1}(x + u) - L_p(x), inside)``, ``L`` the mean over channels of ``img``."""
     height = img.shape[1]
@@ -237,6 +260,18 @@ def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
     max_spread = check_positive("max_spread", max_spread)
     if occ.size:
         warp_reliability_rows(log_image, flow, occ, max_spread)
+
+
+def chroma_consistency(log_image, flow, occ, max_change: float) -> None:
+    """Clear ``occ`` where the log chromaticity changes along the flow; see
+    :func:`ivkernels.kernels.warp.maps.chroma_consistency`."""
+    log_image = check_array("log_image", log_image, (None, None, None, 3), "(T, H, W, 3)")
+    t, h, w, _ = log_image.shape
+    flow = check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)")
+    check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", output=True)
+    max_change = check_positive("max_change", max_change)
+    if occ.size:
+        chroma_consistency_rows(log_image, flow, occ, max_change)
 
 
 def shading_gate(log_image, flow, gate, tau: float, tau_chroma: float = 0.0) -> None:

@@ -7,6 +7,8 @@
   (thresholded Sobel magnitude of the flow, dilated),
 * :func:`warp_reliability`: clears ``w_occ`` where the bilinear warp of the
   next frame is not trustworthy (a sub-pixel sample across an edge),
+* :func:`chroma_consistency`: clears ``w_occ`` where the input's chromaticity
+  changes along the flow (a flow that joins two different surfaces),
 * :func:`shading_gate`: the per-pixel weight of the local shading smoothness
   (Eq. 9), low where the input's log gradient changes along the flow.
 
@@ -114,6 +116,31 @@ def warp_reliability_rows(row_begin: int, img: wp.array4d(dtype=float), flow: wp
         x0, x1, fx = clamped_corners(float(x) + flow[t, y, x, 0], width)
         y0, y1, fy = clamped_corners(float(y) + flow[t, y, x, 1], height)
         if corner_spread(img, t + 1, x0, x1, fx, y0, y1, fy) >= max_spread:
+            occ[t, y, x] = 0.0
+
+
+@wp.func
+def chroma_change_at(img: wp.array4d(dtype=float), flow: wp.array4d(dtype=float), t: int, y: int, x: int):
+    """``max_c |C_{t+1}(x + u)_c - C_t(x)_c|`` with ``C = img - mean over channels`` (the log
+    chromaticity of a log image), ``C_{t+1}`` sampled bilinearly (clamped corners)."""
+    x0, x1, fx = clamped_corners(float(x) + flow[t, y, x, 0], img.shape[2])
+    y0, y1, fy = clamped_corners(float(y) + flow[t, y, x, 1], img.shape[1])
+    d0 = bilinear_at(img, t + 1, 0, x0, x1, fx, y0, y1, fy) - img[t, y, x, 0]
+    d1 = bilinear_at(img, t + 1, 1, x0, x1, fx, y0, y1, fy) - img[t, y, x, 1]
+    d2 = bilinear_at(img, t + 1, 2, x0, x1, fx, y0, y1, fy) - img[t, y, x, 2]
+    mean = (d0 + d1 + d2) / 3.0
+    return wp.max(wp.abs(d0 - mean), wp.max(wp.abs(d1 - mean), wp.abs(d2 - mean)))
+
+
+@wp.kernel
+def chroma_consistency_rows(row_begin: int, img: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
+                            occ: wp.array3d(dtype=float), max_change: float):
+    r = row_begin + wp.tid()
+    height = flow.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(flow.shape[2]):
+        if chroma_change_at(img, flow, t, y, x) >= max_change:
             occ[t, y, x] = 0.0
 
 
@@ -309,6 +336,35 @@ def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
     check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", dev)
     max_spread = check_positive("max_spread", max_spread)
     launch_rows(warp_reliability_rows, (t - 1) * h, [log_image, flow, occ, max_spread], device=dev)
+
+
+def chroma_consistency(log_image, flow, occ, max_change: float) -> None:
+    """Clear ``occ`` where the input's log chromaticity changes along the flow.
+
+    The shading of Eq. 1 is grey, so it scales the three channels of a pixel
+    alike and leaves the log chromaticity ``C = log I - mean_c log I`` to the
+    albedo.  Where the albedo is constant along the flow (Eq. 4), so is ``C``:
+    ``C_{t+1}(x + u) = C_t(x)`` under any change of light.  A pixel where the
+    largest channel's change ``max_c |C_{t+1}(x + u)_c - C_t(x)_c|`` reaches
+    ``max_change`` is not the same surface in the two frames (the flow is
+    wrong there, or the point is hidden in frame t+1), so the temporal terms
+    must not join them; ``occ`` is set to 0 there.  Unlike Eq. 7's Lab term
+    this test does not see brightness, so a moving shadow does not trigger it.
+
+    Parameters
+    ----------
+    log_image : wp.array float32 (T, H, W, 3), log input image.
+    flow : wp.array float32 (T-1, H, W, 2), forward flow in pixels.
+    occ : wp.array float32 (T-1, H, W), ``w_occ``, updated in place.
+    max_change : change of log chromaticity from which the pixels differ, > 0.
+    """
+    check_array("log_image", log_image, (None, None, None, 3), "(T, H, W, 3)")
+    t, h, w, _ = log_image.shape
+    dev = log_image.device
+    check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)", dev)
+    check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", dev)
+    max_change = check_positive("max_change", max_change)
+    launch_rows(chroma_consistency_rows, (t - 1) * h, [log_image, flow, occ, max_change], device=dev)
 
 
 def shading_gate(log_image, flow, gate, tau: float, tau_chroma: float = 0.0) -> None:
