@@ -250,28 +250,28 @@ def occlusion_binary(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: fl
         occlusion_binary_rows(lab, flow, div_neg, out, sigma_e, sigma_d, float(threshold))
 
 
-def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
-    """Clear ``occ`` where the bilinear sample at ``x + u`` straddles an edge; see
-    :func:`ivkernels.kernels.warp.maps.warp_reliability`."""
+def _clear_occlusion_where(kernel, log_image, flow, occ, name: str, threshold: float) -> None:
+    """Check the arguments of a test that clears ``occ`` from ``log_image`` sampled along
+    ``flow`` and run ``kernel`` with the positive ``threshold`` (see the Warp module)."""
     log_image = check_array("log_image", log_image, (None, None, None, 3), "(T, H, W, 3)")
     t, h, w, _ = log_image.shape
     flow = check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)")
     check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", output=True)
-    max_spread = check_positive("max_spread", max_spread)
+    threshold = check_positive(name, threshold)
     if occ.size:
-        warp_reliability_rows(log_image, flow, occ, max_spread)
+        kernel(log_image, flow, occ, threshold)
+
+
+def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
+    """Clear ``occ`` where the bilinear sample at ``x + u`` straddles an edge; see
+    :func:`ivkernels.kernels.warp.maps.warp_reliability`."""
+    _clear_occlusion_where(warp_reliability_rows, log_image, flow, occ, "max_spread", max_spread)
 
 
 def chroma_consistency(log_image, flow, occ, max_change: float) -> None:
     """Clear ``occ`` where the log chromaticity changes along the flow; see
     :func:`ivkernels.kernels.warp.maps.chroma_consistency`."""
-    log_image = check_array("log_image", log_image, (None, None, None, 3), "(T, H, W, 3)")
-    t, h, w, _ = log_image.shape
-    flow = check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)")
-    check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", output=True)
-    max_change = check_positive("max_change", max_change)
-    if occ.size:
-        chroma_consistency_rows(log_image, flow, occ, max_change)
+    _clear_occlusion_where(chroma_consistency_rows, log_image, flow, occ, "max_change", max_change)
 
 
 def shading_gate(log_image, flow, gate, tau: float, tau_chroma: float = 0.0) -> None:

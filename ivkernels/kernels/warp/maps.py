@@ -308,6 +308,19 @@ def occlusion_binary(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: fl
                 [lab, flow, div_neg, out, sigma_e, sigma_d, float(threshold)], device=lab.device)
 
 
+def _clear_occlusion_where(kernel, log_image, flow, occ, name: str, threshold: float) -> None:
+    """Check the arguments of a test that clears ``occ`` (T-1, H, W) from ``log_image``
+    (T, H, W, 3) sampled along ``flow`` (T-1, H, W, 2), and launch ``kernel`` with the
+    positive ``threshold`` (called ``name`` in messages)."""
+    check_array("log_image", log_image, (None, None, None, 3), "(T, H, W, 3)")
+    t, h, w, _ = log_image.shape
+    dev = log_image.device
+    check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)", dev)
+    check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", dev)
+    threshold = check_positive(name, threshold)
+    launch_rows(kernel, (t - 1) * h, [log_image, flow, occ, threshold], device=dev)
+
+
 def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
     """Clear ``occ`` where the bilinear sample of the next frame at ``x + u`` straddles an edge.
 
@@ -329,13 +342,7 @@ def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
     occ : wp.array float32 (T-1, H, W), ``w_occ``, updated in place.
     max_spread : spread (log units) from which the warp is not trusted, > 0.
     """
-    check_array("log_image", log_image, (None, None, None, 3), "(T, H, W, 3)")
-    t, h, w, _ = log_image.shape
-    dev = log_image.device
-    check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)", dev)
-    check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", dev)
-    max_spread = check_positive("max_spread", max_spread)
-    launch_rows(warp_reliability_rows, (t - 1) * h, [log_image, flow, occ, max_spread], device=dev)
+    _clear_occlusion_where(warp_reliability_rows, log_image, flow, occ, "max_spread", max_spread)
 
 
 def chroma_consistency(log_image, flow, occ, max_change: float) -> None:
@@ -358,13 +365,7 @@ def chroma_consistency(log_image, flow, occ, max_change: float) -> None:
     occ : wp.array float32 (T-1, H, W), ``w_occ``, updated in place.
     max_change : change of log chromaticity from which the pixels differ, > 0.
     """
-    check_array("log_image", log_image, (None, None, None, 3), "(T, H, W, 3)")
-    t, h, w, _ = log_image.shape
-    dev = log_image.device
-    check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)", dev)
-    check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", dev)
-    max_change = check_positive("max_change", max_change)
-    launch_rows(chroma_consistency_rows, (t - 1) * h, [log_image, flow, occ, max_change], device=dev)
+    _clear_occlusion_where(chroma_consistency_rows, log_image, flow, occ, "max_change", max_change)
 
 
 def shading_gate(log_image, flow, gate, tau: float, tau_chroma: float = 0.0) -> None:
