@@ -32,7 +32,7 @@ def motion_maps(be, frames_linear, flow, params: Params, *, workspace=None):
         bilinear warp there is reliable (``maps.warp_reliability`` with
         ``params.warp_spread_max``) and the input's chromaticity stays the
         same along the flow (``maps.chroma_consistency`` with
-        ``params.chroma_change_max``; skipped where that is 0), else 0.
+        ``params.chroma_change_max``; skipped when that is 0), else 0.
     boundary : (T-1, H, W) backend array, 1 within ``params.boundary_radius``
         pixels of a flow Sobel magnitude above ``params.boundary_threshold``.
     """
