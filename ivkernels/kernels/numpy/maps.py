@@ -22,6 +22,12 @@ def occlusion_binary(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: fl
                                            check_positive("sigma_d", sigma_d), float(threshold)))
 
 
+def _check_rgb_log_image(log_image) -> None:
+    """The reference reads three channels of ``log_image``: refuse any other shape."""
+    if log_image.ndim != 4 or log_image.shape[3] != 3:
+        raise ValueError(f"log_image must have shape (T, H, W, 3), got {log_image.shape}")
+
+
 def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
     """Clear ``occ`` (T, H, W) in place where the warp of ``log_image`` (T+1, H, W, C) straddles an edge."""
     arrays(log_image=log_image, flow=flow, occ=occ)
@@ -32,16 +38,14 @@ def chroma_consistency(log_image, flow, occ, max_change: float) -> None:
     """Clear ``occ`` (T, H, W) in place where the log chromaticity of ``log_image`` (T+1, H, W, 3)
     changes along ``flow`` by ``max_change`` or more."""
     arrays(log_image=log_image, flow=flow, occ=occ)
-    if log_image.ndim != 4 or log_image.shape[3] != 3:
-        raise ValueError(f"log_image must have shape (T, H, W, 3), got {log_image.shape}")
+    _check_rgb_log_image(log_image)
     write("occ", occ, ref.chroma_consistency(log_image, flow, occ, check_positive("max_change", max_change)))
 
 
 def shading_gate(log_image, flow, gate, tau: float, tau_chroma: float = 0.0) -> None:
     """The gate (T, H, W) of Eq. 9's local term from log_image (T, H, W, 3) and flow (T-1, H, W, 2)."""
     arrays(log_image=log_image, flow=flow)
-    if log_image.ndim != 4 or log_image.shape[3] != 3:
-        raise ValueError(f"log_image must have shape (T, H, W, 3), got {log_image.shape}")
+    _check_rgb_log_image(log_image)
     t, h, w, _ = log_image.shape
     if flow.shape != (max(t - 1, 0), h, w, 2):
         raise ValueError(f"flow must have shape {(max(t - 1, 0), h, w, 2)} (T-1, H, W, 2), got {flow.shape}")
