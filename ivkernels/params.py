@@ -121,6 +121,23 @@ class Params:
         0.0160 / 0.0161; 5 / 0.3 and 10 / 0.3 give 0.0168 / 0.0194.  The
         ablation without temporal terms is best at 2 / 0.3 (0.0189) and gets
         0.0193 at 10 / 1: its best is 15% worse than intrinsic video here.
+    shading_cut_threshold
+        Eq. 9's local term is cut where the flow jumps: a pixel whose flow
+        Sobel magnitude (pixels per pixel, as ``boundary_threshold``; a step
+        of d pixels gives about d/2) exceeds this in a frame pair that
+        includes its frame gets no local pair terms of its own
+        (:func:`ivkernels.solver.motion_maps.shading_cut_gate`, through the
+        gated local term).  The paper applies the local term everywhere and
+        stops only its non-local term at motion boundaries, yet a motion
+        boundary is where one surface ends and the shading jumps (Sec. 3.3).
+        Needs the flow; 0 switches it off.  Chosen on training seeds 1 and 2
+        (perf/RESULTS.md, "Eq. 9's local term cut at flow discontinuities";
+        ``python perf/accuracy.py --seed S --no-mit --methods IV IV-gtflow
+        --iv-param shading_cut_threshold=V``): mean LMSE IV / IV-gtflow off
+        0.0052 / 0.0053 (seed 1) and 0.0048 / 0.0046 (seed 2), at 0.25
+        0.0053 / 0.0045 and 0.0048 / 0.0045, at 0.5 0.0051 / 0.0047 and
+        0.0046 / 0.0044.  The gain is largest with an accurate flow; an
+        estimated flow's false edges cost part of it.
     shading_gate_tau
         A per-pixel gate on the pair terms of Eq. 9's local term, computed
         from the input (``maps.shading_gate``): pair weight ``(g(x) + g(y)) /
@@ -129,7 +146,8 @@ class Params:
         to a neighbour (Weiss: an albedo edge keeps its contrast while the
         light or the scene moves, a shading edge does not).  Needs the flow:
         without temporal terms it is not computed.  0 switches it off
-        (``energy_shading.shading_smoothness``, bit for bit).  Off by
+        (with ``shading_cut_threshold`` 0 as well, the plain
+        ``energy_shading.shading_smoothness``, bit for bit).  Off by
         default: measured (perf/RESULTS.md, "An edge-aware local shading
         term"; ``python perf/calibrate.py --seeds 12 13 --frames 6 --size
         120 160 --no-ablation --grid lam_shading_local=30
@@ -361,6 +379,7 @@ class Params:
     # Eq. 9, 10, 13
     lam_shading_local: float = 10.0
     eps_shading: float = 0.001
+    shading_cut_threshold: float = 0.5
     shading_gate_tau: float = 0.0
     shading_gate_chroma: float = 0.0
     lam_shading_nonlocal: float = 10000.0
@@ -448,6 +467,8 @@ _RULES = {
     "overlap": Range(int, 0),
     "boundary_threshold": Range(float, 0.0),
     "init_blur": Range(float, 0.0),
+    "shading_cut_threshold": Range(float, 0.0, why="a flow Sobel magnitude in pixels per pixel; "
+                                                   "0 switches the cut off"),
     "shading_gate_tau": Range(float, 0.0, why="a log-contrast change; 0 switches the gate off"),
     "shading_gate_chroma": Range(float, 0.0, why="a log-chromaticity change; 0: the gate ignores colour"),
 }

@@ -13,7 +13,8 @@ data                       Eq. 3        ``energy_data.data_term``
 temporal albedo            Eq. 4-5      ``energy_temporal.temporal_terms``, both at
 temporal shading           Eq. 8        once (``temporal_term`` on A or S alone)
 local shading smoothness   Eq. 9        ``energy_shading.shading_smoothness`` (``_gated``
-                                        with the gate ``maps.shading_gate``)
+                                        with the cut at flow jumps, ``motion_maps.
+                                        shading_cut_gate``, and ``maps.shading_gate``)
 coupling to S~             Eq. 13       ``energy_shading.coupling_term``
 albedo GSM smoothness      Eq. 11       ``energy_albedo_gsm.gsm_smoothness``
 albedo global sparsity     Eq. 12       ``energy_albedo_entropy.entropy_term``
@@ -78,11 +79,7 @@ class WindowEnergy:
         self.A, self.S = self.X[: 3 * n].reshape((T, h, w, 3)), self.X[3 * n:].reshape((T, h, w))
         self.gA, self.gS = self.G[: 3 * n].reshape((T, h, w, 3)), self.G[3 * n:].reshape((T, h, w))
         self.S_tilde = be.empty((T, h, w))
-        self.gate = None             # per-pixel weight of Eq. 9's local term (Params.shading_gate_tau)
-        if params.shading_gate_tau > 0 and self.temporal:
-            self.gate = be.empty((T, h, w))
-            be.maps.shading_gate(log_image, flow, self.gate, params.shading_gate_tau,
-                                 tau_chroma=params.shading_gate_chroma)
+        self.gate = self._local_shading_gate(log_image, flow, params)
         self.workspace = Workspace()        # the kernels' scratch buffers, freed with this energy
         self._rows_shape = (T * h,)
         self._gsm = None
@@ -105,6 +102,31 @@ class WindowEnergy:
     @property
     def temporal(self) -> bool:
         return self.flow is not None and self.shape[0] > 1
+
+    def _local_shading_gate(self, log_image, flow, params: Params):
+        """Per-pixel weight of Eq. 9's local term, or ``None`` (weight 1 everywhere).
+
+        The product of the cut at flow discontinuities
+        (``Params.shading_cut_threshold``, :func:`ivkernels.solver.motion_maps.
+        shading_cut_gate`) and the input's temporal gate
+        (``Params.shading_gate_tau``, ``maps.shading_gate``), each where it is
+        on; both need the flow, so without temporal terms there is none.
+        """
+        if not self.temporal:
+            return None
+        be = self.be
+        T, h, w = self.shape
+        gate = None
+        if params.shading_cut_threshold > 0:
+            from ivkernels.solver.motion_maps import shading_cut_gate
+
+            gate = shading_cut_gate(be, flow, params.shading_cut_threshold, T)
+        if params.shading_gate_tau > 0:
+            edge_gate = be.empty((T, h, w))
+            be.maps.shading_gate(log_image, flow, edge_gate, params.shading_gate_tau,
+                                 tau_chroma=params.shading_gate_chroma)
+            gate = edge_gate if gate is None else be.asarray(be.numpy(gate) * be.numpy(edge_gate))
+        return gate
 
     # ------------------------------------------------------------------ terms
     def _add_terms(self, rows, terms=None) -> None:

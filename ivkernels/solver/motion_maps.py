@@ -1,7 +1,9 @@
-"""The flow's intrinsic images: occlusion w_occ (Eq. 6-7) and motion boundaries w_bnd.
+"""The flow's intrinsic images: occlusion w_occ (Eq. 6-7), motion boundaries w_bnd,
+and where Eq. 9's local shading term is cut at a flow discontinuity.
 
-Both are computed once per window at full resolution on the backend and
-resampled per pyramid level.
+The first two are computed once per window at full resolution on the backend
+and resampled per pyramid level; the cut is computed from each level's own
+flow (:func:`shading_cut_gate`).
 """
 from __future__ import annotations
 
@@ -69,3 +71,42 @@ def resample_mask(be, mask, shape: tuple[int, int]):
     small = resize(be, mask.reshape((*mask.shape, 1)), shape)
     values = be.numpy(small)[..., 0]
     return be.asarray((values >= 0.5).astype(np.float32))
+
+
+def shading_cut_gate(be, flow, threshold: float, n_frames: int):
+    """Per-pixel gate of Eq. 9's local term: 0 where the flow jumps, else 1.
+
+    Eq. 9 smooths the shading over every 3x3 neighbourhood, across motion
+    boundaries too, although a motion boundary is where one surface ends and
+    another begins and the shading is discontinuous (Sec. 3.3; its non-local
+    term already stops there).  A pixel whose flow Sobel magnitude exceeds
+    ``threshold`` in a frame pair that includes its frame (the pair it starts,
+    or the pair that ends on it) gets gate 0, so its local pair terms get
+    weight ``(g(x) + g(y)) / 2`` of 0 or 1/2 (``energy_shading.
+    shading_smoothness_gated``).  The flow is this level's, so the cut is as
+    thin as the level's flow edge; no dilation.
+
+    Parameters
+    ----------
+    be : backend.
+    flow : (n_frames - 1, h, w, 2) backend array, forward flow in pixels of this level.
+    threshold : Sobel magnitude of the flow (pixels per pixel, as
+        ``Params.boundary_threshold``) above which the local term is cut; > 0.
+    n_frames : T, the window's frame count (``flow.shape[0] + 1``).
+
+    Returns
+    -------
+    (T, h, w) backend array, float32 0 or 1.
+    """
+    n, h, w, _ = flow.shape
+    if n != n_frames - 1:
+        raise ValueError(f"flow has {n} frame pairs, expected n_frames - 1 = {n_frames - 1}")
+    sobel = be.empty((n, h, w))
+    be.derivatives.flow_sobel_magnitude(flow, sobel)
+    jumps = be.empty((n, h, w))
+    be.maps.motion_boundary(sobel, jumps, threshold, 0)
+    cut = be.numpy(jumps) > 0.5
+    touched = np.zeros((n_frames, h, w), bool)
+    touched[:-1] |= cut         # the pair t -> t+1 starts on frame t
+    touched[1:] |= cut          # ... and ends on frame t+1
+    return be.asarray((~touched).astype(np.float32))
