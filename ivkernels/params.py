@@ -136,8 +136,10 @@ class Params:
         --iv-param shading_cut_threshold=V``): mean LMSE IV / IV-gtflow off
         0.0052 / 0.0053 (seed 1) and 0.0048 / 0.0046 (seed 2), at 0.25
         0.0053 / 0.0045 and 0.0048 / 0.0045, at 0.5 0.0051 / 0.0047 and
-        0.0046 / 0.0044.  The gain is largest with an accurate flow; an
-        estimated flow's false edges cost part of it.
+        0.0046 / 0.0044.  Over the thirteen training seeds
+        (``perf/seed_spread.py``) mean LMSE IV 0.0060 -> 0.0059 and
+        IV-gtflow 0.0059 -> 0.0050.  The gain is largest with an accurate
+        flow; an estimated flow's own flow edges cost part of it.
     shading_gate_tau
         A per-pixel gate on the pair terms of Eq. 9's local term, computed
         from the input (``maps.shading_gate``): pair weight ``(g(x) + g(y)) /

@@ -38,6 +38,7 @@ import numpy as np
 
 from ivkernels.kernels.workspace import Workspace
 from ivkernels.params import Params
+from ivkernels.solver.motion_maps import shading_cut_gate
 
 
 class WindowEnergy:
@@ -118,8 +119,6 @@ class WindowEnergy:
         T, h, w = self.shape
         gate = None
         if params.shading_cut_threshold > 0:
-            from ivkernels.solver.motion_maps import shading_cut_gate
-
             gate = shading_cut_gate(be, flow, params.shading_cut_threshold, T)
         if params.shading_gate_tau > 0:
             edge_gate = be.empty((T, h, w))
