@@ -127,6 +127,28 @@ def test_lbfgs_minimises_an_ill_conditioned_quadratic(backend, rng):
     np.testing.assert_allclose(backend.numpy(x), target, atol=1e-2)
 
 
+def test_lbfgs_does_not_stop_on_its_first_short_step(backend):
+    """``E = C + |x - 1|^2 / 2`` from 0 with a large constant C: the first step, along the
+    steepest descent and scaled to a change of at most ``first_step`` = 0.1, lowers E by
+    less than ``rel_tol`` of it.  That is no sign of convergence: the run goes on, and
+    its first quasi-Newton step (exact curvature 1) lands on the minimum."""
+    n, offset = 10, 1e8
+
+    def fun(x, g):
+        r = backend.numpy(x).astype(np.float64) - 1.0
+        backend.vecops.copy(backend.asarray(r.astype(np.float32)), g)
+        return offset + 0.5 * float(r @ r)
+
+    x, g = backend.zeros((n,)), backend.zeros((n,))
+    opt = LBFGS(backend, n, memory=4, first_step=0.1)
+    steps = []
+    opt.minimize(fun, x, g, 20, rel_tol=1e-6, on_iteration=lambda k, e: steps.append(e))
+    # the first step's decrease, 0.5 * 10 * (1 - 0.9^2) = 0.95, is below 1e-6 * 1e8
+    assert offset + 5.0 - steps[0] == pytest.approx(0.95, rel=1e-3)
+    np.testing.assert_allclose(backend.numpy(x), 1.0, atol=1e-5)
+    assert opt.stop_reason == "tolerance" and len(steps) >= 2
+
+
 def _two_loop(g, pairs):
     """Textbook L-BFGS direction -H g (Nocedal & Wright Alg. 7.4) in float64."""
     q, alphas = g.copy(), []

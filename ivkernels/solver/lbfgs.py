@@ -103,7 +103,10 @@ class LBFGS:
         ``g`` its gradient; the energy there is returned.
         ``on_iteration(k, energy)`` is called after every accepted step.
         Afterwards :attr:`stop_reason` says why it stopped: ``"tolerance"``
-        (relative energy change below ``rel_tol``: converged), ``"stationary"``
+        (relative energy change of a quasi-Newton step below ``rel_tol``:
+        converged; a steepest-descent step, the first of a run or after a
+        restart, is scaled to ``first_step`` and says nothing about
+        convergence, so it never stops the run), ``"stationary"``
         (zero gradient), ``"line search"`` (no decrease along steepest descent
         either: converged to float32 precision) or ``"budget"`` (``iterations``
         used up).
@@ -125,7 +128,8 @@ class LBFGS:
             if pending is not None:
                 self._finish_pair(pending, cur, prev, live)
                 pending = None
-            if self._pairs:
+            quasi_newton = bool(self._pairs)
+            if quasi_newton:
                 c = self._direction(cur)
                 step = 1.0
             else:
@@ -174,7 +178,7 @@ class LBFGS:
             self._g_rows.reverse()
             if on_iteration is not None:
                 on_iteration(k, f)
-            if abs(f_old - f) <= rel_tol * max(1.0, abs(f)):
+            if quasi_newton and abs(f_old - f) <= rel_tol * max(1.0, abs(f)):
                 self.stop_reason = "tolerance"
                 break
         if pending is not None:
