@@ -80,7 +80,7 @@ class WindowEnergy:
         self.A, self.S = self.X[: 3 * n].reshape((T, h, w, 3)), self.X[3 * n:].reshape((T, h, w))
         self.gA, self.gS = self.G[: 3 * n].reshape((T, h, w, 3)), self.G[3 * n:].reshape((T, h, w))
         self.S_tilde = be.empty((T, h, w))
-        self.gate = self._local_shading_gate(log_image, flow, params)
+        self.gate = self._local_shading_gate()
         self.workspace = Workspace()        # the kernels' scratch buffers, freed with this energy
         self._rows_shape = (T * h,)
         self._gsm = None
@@ -104,7 +104,7 @@ class WindowEnergy:
     def temporal(self) -> bool:
         return self.flow is not None and self.shape[0] > 1
 
-    def _local_shading_gate(self, log_image, flow, params: Params):
+    def _local_shading_gate(self):
         """Per-pixel weight of Eq. 9's local term, or ``None`` (weight 1 everywhere).
 
         The product of the cut at flow discontinuities
@@ -115,14 +115,14 @@ class WindowEnergy:
         """
         if not self.temporal:
             return None
-        be = self.be
+        be, params, flow = self.be, self.params, self.flow
         T, h, w = self.shape
         gate = None
         if params.shading_cut_threshold > 0:
             gate = shading_cut_gate(be, flow, params.shading_cut_threshold, T)
         if params.shading_gate_tau > 0:
             edge_gate = be.empty((T, h, w))
-            be.maps.shading_gate(log_image, flow, edge_gate, params.shading_gate_tau,
+            be.maps.shading_gate(self.I, flow, edge_gate, params.shading_gate_tau,
                                  tau_chroma=params.shading_gate_chroma)
             gate = edge_gate if gate is None else be.asarray(be.numpy(gate) * be.numpy(edge_gate))
         return gate
