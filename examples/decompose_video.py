@@ -13,7 +13,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ivkernels import cli, synthetic
+from ivkernels import cli
+from ivkernels.evaluation import synthetic
 from ivkernels.io import write_video
 
 

@@ -18,8 +18,9 @@ from pathlib import Path
 import imageio.v2 as imageio
 import numpy as np
 
-from ivkernels import cli, metrics, synthetic
-from ivkernels.baselines import color_retinex
+from ivkernels import cli
+from ivkernels.evaluation import metrics, synthetic
+from ivkernels.evaluation.baselines import color_retinex
 from ivkernels.io import write_png_sequence
 from ivkernels.viz import albedo_to_srgb8, contact_sheet, shading_to_srgb8
 

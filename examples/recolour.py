@@ -22,7 +22,7 @@ import imageio.v2 as imageio
 import numpy as np
 
 import ivkernels as iv
-from ivkernels import synthetic
+from ivkernels.evaluation import synthetic
 from ivkernels.io import linear_to_srgb, srgb_to_linear, write_video
 from ivkernels.viz import albedo_to_srgb8, contact_sheet
 

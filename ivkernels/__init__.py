@@ -7,22 +7,24 @@ boundaries) with data-parallel Warp kernels and a Taichi mirror.
 
 Method: N. Kong, P. V. Gehler, M. J. Black, "Intrinsic Video", ECCV 2014.
 """
+import importlib
+
+from ivkernels import backends, flow, flowio, io, viz
+from ivkernels._version import __version__
 from ivkernels.decompose import DEFAULT_FLOW_METHOD, IntrinsicVideo, decompose, iter_decompose
+from ivkernels.flow import estimate_flow
 from ivkernels.params import Params
 
-__version__ = "0.1.0"
+
+#: The research harness (renderer, metrics, baselines, datasets) lives in
+#: :mod:`ivkernels.evaluation`; these names reach it from the top, loaded on
+#: first use (``ivkernels.synthetic.render_sequence(...)``).
+_EVALUATION = ("synthetic", "metrics", "baselines", "datasets")
 
 
 def __getattr__(name):
-    # Submodules with heavier imports load on first use.
-    import importlib
-
-    if name in ("synthetic", "metrics", "baselines", "io", "flowio", "viz", "flow", "backends"):
-        return importlib.import_module(f"ivkernels.{name}")
-    if name == "estimate_flow":
-        from ivkernels.flow import estimate_flow
-
-        return estimate_flow
+    if name in _EVALUATION:
+        return importlib.import_module(f"ivkernels.evaluation.{name}")
     raise AttributeError(f"module 'ivkernels' has no attribute {name!r}")
 
 

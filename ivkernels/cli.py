@@ -22,13 +22,24 @@ Every foreseeable failure prints one line and exits with status 2.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import zipfile
 from pathlib import Path
 
+import imageio.v2 as imageio
 import numpy as np
+from numpy.lib.format import open_memmap
 
-from ivkernels.backends import backend_names
+from ivkernels.backends import backend_names, check_device
+from ivkernels.decompose import DEFAULT_FLOW_PASSES, iter_decompose
+from ivkernels.flow import FLOW_METHODS
+from ivkernels.flowio import read_flo
+from ivkernels.io import Interrupted, OutputFolder, probe_frames, read_frames, write_png_sequence
+from ivkernels.kernels.thread_count import check_threads, default_threads
+from ivkernels.params import Params
+from ivkernels.validation import check_memory, decompose_nbytes
+from ivkernels.viz import albedo_to_srgb8, contact_sheet, flow_to_color, gray_to_rgb8, shading_to_srgb8
 
 
 class _Parser(argparse.ArgumentParser):
@@ -75,8 +86,6 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _read_flo_folder(folder: Path, n_pairs: int, start: int, step: int) -> np.ndarray:
-    from ivkernels.flowio import read_flo
-
     files = sorted(folder.glob("*.flo"))
     files = files[start:start + n_pairs]
     if len(files) != n_pairs:
@@ -89,8 +98,6 @@ class _NpzWriter:
     """Builds ``intrinsics.npz`` window by window through memory-mapped .npy files."""
 
     def __init__(self, folder: Path, shapes: dict):
-        from numpy.lib.format import open_memmap
-
         self.folder = folder
         self.arrays = {name: open_memmap(folder / f"{name}.npy", mode="w+", dtype=np.float32,
                                          shape=shape) for name, shape in shapes.items()}
@@ -116,12 +123,6 @@ def _check_arguments(args):
 
     Returns ``(params, flow_folder)``.
     """
-    import math
-
-    from ivkernels import Params
-    from ivkernels.flow import FLOW_METHODS
-    from ivkernels.validation import check_backend_device, check_threads
-
     src = Path(args.input)
     if not src.exists():
         raise ValueError(f"input {src} does not exist; expected a video file or a folder of images")
@@ -140,12 +141,10 @@ def _check_arguments(args):
         if args.window < 2:
             raise ValueError(f"--window must be at least 2 frames, got {args.window}")
         params = params.replace(window=args.window, overlap=min(params.overlap, args.window - 1))
-    check_backend_device(args.backend, args.device)
+    check_device(args.backend, args.device)
     if args.threads is not None:
         check_threads(args.threads, name="--threads")
     else:
-        from ivkernels.kernels.thread_count import default_threads
-
         default_threads()           # refuses a malformed IVKERNELS_THREADS before any work
     flow_folder = None
     if args.flow is not None and args.flow not in FLOW_METHODS:
@@ -161,15 +160,6 @@ def _check_arguments(args):
 def run_decompose(args) -> Path:
     """``ivkernels decompose``: check everything, then write OUT through an
     :class:`ivkernels.io.OutputFolder`."""
-    import imageio.v2 as imageio
-
-    from ivkernels import iter_decompose
-    from ivkernels.decompose import DEFAULT_FLOW_PASSES
-    from ivkernels.io import OutputFolder, probe_frames, read_frames, write_png_sequence
-    from ivkernels.validation import check_memory, decompose_nbytes
-    from ivkernels.viz import albedo_to_srgb8, contact_sheet, flow_to_color, gray_to_rgb8, \
-        shading_to_srgb8
-
     params, flow_folder = _check_arguments(args)
     src = Path(args.input)
     target = OutputFolder(args.out, force=args.force, protect={"input": src, "flow folder": flow_folder},
@@ -261,8 +251,6 @@ def main(argv=None) -> int:
     not enough memory, a file that cannot be read or written); 130 on SIGINT
     and 128 + N on signal N (SIGTERM, SIGHUP), with the partial output removed.
     """
-    from ivkernels.io import Interrupted
-
     args = _parser().parse_args(argv)
     try:
         if args.command == "decompose":

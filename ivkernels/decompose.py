@@ -13,15 +13,29 @@ from dataclasses import dataclass, field
 from typing import Iterator
 
 import numpy as np
+from tqdm.auto import tqdm
 
-from ivkernels.flow.joint import DEFAULT_PASSES
+from ivkernels import validation as v
+from ivkernels.backends import check_device, get_backend
+from ivkernels.flow import FLOW_METHODS, estimate_flow
+from ivkernels.kernels.thread_count import check_threads, get_threads, iterate_with_threads
+from ivkernels.kernels.thread_count import threads as launch_threads
 from ivkernels.params import Params
+from ivkernels.priors import load_albedo_prior
+from ivkernels.solver.guide import guide_shape, guide_solve
+from ivkernels.solver.motion_maps import motion_maps
+from ivkernels.solver.pyramid import downsample, level_shapes, resize_flow
+from ivkernels.solver.window_solver import SolveLog, solve_window
 
 #: Flow method used when ``flow=None``.
 DEFAULT_FLOW_METHOD = "classic_nl_fast"
 #: Passes of flow and intrinsic video estimated together when the flow is
 #: estimated (``flow=None`` or a method name); see :func:`decompose`.
-DEFAULT_FLOW_PASSES = DEFAULT_PASSES
+#: Measured (perf/eval_joint.py and perf/eval_flow_passes.py, training seed 1,
+#: 8 frames at 320x240): the second pass on the albedo lowers flow EPE, false
+#: occlusions and LMSE on every synthetic kind; a third changes the flow by
+#: under 0.07 px.
+DEFAULT_FLOW_PASSES = 2
 #: Frame pairs given to the flow method per call (bounds its working memory).
 FLOW_PAIRS_PER_CALL = 7
 
@@ -98,17 +112,12 @@ def window_ranges(n_frames: int, window: int, overlap: int) -> list[tuple[int, i
 
 def _resolved_threads(threads) -> int:
     """``threads`` checked, or the calling thread's launch thread count when ``None``."""
-    from ivkernels.kernels.thread_count import get_threads
-    from ivkernels.validation import check_threads
-
     return get_threads() if threads is None else check_threads(threads)
 
 
 def _as_flow(flow, n_frames: int, height: int, width: int) -> np.ndarray:
     """A user flow (T-1, H, W, 2) as float32, checked by :func:`ivkernels.validation.check_flow`."""
-    from ivkernels.validation import check_flow
-
-    return check_flow(flow, n_frames, height, width)
+    return v.check_flow(flow, n_frames, height, width)
 
 
 def iter_decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
@@ -125,8 +134,6 @@ def iter_decompose(frames, flow=None, temporal: bool = True, backend: str = "war
     The thread count applies while a window is being solved, not between
     windows (the caller's own launches keep theirs).
     """
-    from ivkernels.kernels.thread_count import iterate_with_threads
-
     job = _Decomposer(frames, flow, temporal, backend, device, params, progress, threads,
                       keep_outputs=False, flow_passes=flow_passes)
     return iterate_with_threads(job.threads, job.windows())
@@ -137,8 +144,6 @@ class _Decomposer:
 
     def __init__(self, frames, flow, temporal, backend, device, params, progress, threads, *,
                  keep_outputs: bool = True, flow_passes: int = 1):
-        from ivkernels import validation as v
-
         # cheap checks first, then shapes, then memory, and only then values and allocations
         if params is None:
             params = Params()
@@ -146,14 +151,12 @@ class _Decomposer:
             raise TypeError(f"params must be an ivkernels.Params, got {type(params).__name__}")
         if not isinstance(temporal, (bool, np.bool_)):
             raise TypeError(f"temporal must be True or False, got {temporal!r}")
-        v.check_backend_device(backend, device)
+        check_device(backend, device)
         threads = _resolved_threads(threads)
         if isinstance(flow_passes, (bool, np.bool_)) or not isinstance(flow_passes, (int, np.integer)) \
                 or flow_passes < 1:
             raise ValueError(f"flow_passes must be an int >= 1, got {flow_passes!r}")
         if isinstance(flow, str):
-            from ivkernels.flow import FLOW_METHODS
-
             if flow not in FLOW_METHODS:
                 raise ValueError(f"unknown flow method {flow!r}; expected one of {FLOW_METHODS}")
         checked = v.check_frames(frames, min_size=v.MIN_FRAME_SIZE, what="decompose")
@@ -172,19 +175,12 @@ class _Decomposer:
         if flow is not None and not isinstance(flow, str):
             given_flow = _as_flow(flow, T, H, W)
 
-        from ivkernels.backends import get_backend
-        from ivkernels.priors import load_albedo_prior
-        from ivkernels.solver.window_solver import SolveLog
-
         self.frames = v.linear_frames(checked)
         self.params = params
         self.temporal = bool(temporal)
         self.be = get_backend(backend, device)
         self.threads = threads
-        if self.be.name == "taichi":
-            from ivkernels.kernels.taichi import init
-
-            init(threads)
+        self.be.use_threads(threads)
         self.prior = load_albedo_prior()
         self.progress = progress
         self.log = SolveLog()
@@ -205,8 +201,6 @@ class _Decomposer:
 
         missing = [t for t in range(start, stop - 1) if t not in cached]
         if missing:
-            from tqdm.auto import tqdm
-
             t0 = time.perf_counter()
             # Several pairs per call: the flow kernels then run over longer row
             # ranges, with fewer launches per pair, while the progress bar still
@@ -234,10 +228,6 @@ class _Decomposer:
         solve, which works at the guide's size: it is estimated on the
         frames resized to that size, and its up-sampled vectors are returned.
         """
-        from ivkernels.flow import estimate_flow
-        from ivkernels.flow.joint import guide_shape
-        from ivkernels.solver.pyramid import downsample, resize_flow
-
         be, (H, W) = self.be, frames.shape[1:3]
         shape = guide_shape(H, W, self.params) if self.joint and self.params.first_flow_at_guide_size \
             else (H, W)
@@ -257,15 +247,12 @@ class _Decomposer:
         """Passes 2..N of flow and intrinsic video together, for one window.
 
         Each pass re-estimates the window's flow on the albedo of a guide
-        solve (:func:`ivkernels.flow.joint.guide_solve`), which obeys
+        solve (:func:`ivkernels.solver.guide.guide_solve`), which obeys
         brightness constancy where the input does not (paper Sec. 5.1, 6);
         Classic+NL starts from the previous pass's flow, with
         ``Params.flow_refine_warps`` warping steps per level.  Returns the last
         flow and the last guide's log shading (at the guide's size).
         """
-        from ivkernels.flow import estimate_flow
-        from ivkernels.flow.joint import guide_solve
-
         classic = self.flow_method.startswith("classic_nl")
         guide_shading = None
         for _ in range(self.flow_passes - 1):
@@ -279,18 +266,12 @@ class _Decomposer:
         return flow_np, guide_shading
 
     def windows(self) -> Iterator[WindowResult]:
-        from ivkernels.solver.motion_maps import motion_maps
-        from ivkernels.solver.pyramid import level_shapes
-        from ivkernels.solver.window_solver import solve_window
-
         be, p = self.be, self.params
         T, H, W, _ = self.frames.shape
         ranges = window_ranges(T, int(p.window), int(p.overlap))
         n_levels = len(level_shapes(H, W, p.pyramid_scale, p.pyramid_min_size))
         bar = None
         if self.progress:
-            from tqdm.auto import tqdm
-
             bar = tqdm(total=len(ranges) * n_levels, desc="solve (window x level)", unit="level")
         cached_flow: dict = {}
         carried = None
@@ -306,8 +287,6 @@ class _Decomposer:
                 elif self.flow is not None and self.temporal and p.start_from_guide \
                         and flow_np is not None and len(flow_np):
                     # A given flow is final: one guide solve with it, the last solve's start.
-                    from ivkernels.flow.joint import guide_solve
-
                     _, guide_shading = guide_solve(be, frames_be, flow_np, p, self.prior, log=self.log)
                 t0 = time.perf_counter()
                 flow_be = occ_be = bnd_be = None
@@ -372,7 +351,7 @@ def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
         flow on that solve's albedo, which obeys brightness constancy where
         the input does not (paper Sec. 5.1 and 6), starting from the previous
         flow, and the last solve uses the final flow
-        (:func:`ivkernels.flow.joint.guide_albedo`).  Default 2, measured on
+        (:func:`ivkernels.solver.guide.guide_albedo`).  Default 2, measured on
         training seed 1 (perf/RESULTS.md, "Flow and intrinsic video
         together"): the second pass lowers flow EPE on a static scene under
         a moving light from 0.168 to 0.053 px, under rotating shadows from
@@ -413,8 +392,6 @@ def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
     >>> video.albedo.shape, video.shading.shape
     ((3, 48, 64, 3), (3, 48, 64))
     """
-    from ivkernels.kernels.thread_count import threads as launch_threads
-
     n_threads = _resolved_threads(threads)
     with launch_threads(n_threads):
         return _collect(_Decomposer(frames, flow, temporal, backend, device, params, progress,

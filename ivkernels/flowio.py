@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .io import atomic_output
+from ivkernels.io import atomic_output
 
 TAG_FLOAT = 202021.25
 TAG_BYTES = b"PIEH"

@@ -23,13 +23,15 @@ import shutil
 import signal
 import socket
 import tempfile
-from functools import lru_cache
 from pathlib import Path
 
 import cv2
+import imageio_ffmpeg
 import numpy as np
 
-from ivkernels.kernels.host import srgb_encode
+from ivkernels._version import __version__
+from ivkernels.colour import linear_to_srgb, srgb_decode_table, srgb_int_to_linear, srgb_to_linear
+from ivkernels.validation import check_frames, check_memory, linear_frames
 
 IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp")
 VIDEO_EXTENSIONS_WRITE = (".mp4", ".mkv", ".mov")
@@ -52,66 +54,6 @@ __all__ = [
     "OutputFolder",
     "OUTPUT_MARKER",
 ]
-
-
-# ----------------------------------------------------------------------------
-# sRGB transfer function (IEC 61966-2-1)
-# ----------------------------------------------------------------------------
-
-def _check_float(x, name: str) -> np.ndarray:
-    x = np.asarray(x)
-    if not np.issubdtype(x.dtype, np.floating):
-        raise TypeError(
-            f"{name}: expected a floating-point array with values in [0, 1], got dtype "
-            f"{x.dtype}; for uint8/uint16 images use to_linear_float()"
-        )
-    return x
-
-
-def srgb_to_linear(x) -> np.ndarray:
-    """Decode sRGB-encoded values to linear light (IEC 61966-2-1).
-
-    Parameters
-    ----------
-    x : array of any shape, floating point, sRGB-encoded values in ``[0, 1]``
-        (values outside are clipped to ``[0, 1]`` first).
-
-    Returns
-    -------
-    Linear values, same shape and float dtype as ``x``:
-    ``x / 12.92`` for ``x <= 0.04045``, else ``((x + 0.055) / 1.055) ** 2.4``.
-    """
-    x = _check_float(x, "srgb_to_linear")
-    x = np.clip(x, 0.0, 1.0)
-    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4).astype(x.dtype, copy=False)
-
-
-def linear_to_srgb(x) -> np.ndarray:
-    """Encode linear values as sRGB (inverse of :func:`srgb_to_linear`).
-
-    ``x`` (any shape, floating point) is clipped to ``[0, 1]``; returns
-    ``12.92 x`` for ``x <= 0.0031308``, else ``1.055 x ** (1/2.4) - 0.055``,
-    same shape and float dtype.
-    """
-    x = _check_float(x, "linear_to_srgb")
-    return srgb_encode(x, x.dtype)
-
-
-@lru_cache(maxsize=2)
-def srgb_decode_table(levels: int) -> np.ndarray:
-    """float32 look-up table: integer sRGB code ``0 .. levels-1`` -> linear."""
-    codes = np.arange(levels, dtype=np.float64) / (levels - 1)
-    table = srgb_to_linear(codes).astype(np.float32)
-    table.setflags(write=False)
-    return table
-
-
-def _srgb_int_to_linear(img: np.ndarray) -> np.ndarray:
-    if img.dtype == np.uint8:
-        return srgb_decode_table(256)[img]
-    if img.dtype == np.uint16:
-        return srgb_decode_table(65536)[img]
-    raise TypeError(f"expected uint8 or uint16 sRGB values, got dtype {img.dtype}")
 
 
 def to_linear_float(frames, name: str = "frames") -> np.ndarray:
@@ -141,8 +83,6 @@ def to_linear_float(frames, name: str = "frames") -> np.ndarray:
                frames of different sizes in a list, non-finite or
                out-of-range floats.
     """
-    from ivkernels.validation import check_frames, linear_frames
-
     return linear_frames(check_frames(frames, name, single_frame=False))
 
 
@@ -180,7 +120,7 @@ def _decode_to_linear_rgb(img: np.ndarray, source: str) -> np.ndarray:
     else:
         img = img[:, :, 2::-1]          # BGRA -> RGB, alpha dropped
     if img.dtype in (np.uint8, np.uint16):
-        return np.ascontiguousarray(_srgb_int_to_linear(img))
+        return np.ascontiguousarray(srgb_int_to_linear(img))
     if img.dtype in (np.float32, np.float64):
         # Floating-point files (e.g. 32-bit TIFF) are taken as linear values.
         return to_linear_float(img[None], name=source)[0]
@@ -236,8 +176,6 @@ def _video_error(path: Path, err: BaseException) -> ValueError:
 
 def _open_video(path: Path):
     """``(meta, generator of (H, W, 3) uint8 frames)`` of a video, through imageio-ffmpeg."""
-    import imageio_ffmpeg
-
     gen = imageio_ffmpeg.read_frames(str(path), pix_fmt="rgb24")
     try:
         meta = next(gen)
@@ -355,7 +293,6 @@ def read_frames(path, start: int = 0, stop: int | None = None, step: int = 1,
     the file list or the video header before decoding; the message gives the
     size).
     """
-    from ivkernels.validation import check_memory
 
     _check_range(start, stop, step)
     scale = _check_scale(scale)
@@ -410,7 +347,7 @@ def read_frames(path, start: int = 0, stop: int | None = None, step: int = 1,
                 ended = False
                 break
             if i >= start and (i - start) % step == 0:
-                frames.append(_resize(_srgb_int_to_linear(rgb), scale))
+                frames.append(_resize(srgb_int_to_linear(rgb), scale))
     finally:
         decoded.close()
     if ended and announced is not None and n_decoded < announced - _truncation_tolerance(announced) \
@@ -557,8 +494,6 @@ def write_video(path, frames_srgb_uint8, fps: float = 10) -> Path:
     Odd widths/heights are made even (yuv420p needs it) by repeating the last
     column/row, so a read-back frame may be one pixel wider/taller.
     """
-    import imageio_ffmpeg
-
     frames = np.asarray(frames_srgb_uint8)
     if frames.dtype != np.uint8:
         raise TypeError(f"write_video: expected uint8 sRGB frames, got dtype {frames.dtype}")
@@ -825,8 +760,6 @@ def glob_escape(name: str) -> str:
 
 
 def _write_marker(folder: Path) -> None:
-    from ivkernels import __version__
-
     info = {"written_by": "ivkernels", "version": __version__, "pid": os.getpid(),
             "host": socket.gethostname()}
     (folder / OUTPUT_MARKER).write_text(json.dumps(info) + "\n")

@@ -8,7 +8,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
-from ivkernels.validation import MIN_FRAME_SIZE, Range
+from ivkernels.validation import MIN_FRAME_SIZE, Range, check_fields
 
 
 @dataclass(frozen=True)
@@ -295,7 +295,7 @@ class Params:
         With ``flow_passes`` > 1 (:func:`ivkernels.decompose`), each pass
         before the last solves the window at this fraction of its size; its
         shading, up-sampled, divides the input into the albedo the next
-        flow is estimated on (:func:`ivkernels.flow.joint.guide_albedo`).
+        flow is estimated on (:func:`ivkernels.solver.guide.guide_albedo`).
         Chosen on training seed 1 (8 frames at 320x240, perf/RESULTS.md,
         "Flow and intrinsic video together, per window"): at 0.5 the second
         pass keeps most of what a full-size first pass gives (flow EPE on
@@ -418,8 +418,6 @@ class Params:
     def __post_init__(self):
         # Every field against its rule in _RULES (a new int / float field without a
         # rule must be finite and >= 0), then the rules that tie fields together.
-        from ivkernels.validation import check_fields
-
         check_fields(self, _RULES, "Params")
         if not self.overlap < self.window:
             raise ValueError(

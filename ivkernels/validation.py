@@ -15,11 +15,6 @@ everywhere:
   and dtype (a frame that differs is named).
 * **flow** (:func:`check_flow`): float, ``(T-1, H, W, 2)``, finite, and
   at most :data:`MAX_FLOW` pixels in each component once in float32.
-* **backend and device** (:func:`check_backend_device`): a backend named in
-  the registry (:func:`ivkernels.backends.backend_names`: ``"warp"`` on
-  ``"cpu"`` or ``"cuda[:N]"``, a CUDA device must be present; ``"taichi"``
-  and ``"numpy"`` on ``"cpu"``), on a kind of device it declares.
-* **threads** (:func:`check_threads`): an integer >= 1.
 * **memory** (:func:`check_memory`): the bytes a call will hold are estimated
   from the shapes alone and compared with the memory available *before*
   anything is allocated.
@@ -40,6 +35,8 @@ from dataclasses import dataclass
 from typing import Any, NamedTuple, Sequence
 
 import numpy as np
+
+from ivkernels.colour import srgb_decode_table
 
 #: Float frames may lie this far outside [0, 1] (rounding) and are clipped.
 FLOAT_TOLERANCE = 1e-6
@@ -189,8 +186,6 @@ def linear_frames(frames: Frames) -> np.ndarray:
     Integer frames are sRGB-decoded; float frames are checked one frame at a
     time (finite, inside ``[0, 1]`` up to :data:`FLOAT_TOLERANCE`) and copied.
     """
-    from ivkernels.io import srgb_decode_table
-
     T, H, W = frames.shape
     check_memory(frames.linear_nbytes, f"{frames.name}: {T} frames of {W}x{H} in float32")
     out = np.empty((T, H, W, 3), np.float32)
@@ -251,49 +246,6 @@ def check_flow(flow, n_frames: int, height: int, width: int, name: str = "flow")
 # ----------------------------------------------------------------------------
 # backend and device
 # ----------------------------------------------------------------------------
-
-def check_backend_device(backend, device) -> None:
-    """Refuse a backend the registry does not hold, a malformed device, a device
-    the backend does not run on, or a CUDA device that is not present."""
-    from ivkernels.backends import backend_spec
-    from ivkernels.backends.registry import device_kind
-
-    spec = backend_spec(backend)
-    if not isinstance(device, str):
-        raise TypeError(f"device must be a string, 'cpu' or 'cuda[:N]', got {device!r}")
-    kind = device_kind(device)
-    if kind not in spec.devices:
-        raise ValueError(f"the {backend} backend runs on device={' or '.join(repr(d) for d in spec.devices)} "
-                         f"only, got {device!r}")
-    if kind == "cpu":
-        return
-    index = int(device[5:]) if device.startswith("cuda:") else 0
-    count = cuda_device_count()
-    if count == 0:
-        raise ValueError(f"device={device!r}: no CUDA device is available (Warp finds none); "
-                         "use device='cpu'")
-    if index >= count:
-        raise ValueError(f"device={device!r}: only {count} CUDA device(s) are available (cuda:0"
-                         f"{'' if count == 1 else f' .. cuda:{count - 1}'})")
-
-
-def check_threads(threads, name: str = "threads") -> int:
-    """Refuse a CPU thread count that is not an integer >= 1; return it as an int."""
-    if isinstance(threads, (bool, np.bool_)) or not isinstance(threads, numbers.Integral):
-        raise TypeError(f"{name} must be an integer >= 1 (CPU threads), got {threads!r}")
-    if threads < 1:
-        raise ValueError(f"{name} must be an integer >= 1 (CPU threads), got {threads!r}")
-    return int(threads)
-
-
-def cuda_device_count() -> int:
-    """Number of CUDA devices Warp can use (0 when none)."""
-    import warp as wp
-
-    wp.config.log_level = wp.LOG_WARNING
-    wp.init()
-    return wp.get_cuda_device_count() if wp.is_cuda_available() else 0
-
 
 # ----------------------------------------------------------------------------
 # memory

@@ -10,8 +10,8 @@ import cv2
 import flow_vis
 import numpy as np
 
-from .flowio import valid_flow_mask
-from .io import linear_to_srgb
+from ivkernels.colour import linear_to_srgb
+from ivkernels.flowio import valid_flow_mask
 
 __all__ = [
     "flow_to_color",

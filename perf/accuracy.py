@@ -50,8 +50,8 @@ import time
 import numpy as np
 
 import ivkernels as iv
-from ivkernels import datasets, metrics, synthetic
-from ivkernels.baselines import color_retinex, weiss, weiss_flow
+from ivkernels.evaluation import datasets, metrics, synthetic
+from ivkernels.evaluation.baselines import color_retinex, weiss, weiss_flow
 
 EVAL_SEED = 0
 METHODS = ("IV", "IV-noflow", "IV-gtflow", "CRET", "CRET-tuned", "Weiss", "Weiss-gtflow", "Weiss-flow",

@@ -81,7 +81,7 @@ def main(argv=None) -> int:
     from ivkernels.backends import get_backend
     from ivkernels.kernels import launch
     from ivkernels.kernels.cases import all_cases, bind
-    from ivkernels.validation import check_threads
+    from ivkernels.kernels.thread_count import check_threads
 
     n = launch.default_threads() if args.threads is None else check_threads(args.threads, "--threads")
     if n < 2:

@@ -38,7 +38,7 @@ def run_one(args) -> dict:
 
     import ivkernels as iv
     from calibrate import parse_grid
-    from ivkernels import synthetic
+    from ivkernels.evaluation import synthetic
     from ivkernels.kernels.launch import set_threads
 
     set_threads(args.threads)
@@ -67,7 +67,7 @@ def run_stream(args) -> dict:
     import numpy as np
 
     import ivkernels as iv
-    from ivkernels import synthetic
+    from ivkernels.evaluation import synthetic
 
     # A long sequence made of renders of shorter ones (the renderer keeps whole
     # sequences in memory; the solver must not).

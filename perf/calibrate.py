@@ -23,7 +23,7 @@ import time
 import numpy as np
 
 import ivkernels as iv
-from ivkernels import metrics, synthetic
+from ivkernels.evaluation import metrics, synthetic
 
 EVAL_SEED = 0
 
@@ -53,7 +53,7 @@ def score(seq, params, temporal: bool) -> float:
 
 
 def mit_albedo_lmse(obj, params) -> float:
-    """Albedo LMSE in the mask of one MIT object (:class:`ivkernels.datasets.MITObject`), zero flow."""
+    """Albedo LMSE in the mask of one MIT object (:class:`ivkernels.evaluation.datasets.MITObject`), zero flow."""
     t, h, w, _ = obj.frames.shape
     video = iv.decompose(obj.frames, flow=np.zeros((t - 1, h, w, 2), np.float32), params=params)
     truth = np.broadcast_to(obj.albedo, obj.frames.shape)
@@ -82,12 +82,12 @@ def main(argv=None) -> int:
             for seed in args.seeds for kind in args.kinds]
     objects = []
     if args.mit:
-        from ivkernels import datasets
+        from ivkernels.evaluation import datasets
 
         names = args.mit_objects or datasets.available_mit_objects()
         objects = [datasets.load_mit_object(name, scale=args.mit_scale) for name in names]
         if not objects:
-            raise SystemExit("--mit: the MIT-Berkeley objects are not present (ivkernels.datasets)")
+            raise SystemExit("--mit: the MIT-Berkeley objects are not present (ivkernels.evaluation.datasets)")
     header = " ".join(f"{k[:8]}/{s}" for k, s, _ in seqs)
     if seqs:
         print(f"{'config':<60} {'mode':<8} {header}   mean      s")

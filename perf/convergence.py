@@ -27,7 +27,7 @@ import numpy as np
 
 import ivkernels as iv
 from calibrate import parse_grid
-from ivkernels import metrics, synthetic
+from ivkernels.evaluation import metrics, synthetic
 
 
 def finest_energies(video) -> tuple[float, float]:

@@ -9,7 +9,7 @@ searches, :class:`ivkernels.solver.energy.ConstrainedEnergy`):
 
 - ``solution``: the log shading ``decompose()`` returned;
 - ``truth``: the log of the true shading (synthetic: the renderer's; MIT: the
-  per-frame shading of :class:`ivkernels.datasets.MITObject`);
+  per-frame shading of :class:`ivkernels.evaluation.datasets.MITObject`);
 - ``weiss``: the log shading that Weiss's temporal median implies
   (``I - A_weiss``, grey part), the baseline the MIT objects are scored against.
 
@@ -34,7 +34,7 @@ import numpy as np
 
 import ivkernels as iv
 from calibrate import parse_grid
-from ivkernels import baselines, datasets, metrics, synthetic
+from ivkernels.evaluation import baselines, datasets, metrics, synthetic
 from ivkernels.backends.registry import get_backend
 from ivkernels.priors import load_albedo_prior
 from ivkernels.solver.energy import ConstrainedEnergy, WindowEnergy

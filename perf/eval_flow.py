@@ -26,7 +26,7 @@ from ivkernels.flow import FLOW_METHODS, estimate_flow
 from ivkernels.flowio import read_flo
 from ivkernels.io import read_image
 from ivkernels.kernels.launch import set_threads
-from ivkernels.metrics import flow_errors
+from ivkernels.evaluation.metrics import flow_errors
 
 SEQUENCES = ("Dimetrodon", "Grove2", "Grove3", "Hydrangea", "RubberWhale", "Urban2", "Urban3", "Venus")
 
@@ -48,7 +48,7 @@ def middlebury_pairs(root: Path, names):
 
 
 def synthetic_pairs(size, n_frames: int):
-    from ivkernels.synthetic import KINDS, render_sequence
+    from ivkernels.evaluation.synthetic import KINDS, render_sequence
 
     for kind in KINDS:
         seq = render_sequence(kind, n_frames=n_frames, size=size, seed=1)

@@ -3,7 +3,7 @@
 For every synthetic kind, ``decompose(frames, flow_passes=N)`` with the
 estimated flow (the default method), against the renderer's ground truth:
 flow end-point error (all pixels, and pixels visible in the next frame),
-occlusion IoU against the visibility (:func:`ivkernels.flow.joint.occlusion_iou`),
+occlusion IoU against the visibility (:func:`ivkernels.evaluation.joint.occlusion_iou`),
 LMSE of albedo / shading / mean, and the seconds of the flow, the guide
 solves ("-" where none ran) and the final solve, with the process's CPU seconds.  Choose on
 training seeds (not 0); report on seed 0.
@@ -19,8 +19,8 @@ import time
 
 import ivkernels as iv
 from calibrate import parse_grid
-from ivkernels import metrics, synthetic
-from ivkernels.flow.joint import occlusion_iou
+from ivkernels.evaluation import metrics, synthetic
+from ivkernels.evaluation.joint import occlusion_iou
 
 
 def main(argv=None) -> int:

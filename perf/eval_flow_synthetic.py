@@ -1,7 +1,7 @@
 """Flow accuracy on the rendered synthetic sequences, per kind, under changing light.
 
 Prints the mean end-point error (EPE, pixels, over all pixels of all frame
-pairs) of each flow on each kind of :mod:`ivkernels.synthetic` (and the extra
+pairs) of each flow on each kind of :mod:`ivkernels.evaluation.synthetic` (and the extra
 kinds with ``--extra``), for the evaluation seed 0 and the training seeds,
 plus the mean seconds per frame pair.  Rows: ``zero`` (no motion), the
 OpenCV and Classic+NL methods of :func:`ivkernels.flow.estimate_flow`, and
@@ -22,10 +22,10 @@ import time
 
 import numpy as np
 
-from ivkernels import synthetic
+from ivkernels.evaluation import synthetic
 from ivkernels.flow import estimate_flow
 from ivkernels.kernels.launch import set_threads
-from ivkernels.metrics import flow_errors
+from ivkernels.evaluation.metrics import flow_errors
 
 BASELINES = ("zero", "dis", "classic_nl_fast")
 

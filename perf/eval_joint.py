@@ -1,6 +1,6 @@
 """Flow and intrinsic video estimated together: what each outer pass buys.
 
-For each synthetic kind, runs :func:`ivkernels.flow.joint.joint_decompose`
+For each synthetic kind, runs :func:`ivkernels.evaluation.joint.joint_decompose`
 for ``--passes`` passes and prints, per pass, the flow's mean change from
 the previous pass, flow EPE (all pixels and visible ones), occlusion IoU
 against the renderer's visibility (with the fractions of pixels marked
@@ -16,8 +16,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ivkernels import synthetic
-from ivkernels.flow.joint import FLOW_SOURCES, joint_decompose
+from ivkernels.evaluation import synthetic
+from ivkernels.evaluation.joint import FLOW_SOURCES, joint_decompose
 from ivkernels.kernels.launch import set_threads
 
 

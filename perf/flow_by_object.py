@@ -24,7 +24,7 @@ import numpy as np
 
 import ivkernels as iv
 from calibrate import EVAL_SEED, parse_grid
-from ivkernels import metrics, synthetic
+from ivkernels.evaluation import metrics, synthetic
 
 
 def swapped_flow(true_flow: np.ndarray, estimated: np.ndarray, object_id: np.ndarray, k: int) -> np.ndarray:

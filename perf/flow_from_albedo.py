@@ -15,7 +15,7 @@ import argparse
 import numpy as np
 
 import ivkernels as iv
-from ivkernels import metrics, synthetic
+from ivkernels.evaluation import metrics, synthetic
 
 KINDS_WITH_LIGHT_CHANGE = ("free_camera", "rotating_shadows")
 SEED = 0

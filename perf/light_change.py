@@ -21,7 +21,7 @@ import argparse
 import numpy as np
 
 import ivkernels as iv
-from ivkernels import synthetic
+from ivkernels.evaluation import synthetic
 from ivkernels.backends import get_backend
 from ivkernels.solver.independent_shadings import (SHADING_CHANGE_FLOOR, count_from_ratios,
                                                    ratios_from_changes, shading_changes)
@@ -67,7 +67,7 @@ def main(argv=None) -> int:
             flow = seq.flow if truth else iv.estimate_flow(frames)
             report(f"{kind}/{seed} ({'true' if truth else 'estimated'} flow)", frames, flow, params)
     if args.mit:
-        from ivkernels import datasets
+        from ivkernels.evaluation import datasets
 
         for name in datasets.available_mit_objects():
             obj = datasets.load_mit_object(name, scale=args.mit_scale)

@@ -23,7 +23,7 @@ import statistics
 
 from accuracy import EVAL_SEED, IV_METHODS, METHODS, evaluate_kind, iv_params_from, mean_rows
 
-from ivkernels import synthetic
+from ivkernels.evaluation import synthetic
 
 TRAINING_SEEDS = tuple(range(1, 14))
 

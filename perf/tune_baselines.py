@@ -1,6 +1,6 @@
 """Choose the baselines' free settings on training data only.
 
-1. Colour Retinex (``ivkernels.baselines.color_retinex``): its two
+1. Colour Retinex (``ivkernels.evaluation.baselines.color_retinex``): its two
    thresholds, grey and chromaticity (log units), searched coordinate-wise
    over a grid (grey thresholds at Grosse's chromaticity threshold 1.0, then
    chromaticity thresholds at the best grey one, and so on until neither
@@ -14,7 +14,7 @@
    * the MIT-Berkeley training objects as ten-frame moving-light sequences
      (half size by default): albedo LMSE inside the mask against the one
      reflectance image, averaged over the objects (the shading truth of the
-     frames is only derived, see ``ivkernels.datasets``, so it is left out).
+     frames is only derived, see ``ivkernels.evaluation.datasets``, so it is left out).
 
    The criterion is the mean of the two averages (each data source counts
    half); the pair with the lowest is printed, to be recorded as
@@ -32,8 +32,8 @@ import time
 
 import numpy as np
 
-from ivkernels import datasets, metrics, synthetic
-from ivkernels.baselines import GROSSE_THRESHOLDS, TUNED_THRESHOLDS, color_retinex, weiss, weiss_flow
+from ivkernels.evaluation import datasets, metrics, synthetic
+from ivkernels.evaluation.baselines import GROSSE_THRESHOLDS, TUNED_THRESHOLDS, color_retinex, weiss, weiss_flow
 
 EVAL_SEED = 0
 GRID_GRAY = (0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.6, 0.8, 1.2, 2.0, 3.0, 100.0)   # 100: grey edges off

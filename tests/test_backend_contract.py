@@ -7,7 +7,7 @@ import sys
 import numpy as np
 import pytest
 
-from ivkernels import cli, validation
+from ivkernels import cli
 from ivkernels.backends import (FAMILIES, FAMILY_PROTOCOLS, BackendProtocol, NumpyBackend, available_backends,
                                 backend_names, backend_spec, get_backend, register_backend)
 from ivkernels.backends import registry
@@ -102,9 +102,9 @@ def test_a_registered_backend_reaches_every_reader(monkeypatch):
 
     register_backend("echo", Echo)
     assert isinstance(get_backend("echo"), Echo)
-    validation.check_backend_device("echo", "cpu")
+    registry.check_device("echo", "cpu")
     with pytest.raises(ValueError, match="echo backend runs on device='cpu' only"):
-        validation.check_backend_device("echo", "cuda")
+        registry.check_device("echo", "cuda")
     assert cli._parser().parse_args(["decompose", "in", "-o", "out", "--backend", "echo"]).backend == "echo"
 
 

@@ -3,9 +3,9 @@ Weiss (2001) temporal median, plain and along the flow."""
 import numpy as np
 import pytest
 
-from ivkernels.baselines import (GROSSE_THRESHOLDS, TUNED_THRESHOLDS, _invert_flow, _poisson_neumann,
+from ivkernels.evaluation.baselines import (GROSSE_THRESHOLDS, TUNED_THRESHOLDS, _invert_flow, _poisson_neumann,
                                  color_retinex, weiss, weiss_flow)
-from ivkernels.metrics import albedo_flicker, lmse
+from ivkernels.evaluation.metrics import albedo_flicker, lmse
 
 
 def _blocks_times_smooth(rng, h=60, w=80, block=10):
@@ -109,7 +109,7 @@ def test_baselines_take_frames_as_decompose_does(rng):
 
 def test_color_retinex_beats_image_on_synthetic_sequences():
     """Averaged over the synthetic kinds, as the paper's baseline comparison needs."""
-    from ivkernels import synthetic
+    from ivkernels.evaluation import synthetic
 
     ours, base = [], []
     for kind in synthetic.KINDS:
@@ -270,7 +270,7 @@ def test_weiss_rejects(call, exc, msg):
 
 
 def test_weiss_beats_the_input_and_grosse_retinex_on_the_static_moving_light_kind():
-    from ivkernels import synthetic
+    from ivkernels.evaluation import synthetic
 
     seq = synthetic.render_sequence("static_moving_light", n_frames=5, size=(48, 64), seed=3)
     a, s = weiss(seq.frames)

@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from ivkernels import cli, synthetic
+from ivkernels import cli
+from ivkernels.evaluation import synthetic
 from ivkernels.io import write_png_sequence
 
 

@@ -13,8 +13,9 @@ import numpy as np
 import pytest
 
 import ivkernels as iv
-from ivkernels import Params, metrics, synthetic
-from ivkernels.validation import cuda_device_count
+from ivkernels import Params
+from ivkernels.evaluation import metrics, synthetic
+from ivkernels.backends import cuda_device_count
 
 pytestmark = [pytest.mark.cuda,
               pytest.mark.skipif("cuda_device_count() == 0", reason="no CUDA device")]

@@ -3,8 +3,8 @@ import cv2
 import numpy as np
 import pytest
 
-from ivkernels import datasets
-from ivkernels.datasets import MIT_OBJECTS, available_mit_objects, load_mit_object
+from ivkernels.evaluation import datasets
+from ivkernels.evaluation.datasets import MIT_OBJECTS, available_mit_objects, load_mit_object
 
 PRESENT = available_mit_objects()
 

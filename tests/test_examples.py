@@ -11,8 +11,8 @@ import imageio.v2 as imageio
 import numpy as np
 import pytest
 
-from ivkernels import metrics, synthetic
-from ivkernels.baselines import color_retinex
+from ivkernels.evaluation import metrics, synthetic
+from ivkernels.evaluation.baselines import color_retinex
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 

@@ -1,9 +1,10 @@
-"""Flow and intrinsic video estimated together (ivkernels.flow.joint)."""
+"""Flow and intrinsic video estimated together (ivkernels.evaluation.joint)."""
 import numpy as np
 import pytest
 
-from ivkernels import synthetic
-from ivkernels.flow.joint import FLOW_SOURCES, MIN_GUIDE_SIZE, guide_shape, joint_decompose, occlusion_iou
+from ivkernels.evaluation import synthetic
+from ivkernels.evaluation.joint import FLOW_SOURCES, joint_decompose, occlusion_iou
+from ivkernels.solver.guide import MIN_GUIDE_SIZE, guide_shape
 
 
 def test_occlusion_iou_hand_computed():
@@ -65,7 +66,7 @@ def test_guide_albedo_keeps_the_texture_and_drops_the_shading():
     import ivkernels as iv
     from ivkernels.backends import get_backend
     from ivkernels.flow import as_linear_rgb
-    from ivkernels.flow.joint import guide_albedo
+    from ivkernels.solver.guide import guide_albedo
     from ivkernels.priors import load_albedo_prior
 
     seq = synthetic.render_sequence("static_moving_light", n_frames=3, size=(40, 54), seed=2)
@@ -93,7 +94,7 @@ def test_guide_albedo_keeps_the_texture_and_drops_the_shading():
 @pytest.mark.slow
 def test_default_passes_remove_the_motion_a_moving_light_fakes():
     import ivkernels as iv
-    from ivkernels import metrics
+    from ivkernels.evaluation import metrics
 
     seq = synthetic.render_sequence("static_moving_light", n_frames=4, size=(60, 80), seed=3)
     one = iv.decompose(seq.frames, flow_passes=1)
@@ -107,7 +108,7 @@ def test_default_passes_remove_the_motion_a_moving_light_fakes():
 def test_a_solve_started_from_the_truth_skips_the_coarse_levels_and_keeps_it():
     """solve_window(start_shading=...) enters the pyramid at the start's level and solves from it."""
     import ivkernels as iv
-    from ivkernels import metrics
+    from ivkernels.evaluation import metrics
     from ivkernels.backends import get_backend
     from ivkernels.priors import load_albedo_prior
     from ivkernels.solver.motion_maps import motion_maps
@@ -173,20 +174,20 @@ def test_the_guide_runs_its_own_budget_capped_by_the_solve(monkeypatch, solve_bu
                                                             expected):
     import ivkernels as iv
     from ivkernels.backends.registry import get_backend
-    from ivkernels.flow.joint import guide_solve
+    from ivkernels.solver.guide import guide_solve
     from ivkernels.priors import load_albedo_prior
-    from ivkernels.solver import window_solver
+    from ivkernels.solver import guide as guide_module    # where guide_solve() looks solve_window up
 
     seq = synthetic.render_sequence("objects_camera", n_frames=2, size=(48, 64), seed=4)
     params = iv.Params(lbfgs_iterations=solve_budget, guide_lbfgs_iterations=guide_budget)
     seen = []
-    real = window_solver.solve_window
+    real = guide_module.solve_window
 
     def spy(be, frames, flow, occlusion, boundary, p, prior, **kw):
         seen.append(p)
         return real(be, frames, flow, occlusion, boundary, p, prior, **kw)
 
-    monkeypatch.setattr(window_solver, "solve_window", spy)
+    monkeypatch.setattr(guide_module, "solve_window", spy)
     be = get_backend("warp")
     albedo, shading = guide_solve(be, be.asarray(seq.frames), seq.flow, params, load_albedo_prior())
     assert [p.lbfgs_iterations for p in seen] == [expected]

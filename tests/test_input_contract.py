@@ -36,7 +36,7 @@ def no_work(monkeypatch):
     def refuse(*args, **kwargs):
         raise AssertionError("frames were read before the arguments were checked")
 
-    monkeypatch.setattr(ivio, "read_frames", refuse)
+    monkeypatch.setattr(cli, "read_frames", refuse)
 
 
 # ----------------------------------------------------------------------------- Params
@@ -379,7 +379,7 @@ def test_cli_window_sets_a_valid_overlap(image_folder, tmp_path, capsys, monkeyp
         seen.update(kwargs)
         raise ValueError("stop here")
 
-    monkeypatch.setattr(iv, "iter_decompose", fake_iter)
+    monkeypatch.setattr(cli, "iter_decompose", fake_iter)
     rc = cli.main(["decompose", str(image_folder), "-o", str(tmp_path / "out"), "--window", "2"])
     assert rc == 2 and seen["params"].window == 2 and seen["params"].overlap == 1
 

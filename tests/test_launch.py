@@ -9,7 +9,8 @@ import pytest
 import warp as wp
 
 import ivkernels as iv
-from ivkernels import Params, cli, synthetic
+from ivkernels import Params, cli
+from ivkernels.evaluation import synthetic
 from ivkernels.backends import get_backend
 from ivkernels.kernels import launch, thread_count
 from ivkernels.kernels.launch import (THREADS_ENV, available_cores, get_threads, iterate_with_threads,

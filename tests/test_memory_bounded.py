@@ -13,7 +13,8 @@ import pytest
 import warp as wp
 
 import ivkernels as iv
-from ivkernels import Params, synthetic
+from ivkernels import Params
+from ivkernels.evaluation import synthetic
 from ivkernels.backends import get_backend
 
 FAST = Params(outer_iterations=1, lbfgs_iterations=4)

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from ivkernels.metrics import (_dis_flow, albedo_consistency, albedo_flicker, angular_error, endpoint_error, flow_errors,
+from ivkernels.evaluation.metrics import (_dis_flow, albedo_consistency, albedo_flicker, angular_error, endpoint_error, flow_errors,
                                intrinsic_lmse, lmse, temporal_incoherence)
 
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import ivkernels as iv
-from ivkernels import metrics, synthetic
+from ivkernels.evaluation import metrics, synthetic
 from ivkernels.backends import get_backend
 from ivkernels.solver.motion_maps import motion_maps
 

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 import ivkernels as iv
-from ivkernels import Params, cli, metrics, synthetic
+from ivkernels import Params, cli
+from ivkernels.evaluation import metrics, synthetic
 from ivkernels.io import write_png_sequence
 
 #: A fixed iteration budget (2 outer x 15 L-BFGS steps, no early stop on this

@@ -201,9 +201,7 @@ def test_stale_partial_of_a_dead_run_is_named_and_removed(image_folder, tmp_path
     def stop(*args, **kwargs):
         raise ValueError("stop here")
 
-    from ivkernels import io as ivio
-
-    monkeypatch.setattr(ivio, "read_frames", stop)
+    monkeypatch.setattr(cli, "read_frames", stop)
     rc = cli.main(["decompose", str(image_folder), "-o", str(tmp_path / "out"), "--quiet"])
     err = capsys.readouterr().err
     assert rc == 2 and f"removed {stale}" in err and not stale.exists()

@@ -84,7 +84,7 @@ def test_bench_balance_prints_a_row_per_pair(tmp_path):
     import cv2
 
     from ivkernels.flowio import write_flo
-    from ivkernels.synthetic import render_sequence
+    from ivkernels.evaluation.synthetic import render_sequence
 
     seq = render_sequence("objects_camera", n_frames=2, size=(40, 56), seed=1)
     pair = tmp_path / "Venus"

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import ivkernels as iv
-from ivkernels import metrics
+from ivkernels.evaluation import metrics
 from ivkernels.backends import get_backend
 from ivkernels.solver.motion_maps import shading_cut_gate
 

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 import ivkernels as iv
-from ivkernels import Params, synthetic
+from ivkernels import Params
+from ivkernels.evaluation import synthetic
 
 FAST = Params(outer_iterations=2, lbfgs_iterations=15)
 

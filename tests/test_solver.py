@@ -419,7 +419,7 @@ def _finest_energy_at_ten_iterations(kind: str, size: tuple[int, int], seed: int
     """The finest level's last energy of decompose() with the true flow, 4 frames,
     10 L-BFGS iterations per alternation and the given Params fields."""
     import ivkernels as iv
-    from ivkernels import synthetic
+    from ivkernels.evaluation import synthetic
 
     seq = synthetic.render_sequence(kind, n_frames=4, size=size, seed=seed)
     video = iv.decompose(seq.frames, flow=seq.flow, params=Params(lbfgs_iterations=10, **fields))

@@ -3,8 +3,8 @@ visibility, resolution scaling, determinism and input checks."""
 import numpy as np
 import pytest
 
-import ivkernels.synthetic as syn
-from ivkernels.synthetic import AMBIENT, KINDS, TEXTURE_KINDS, SyntheticSequence, _build_scene, render_sequence
+import ivkernels.evaluation.synthetic as syn
+from ivkernels.evaluation.synthetic import AMBIENT, KINDS, TEXTURE_KINDS, SyntheticSequence, _build_scene, render_sequence
 
 SIZE = (72, 96)
 N_FRAMES = 4

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import ivkernels as iv
-from ivkernels import metrics, synthetic
+from ivkernels.evaluation import metrics, synthetic
 
 
 def _flicker(log_albedo: np.ndarray, mask: np.ndarray) -> float:

@@ -29,16 +29,17 @@ from ivkernels.backends.base import Backend
 from ivkernels.backends.numpy_backend import NumpyBackend
 from ivkernels.backends.protocols import FAMILIES, FAMILY_PROTOCOLS, BackendProtocol
 from ivkernels.backends.registry import (BackendSpec, available_backends, backend_names, backend_spec,
-                                         get_backend, register_backend)
+                                         check_device, get_backend, register_backend)
 from ivkernels.backends.taichi_backend import TaichiBackend
-from ivkernels.backends.warp_backend import WarpBackend, cuda_devices
+from ivkernels.backends.warp_backend import WarpBackend, cuda_device_count, cuda_devices
 
 __all__ = [
     "Backend", "BackendProtocol", "BackendSpec", "FAMILIES", "FAMILY_PROTOCOLS", "NumpyBackend",
-    "TaichiBackend", "WarpBackend", "available_backends", "backend_names", "backend_spec", "get_backend",
-    "register_backend",
+    "TaichiBackend", "WarpBackend", "available_backends", "backend_names", "backend_spec", "check_device",
+    "cuda_device_count", "get_backend", "register_backend",
 ]
 
-register_backend("warp", WarpBackend, devices=("cpu", "cuda"), present=cuda_devices)
+register_backend("warp", WarpBackend, devices=("cpu", "cuda"), present=cuda_devices,
+                 device_count=lambda kind: cuda_device_count())
 register_backend("taichi", TaichiBackend, devices=("cpu",))
 register_backend("numpy", NumpyBackend, devices=("cpu",), oracle=True)

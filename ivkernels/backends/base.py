@@ -24,6 +24,15 @@ class Backend:
     def __init__(self, device: str = "cpu"):
         self.device = device
 
+    def use_threads(self, threads: int) -> None:
+        """Make the next launches run on ``threads`` CPU threads.
+
+        Warp and the NumPy references read the calling thread's count from
+        :mod:`ivkernels.kernels.thread_count` at every launch, so the default
+        does nothing; a backend whose runtime fixes its thread count when it
+        starts (Taichi) restarts it here.
+        """
+
     def __getattr__(self, family: str):
         if family in FAMILIES and self.kernel_package:
             module = importlib.import_module(f"{self.kernel_package}.{family}")

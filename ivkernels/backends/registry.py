@@ -4,8 +4,8 @@ A backend registers itself under a name with a factory ``factory(device)``
 returning an object that satisfies
 :class:`~ivkernels.backends.protocols.BackendProtocol`, and the kinds of
 device it runs on.  :func:`get_backend`, :func:`available_backends`, the
-command line's ``--backend`` choices, :func:`ivkernels.validation.check_backend_device`
-and the tests' ``backend`` fixture all ask this module, so a new backend is
+command line's ``--backend`` choices, :func:`check_device` (the one check of a
+backend name and a device) and the tests' ``backend`` fixture all ask this module, so a new backend is
 one :func:`register_backend` call away from every one of them.
 """
 from __future__ import annotations
@@ -29,6 +29,8 @@ class BackendSpec:
         process (e.g. ``["cuda"]``); ``None``: none are looked for.
     oracle : built on the NumPy references; the per-kernel batteries, which
         compare backends against those references, leave it out.
+    device_count : ``device_count(kind)`` -> how many devices of ``kind``
+        (e.g. ``"cuda"``) are present; ``None``: none beyond the CPU.
     """
 
     name: str
@@ -36,6 +38,7 @@ class BackendSpec:
     devices: tuple
     present: Callable[[], Sequence[str]] | None = None
     oracle: bool = False
+    device_count: Callable[[str], int] | None = None
 
 
 _specs: dict[str, BackendSpec] = {}
@@ -44,7 +47,8 @@ _lock = threading.Lock()
 
 
 def register_backend(name: str, factory: Callable, *, devices: Sequence[str] = ("cpu",),
-                     present: Callable[[], Sequence[str]] | None = None, oracle: bool = False) -> None:
+                     present: Callable[[], Sequence[str]] | None = None, oracle: bool = False,
+                     device_count: Callable[[str], int] | None = None) -> None:
     """Register ``factory`` as backend ``name``, running on ``devices`` (kinds among :data:`DEVICE_KINDS`).
 
     Registering a name again replaces its entry (and forgets backends made
@@ -59,7 +63,7 @@ def register_backend(name: str, factory: Callable, *, devices: Sequence[str] = (
     if not callable(factory):
         raise TypeError(f"factory must be callable, got {factory!r}")
     with _lock:
-        _specs[name] = BackendSpec(name, factory, devices, present, bool(oracle))
+        _specs[name] = BackendSpec(name, factory, devices, present, bool(oracle), device_count)
         for key in [k for k in _made if k[0] == name]:
             del _made[key]
 
@@ -86,12 +90,39 @@ def device_kind(device: str) -> str:
     raise ValueError(f"device must be 'cpu' or 'cuda[:N]', got {device!r}")
 
 
-def get_backend(name: str = "warp", device: str = "cpu"):
-    """The backend ``name`` on ``device``, made once per (name, device) and kept."""
+def check_device(name: str, device) -> BackendSpec:
+    """The one check of a backend and a device; returns the backend's :class:`BackendSpec`.
+
+    Refuses a backend the registry does not hold, a device that is not a
+    string ``"cpu"`` / ``"cuda"`` / ``"cuda:N"``, a kind of device the backend
+    does not declare, and a CUDA device that is not present.
+    """
     spec = backend_spec(name)
-    if device_kind(device) not in spec.devices:
+    if not isinstance(device, str):
+        raise TypeError(f"device must be a string, 'cpu' or 'cuda[:N]', got {device!r}")
+    kind = device_kind(device)
+    if kind not in spec.devices:
         raise ValueError(f"the {name} backend runs on device={' or '.join(repr(d) for d in spec.devices)} "
                          f"only, got {device!r}")
+    if kind == "cpu":
+        return spec
+    index = int(device[5:]) if device.startswith("cuda:") else 0
+    count = spec.device_count(kind) if spec.device_count is not None else 0
+    if count == 0:
+        raise ValueError(f"device={device!r}: no CUDA device is available (Warp finds none); "
+                         "use device='cpu'")
+    if index >= count:
+        raise ValueError(f"device={device!r}: only {count} CUDA device(s) are available (cuda:0"
+                         f"{'' if count == 1 else f' .. cuda:{count - 1}'})")
+    return spec
+
+
+def get_backend(name: str = "warp", device: str = "cpu"):
+    """The backend ``name`` on ``device``, made once per (name, device) and kept.
+
+    ``name`` and ``device`` are checked by :func:`check_device` first.
+    """
+    spec = check_device(name, device)
     key = (name, device)
     with _lock:
         if key not in _made:

@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 from ivkernels.backends.host_arrays import HostArrayBackend
+from ivkernels.kernels.taichi import init
+from ivkernels.kernels.thread_count import get_threads
 
 
 class TaichiBackend(HostArrayBackend):
@@ -17,7 +19,8 @@ class TaichiBackend(HostArrayBackend):
 
     def __init__(self, device: str = "cpu", threads: int | None = None):
         super().__init__(device)
-        from ivkernels.kernels.taichi import init
-        from ivkernels.kernels.thread_count import get_threads
-
         init(get_threads() if threads is None else threads)
+
+    def use_threads(self, threads: int) -> None:
+        """Restart Taichi's runtime on ``threads`` threads (nothing if it already runs on them)."""
+        init(threads)

@@ -6,6 +6,19 @@ import numpy as np
 from ivkernels.backends.base import Backend, as_shape
 
 
+def _init_warp():
+    """Import and start Warp quietly (once; later calls return at once), and return it.
+
+    Warp is imported here, not at the top: the Taichi and NumPy backends
+    never load it.
+    """
+    import warp as wp
+
+    wp.config.log_level = wp.LOG_WARNING
+    wp.init()
+    return wp
+
+
 class WarpBackend(Backend):
     """Warp arrays (``wp.array``) on ``device`` ("cpu" or "cuda[:N]"); kernels in :mod:`ivkernels.kernels.warp`."""
 
@@ -13,17 +26,9 @@ class WarpBackend(Backend):
     kernel_package = "ivkernels.kernels.warp"
 
     def __init__(self, device: str = "cpu"):
-        import warp as wp
-
-        wp.config.log_level = wp.LOG_WARNING
-        wp.init()
-        if device.startswith("cuda") and not wp.is_cuda_available():
-            raise RuntimeError(
-                f"device={device!r} was asked for but Warp finds no CUDA device; use device='cpu'")
-        if device != "cpu" and not device.startswith("cuda"):
-            raise ValueError(f"device must be 'cpu' or 'cuda[:N]', got {device!r}")
+        # ``device`` was checked by the registry (:func:`~ivkernels.backends.registry.check_device`).
         super().__init__(device)
-        self._wp = wp
+        self._wp = _init_warp()
 
     def asarray(self, a: np.ndarray):
         """Backend array holding ``a`` (a zero-copy view on the CPU when possible)."""
@@ -53,6 +58,11 @@ class WarpBackend(Backend):
 
 def cuda_devices() -> list[str]:
     """``["cuda"]`` when Warp finds a CUDA device, else ``[]`` (the devices beyond the CPU)."""
-    import warp as wp
-
+    wp = _init_warp()
     return ["cuda"] if wp.is_cuda_available() else []
+
+
+def cuda_device_count() -> int:
+    """Number of CUDA devices Warp can use (0 when none)."""
+    wp = _init_warp()
+    return wp.get_cuda_device_count() if wp.is_cuda_available() else 0

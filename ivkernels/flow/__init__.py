@@ -22,7 +22,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from ivkernels import validation as v
+from ivkernels.backends import check_device, get_backend
 from ivkernels.flow.classic_nl import DATA_TERMS, PRESETS, ClassicNL, ClassicNLSettings, settings_for
+from ivkernels.flow.opencv_flow import dis_flow, farneback_flow
+from ivkernels.kernels.thread_count import check_threads, get_threads
+from ivkernels.kernels.thread_count import threads as launch_threads
 
 FLOW_METHODS = ("classic_nl_fast", "classic_nl", "dis", "farneback")
 
@@ -42,9 +47,7 @@ def as_linear_rgb(frames, backend: str = "warp", device: str = "cpu") -> np.ndar
     stacked.  At least 2 frames of at least 4x4 pixels.  ``backend`` and
     ``device`` are checked too.
     """
-    from ivkernels import validation as v
-
-    v.check_backend_device(backend, device)
+    check_device(backend, device)
     checked = v.check_frames(frames, min_frames=2, min_size=MIN_SIZE, what="flow")
     T, H, W = checked.shape
     v.check_memory(v.flow_nbytes(T, H, W), f"optical flow on {T} frames of {W}x{H}")
@@ -78,33 +81,19 @@ def estimate_flow(frames, method: str = "classic_nl_fast", backend: str = "warp"
     (T-1, H, W, 2) float32 flow in pixels; channel 0 = dx (columns),
     channel 1 = dy (rows); pixel ``x`` of frame ``t`` moves to ``x + u_t(x)``.
     """
-    from ivkernels.kernels.thread_count import get_threads, threads as launch_threads
-    from ivkernels.validation import check_threads
-
     if not isinstance(method, str) or method not in FLOW_METHODS:
         raise ValueError(f"unknown flow method {method!r}; expected one of {FLOW_METHODS}")
     threads = get_threads() if threads is None else check_threads(threads)
     frames = as_linear_rgb(frames, backend, device)
     if method == "dis":
-        from ivkernels.flow.opencv_flow import dis_flow
-
         return dis_flow(frames, **options)
     if method == "farneback":
-        from ivkernels.flow.opencv_flow import farneback_flow
-
         return farneback_flow(frames, **options)
-    from ivkernels.backends import get_backend
-
     init = options.pop("init", None)
     if init is not None:
-        from ivkernels.validation import check_flow
-
-        init = check_flow(init, *frames.shape[:3], name="init")
+        init = v.check_flow(init, *frames.shape[:3], name="init")
     settings = settings_for(method, **options)
     with launch_threads(threads):
         be = get_backend(backend, device)
-        if be.name == "taichi":
-            from ivkernels.kernels.taichi import init as init_taichi
-
-            init_taichi(threads)
+        be.use_threads(threads)
         return ClassicNL(be, settings)(frames, init)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ivkernels.kernels.host import srgb_encode
+from ivkernels.colour import srgb_encode
 
 #: Farneback parameters: pyramid scale, levels, window, iterations, poly_n, poly_sigma, flags.
 FARNEBACK_DEFAULTS = dict(pyr_scale=0.5, levels=5, winsize=15, iterations=3, poly_n=5, poly_sigma=1.2, flags=0)

@@ -8,7 +8,6 @@ one definition serves every backend.  Nothing here imports a backend.
 
 Contents
 --------
-* sRGB: :func:`srgb_encode`, the one NumPy sRGB encoder of the project.
 * ``flow_classic``: :data:`GREY_WEIGHTS`.
 * ``pyramid``: :func:`gaussian_kernel`.
 * ``energy_albedo_entropy``: :class:`EntropyScratch`, :func:`allocate_entropy_scratch_with`,
@@ -26,23 +25,6 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ivkernels.kernels.checks import check_int
-
-# ----------------------------------------------------------------------------
-# sRGB
-# ----------------------------------------------------------------------------
-
-
-def srgb_encode(x, dtype=np.float64) -> np.ndarray:
-    """sRGB transfer function (IEC 61966-2-1) of linear values, any shape.
-
-    ``x`` is clipped to ``[0, 1]`` first; returns ``12.92 x`` for
-    ``x <= 0.0031308``, else ``1.055 x ** (1/2.4) - 0.055``, computed in
-    float64 and returned as ``dtype`` (values in ``[0, 1]``).
-    """
-    c = np.clip(np.asarray(x, np.float64), 0.0, 1.0)
-    enc = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
-    return enc.astype(dtype, copy=False)
-
 
 # ----------------------------------------------------------------------------
 # flow_classic

@@ -18,16 +18,24 @@ The number of threads N:
 from __future__ import annotations
 
 import contextlib
+import numbers
 import os
 import threading
-
-from ivkernels.validation import check_threads
 
 #: Environment variable giving the default thread count.
 THREADS_ENV = "IVKERNELS_THREADS"
 
 _state = threading.local()
 _default_threads: int | None = None
+
+
+def check_threads(threads, name: str = "threads") -> int:
+    """Refuse a CPU thread count that is not an integer >= 1; return it as an int."""
+    if isinstance(threads, bool) or not isinstance(threads, numbers.Integral):
+        raise TypeError(f"{name} must be an integer >= 1 (CPU threads), got {threads!r}")
+    if threads < 1:
+        raise ValueError(f"{name} must be an integer >= 1 (CPU threads), got {threads!r}")
+    return int(threads)
 
 
 def available_cores() -> int:

@@ -47,6 +47,7 @@ import os
 import sys
 import time
 
+import cv2
 import numpy as np
 
 from ivkernels.priors import tabulate_gsm
@@ -75,8 +76,6 @@ def default_data_dir() -> str:
 
 def load_object(folder: str) -> tuple[np.ndarray, np.ndarray]:
     """Log albedo (H, W, 3) float64 (natural log, linear RGB) and mask (H, W) bool of one object."""
-    import cv2
-
     refl = cv2.imread(os.path.join(folder, "reflectance.png"), cv2.IMREAD_UNCHANGED)
     mask = cv2.imread(os.path.join(folder, "mask.png"), cv2.IMREAD_UNCHANGED)
     if refl is None or mask is None:

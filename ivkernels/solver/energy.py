@@ -38,6 +38,7 @@ import numpy as np
 
 from ivkernels.kernels.workspace import Workspace
 from ivkernels.params import Params
+from ivkernels.priors import entropy_blur_weights
 from ivkernels.solver.motion_maps import shading_cut_gate
 
 
@@ -91,8 +92,6 @@ class WindowEnergy:
                          float(prior.r2_max))
         self._entropy = None
         if params.lam_albedo_sparsity > 0:
-            from ivkernels.priors import entropy_blur_weights
-
             ent = be.energy_albedo_entropy
             self._entropy = (be.asarray(prior.whiten.astype(np.float32)), float(prior.hist_lo),
                              float(prior.hist_bin_width),

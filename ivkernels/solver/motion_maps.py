@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from ivkernels.params import Params
+from ivkernels.solver.pyramid import resize
 
 
 def motion_maps(be, frames_linear, flow, params: Params, *, workspace=None):
@@ -64,8 +65,6 @@ def motion_maps(be, frames_linear, flow, params: Params, *, workspace=None):
 
 def resample_mask(be, mask, shape: tuple[int, int]):
     """Bilinear resize of a (T, H, W) 0/1 map to ``shape``, re-binarised at 0.5."""
-    from ivkernels.solver.pyramid import resize
-
     if tuple(mask.shape[1:]) == tuple(shape):
         return mask
     small = resize(be, mask.reshape((*mask.shape, 1)), shape)

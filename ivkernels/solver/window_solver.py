@@ -105,7 +105,7 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
     progress : optional callable ``progress(n_done_levels)``.
     start_shading : optional (T, h, w) NumPy array, log shading of this
         window solved at a reduced size (the flow guide's solve,
-        :func:`ivkernels.flow.joint.guide_solve`).  The solve starts from it at
+        :func:`ivkernels.solver.guide.guide_solve`).  The solve starts from it at
         the level :func:`start_level_for` gives (resized to that level if the
         sizes differ) and skips the coarser levels, which that solve already
         did; without it the coarsest level starts from blurred log luminance.

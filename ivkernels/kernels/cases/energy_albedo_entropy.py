@@ -13,14 +13,13 @@ import numpy as np
 from ivkernels.kernels.cases import EXACT, Allocate, Case, Gradient, Tol
 from ivkernels.kernels.cases.inputs import F32, nans, normal
 from ivkernels.kernels.reference import energy_albedo_entropy as ref
+from ivkernels.priors import entropy_blur_weights, load_albedo_prior
 
 BIN_WIDTH = 0.06
 
 
 @functools.lru_cache(maxsize=None)
 def prior():
-    from ivkernels.priors import load_albedo_prior
-
     return load_albedo_prior()
 
 
@@ -44,8 +43,6 @@ def tight_cube(A, whiten, h, margin=3):
 
 def _setting(rng, T, H, W, spread=0.05, n_colours=4):
     """Albedo, whitening, cube, blur taps and the reference histogram, blur and dots."""
-    from ivkernels.priors import entropy_blur_weights
-
     p = prior()
     A = clustered_albedo(rng, T, H, W, spread, n_colours)
     whiten = p.whiten.astype(F32)

@@ -8,6 +8,7 @@ import numpy as np
 from ivkernels.kernels.cases import Case, Gradient, Tol
 from ivkernels.kernels.cases.inputs import F32, normal
 from ivkernels.kernels.reference import energy_albedo_gsm as ref
+from ivkernels.priors import load_albedo_prior, tabulate_gsm
 
 DENSE_TABLE = 2 ** 17      # table points for the gradient check (the shipped table has 8192)
 
@@ -16,8 +17,6 @@ DENSE_TABLE = 2 ** 17      # table points for the gradient check (the shipped ta
 def gsm_tables(n: int | None = None) -> tuple:
     """float32 ``(sigma_inv, table_g, table_dg)`` and ``r2_max`` of the shipped prior;
     ``n`` re-tabulates the mixture on ``n`` points."""
-    from ivkernels.priors import load_albedo_prior, tabulate_gsm
-
     prior = load_albedo_prior()
     if n is None:
         tg, tdg = prior.table_g, prior.table_dg

@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.kernels.host import GREY_WEIGHTS, srgb_encode
+from ivkernels.colour import srgb_encode
+from ivkernels.kernels.host import GREY_WEIGHTS
 
 
 def robust_weight(z, a=0.45, eps=1e-3, quad_frac=0.0, quad_weight=2e6):

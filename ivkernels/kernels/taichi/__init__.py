@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import threading
 
+from ivkernels.kernels.thread_count import check_threads, get_threads
+
 _lock = threading.Lock()
 _initialised_threads: int | None = None
 
@@ -38,8 +40,6 @@ def init(threads: int | None = None) -> None:
     so a program that keeps one thread count pays for initialisation once.
     """
     global _initialised_threads
-    from ivkernels.kernels.thread_count import get_threads
-    from ivkernels.validation import check_threads
 
     threads = get_threads() if threads is None else check_threads(threads)
     with _lock:

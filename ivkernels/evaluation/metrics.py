@@ -22,8 +22,8 @@ import cv2
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
-from .flowio import valid_flow_mask
-from .io import linear_to_srgb
+from ivkernels.colour import linear_to_srgb
+from ivkernels.flowio import valid_flow_mask
 
 __all__ = [
     "lmse",

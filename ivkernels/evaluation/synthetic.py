@@ -95,7 +95,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ivkernels.kernels.host import srgb_encode
+from ivkernels.colour import srgb_encode
 
 __all__ = ["KINDS", "SyntheticSequence", "render_sequence"]
 

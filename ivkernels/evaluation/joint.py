@@ -1,4 +1,4 @@
-"""Flow and intrinsic video estimated together, in outer passes.
+"""Flow and intrinsic video estimated together, in outer passes, over a whole video.
 
 Kong, Gehler & Black (ECCV 2014) pre-compute the flow on the input video and
 note (Sec. 5.1, 6) that the recovered albedo obeys brightness constancy where
@@ -7,8 +7,9 @@ the way forward.
 
 :func:`ivkernels.decompose` does it by default inside every window
 (``flow_passes``): the passes before the last solve the window at reduced
-size, and :func:`guide_albedo` turns that solve into the full-size albedo
-the next flow is estimated on.  :func:`joint_decompose` is the whole-video
+size, and :func:`ivkernels.solver.guide.guide_albedo` turns that solve into
+the full-size albedo the next flow is estimated on.  :func:`joint_decompose`
+is the whole-video
 form used to measure the passes: it alternates full decompositions and
 flows,
 
@@ -27,7 +28,7 @@ passes or when the mean change of the flow between passes falls below
 Every pass is recorded in :class:`JointPass` (the flow's change and, given
 the truth of a synthetic sequence, flow EPE, occlusion IoU and LMSE).
 
->>> from ivkernels.flow.joint import joint_decompose
+>>> from ivkernels.evaluation.joint import joint_decompose
 >>> result = joint_decompose(frames, passes=2)              # doctest: +SKIP
 >>> result.video.flow.shape, [p.flow_change for p in result.history]
 """
@@ -38,22 +39,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["JointPass", "JointResult", "joint_decompose", "guide_albedo", "guide_shape", "guide_solve", "occlusion_iou",
-           "FLOW_SOURCES", "DEFAULT_PASSES"]
+from ivkernels.decompose import DEFAULT_FLOW_PASSES, decompose
+from ivkernels.evaluation import metrics
+from ivkernels.flow import FLOW_METHODS, as_linear_rgb, estimate_flow
 
-#: The guide solve never goes below this many pixels on its shorter side.
-MIN_GUIDE_SIZE = 16
+__all__ = ["JointPass", "JointResult", "joint_decompose", "occlusion_iou", "FLOW_SOURCES"]
 
 #: What the flow of passes after the first is computed on.
 FLOW_SOURCES = ("albedo", "relit", "input")
-
-#: Measured default number of passes (perf/eval_joint.py and
-#: perf/eval_flow_passes.py, training seed 1, 8 frames at 320x240): the second
-#: pass on the albedo lowers flow EPE, false occlusions and LMSE on every
-#: synthetic kind; a third changes the flow by under 0.07 px.  Also the
-#: default of :func:`ivkernels.decompose`'s ``flow_passes``.
-DEFAULT_PASSES = 2
-
 
 @dataclass
 class JointPass:
@@ -64,7 +57,7 @@ class JointPass:
     ``occlusion_iou`` (see :func:`occlusion_iou`), ``occluded`` (fraction of
     pixels the occlusion map marks occluded; the truth's fraction is
     ``occluded_true``) and ``lmse`` (dict of
-    :func:`ivkernels.metrics.intrinsic_lmse`)."""
+    :func:`ivkernels.evaluation.metrics.intrinsic_lmse`)."""
 
     index: int
     flow_change: float
@@ -105,79 +98,6 @@ def occlusion_iou(occlusion, visibility) -> float:
     return float(np.logical_and(est, gt).sum() / union)
 
 
-def guide_albedo(be, frames, flow, params, prior, *, log=None) -> np.ndarray:
-    """The albedo a window's next flow pass is estimated on (:func:`guide_solve`'s first output)."""
-    return guide_solve(be, frames, flow, params, prior, log=log)[0]
-
-
-def guide_shape(height: int, width: int, params) -> tuple[int, int]:
-    """(h, w) of the guide solve for frames of ``height`` x ``width``:
-    ``params.flow_guide_scale`` times their size, the shorter side kept at
-    :data:`MIN_GUIDE_SIZE` pixels or the frames' own, if smaller."""
-    floor = min(MIN_GUIDE_SIZE, height, width)
-    scale = max(float(params.flow_guide_scale), floor / min(height, width))
-    return max(1, int(round(height * scale))), max(1, int(round(width * scale)))
-
-
-def guide_solve(be, frames, flow, params, prior, *, log=None) -> tuple[np.ndarray, np.ndarray]:
-    """The albedo a window's next flow pass is estimated on, from a solve at reduced size.
-
-    The window's frames and flow are resized to ``params.flow_guide_scale``
-    times their size (antialiased; the shorter side kept at
-    :data:`MIN_GUIDE_SIZE` pixels or the frames' own, if smaller), the motion
-    maps are made there and Eq. 2 is minimised there
-    (:func:`ivkernels.solver.window_solver.solve_window`) with
-    ``min(lbfgs_iterations, guide_lbfgs_iterations)`` L-BFGS iterations per
-    alternation.  The guide's log shading is up-sampled bilinearly to full
-    size, and the albedo is ``I - S`` at full size: shading is smooth and
-    survives the resampling, while the albedo keeps the input's finest
-    texture, which the flow needs.
-    The albedo is scaled so that its 99th percentile is 1 and clipped to
-    [0, 1], as the flow expects.
-
-    Parameters
-    ----------
-    be : backend.
-    frames : (T, H, W, 3) backend array, linear RGB in [0, 1].
-    flow : (T-1, H, W, 2) float32 NumPy array, the current flow.
-    params : :class:`ivkernels.Params`; prior : the albedo prior.
-    log : optional :class:`ivkernels.solver.window_solver.SolveLog`; the
-        guide's seconds are added to it as ``"guide"``.
-
-    Returns
-    -------
-    albedo : (T, H, W, 3) float32 NumPy array in [0, 1].
-    log_shading : (T, h, w) float32 NumPy array, the guide's log shading at
-        its own (reduced) size: the start the window's last solve can take
-        (``solve_window(..., start_shading=...)``).
-    """
-    from ivkernels.solver.motion_maps import motion_maps
-    from ivkernels.solver.pyramid import downsample, resize, resize_flow
-    from ivkernels.solver.window_solver import SolveLog, solve_window
-
-    t0 = time.perf_counter()
-    T, H, W, _ = frames.shape
-    shape = guide_shape(H, W, params)
-    if shape == (H, W):
-        small, small_flow = frames, be.asarray(np.ascontiguousarray(flow, np.float32))
-    else:
-        small = downsample(be, frames, shape)
-        small_flow = resize_flow(be, be.asarray(np.ascontiguousarray(flow, np.float32)), shape)
-    occlusion, boundary = motion_maps(be, small, small_flow, params)
-    iterations = min(int(params.lbfgs_iterations), int(params.guide_lbfgs_iterations))
-    _, S_small = solve_window(be, small, small_flow, occlusion, boundary,
-                              params.replace(lbfgs_iterations=iterations), prior, log=SolveLog())
-    S = S_small
-    if shape != (H, W):
-        S = be.numpy(resize(be, be.asarray(np.ascontiguousarray(S_small[..., None])), (H, W)))[..., 0]
-    log_image = np.log(np.maximum(be.numpy(frames), params.log_floor))
-    albedo = np.exp(log_image - S[..., None])
-    albedo /= float(np.percentile(albedo, 99.0)) or 1.0
-    if log is not None:
-        log.add_time("guide", time.perf_counter() - t0)
-    return np.ascontiguousarray(np.clip(albedo, 0.0, 1.0), np.float32), S_small
-
-
 def _flow_input(video, source: str, frames) -> np.ndarray:
     if source == "input":
         return frames
@@ -188,7 +108,7 @@ def _flow_input(video, source: str, frames) -> np.ndarray:
     return np.ascontiguousarray(np.clip(albedo * shading[None, :, :, None], 0.0, 1.0), np.float32)
 
 
-def joint_decompose(frames, passes: int = DEFAULT_PASSES, method: str = "classic_nl_fast", source: str = "albedo",
+def joint_decompose(frames, passes: int = DEFAULT_FLOW_PASSES, method: str = "classic_nl_fast", source: str = "albedo",
                     warm_start: bool = True, tol: float = 0.0, backend: str = "warp", device: str = "cpu",
                     params=None, flow_options: dict | None = None, truth=None,
                     progress: bool = False) -> JointResult:
@@ -205,7 +125,7 @@ def joint_decompose(frames, passes: int = DEFAULT_PASSES, method: str = "classic
     tol : stop early once the mean flow change between passes is below ``tol`` pixels.
     backend, device, params : passed to :func:`ivkernels.decompose`.
     flow_options : extra keyword arguments of :func:`estimate_flow`.
-    truth : optional :class:`ivkernels.synthetic.SyntheticSequence` of these
+    truth : optional :class:`ivkernels.evaluation.synthetic.SyntheticSequence` of these
         frames; each pass then records its flow EPE, occlusion IoU and LMSE.
 
     Returns
@@ -215,10 +135,6 @@ def joint_decompose(frames, passes: int = DEFAULT_PASSES, method: str = "classic
         ``flow`` is the joint flow and ``diagnostics["flow_method"]`` says
         how it was made; ``history``: a :class:`JointPass` per pass.
     """
-    from ivkernels import metrics
-    from ivkernels.decompose import decompose
-    from ivkernels.flow import FLOW_METHODS, as_linear_rgb, estimate_flow
-
     if isinstance(passes, bool) or not isinstance(passes, (int, np.integer)) or passes < 1:
         raise ValueError(f"passes must be an int >= 1, got {passes!r}")
     if source not in FLOW_SOURCES:

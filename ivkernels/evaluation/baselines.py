@@ -306,7 +306,7 @@ def weiss(frames, eps: float = 1e-3, colour: str = "chromaticity"):
 
     Examples
     --------
-    >>> from ivkernels import synthetic
+    >>> from ivkernels.evaluation import synthetic
     >>> seq = synthetic.render_sequence("static_moving_light", n_frames=4, size=(24, 32))
     >>> albedo, shading = weiss(seq.frames)
     >>> albedo.shape, shading.shape
@@ -461,7 +461,7 @@ def weiss_flow(frames, flow, visibility=None, eps: float = 1e-3, colour: str = "
     Examples
     --------
     >>> import numpy as np
-    >>> from ivkernels import synthetic
+    >>> from ivkernels.evaluation import synthetic
     >>> seq = synthetic.render_sequence("objects_camera", n_frames=3, size=(24, 32))
     >>> albedo, shading = weiss_flow(seq.frames, seq.flow, seq.visibility)
     >>> albedo.shape, shading.shape
