@@ -40,7 +40,7 @@ from ivkernels.priors import load_albedo_prior
 from ivkernels.solver.energy import ConstrainedEnergy, WindowEnergy
 from ivkernels.solver.independent_shadings import independent_shadings, with_albedo_priors_divided
 from ivkernels.solver.motion_maps import motion_maps
-from ivkernels.solver.window_solver import _log_and_weight
+from ivkernels.solver.window_solver import log_and_weight
 
 EVAL_SEED = 0
 TERMS = ConstrainedEnergy.TERMS
@@ -54,7 +54,7 @@ def finest_energy(be, frames, flow, params, prior) -> WindowEnergy:
     occlusion, boundary = motion_maps(be, frames_be, flow_be, params)
     n = independent_shadings(be, frames_be, flow_be, params.independent_shading_gain, params.log_floor)
     params = with_albedo_priors_divided(params, n)
-    log_image, w_lum = _log_and_weight(be, frames_be, params)
+    log_image, w_lum = log_and_weight(be, frames_be, params)
     return WindowEnergy(be, log_image, w_lum, flow_be, occlusion, boundary, params, prior)
 
 

@@ -49,7 +49,7 @@ def level_iterations(params: Params, level: int) -> int:
     return min(int(params.lbfgs_iterations_coarse), grown)
 
 
-def _log_and_weight(be, frames_linear, params: Params):
+def log_and_weight(be, frames_linear, params: Params):
     """``I = log max(i, floor)`` (T, h, w, 3) and ``w_lum = lum(i) + eps`` (T, h, w) (Eq. 3)."""
     T, h, w, _ = frames_linear.shape
     log_image = be.empty((T, h, w, 3))
@@ -135,7 +135,7 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
 
     def make_energy(level, shape):
         t = time.perf_counter()
-        log_image, w_lum = _log_and_weight(be, pyramid[level], params)
+        log_image, w_lum = log_and_weight(be, pyramid[level], params)
         lflow = locc = lbnd = None
         if flow is not None:
             lflow = flow if level == 0 else resize_flow(be, flow, shape)
