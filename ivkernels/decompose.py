@@ -18,6 +18,7 @@ from tqdm.auto import tqdm
 from ivkernels import validation as v
 from ivkernels.backends import check_device, get_backend
 from ivkernels.flow import FLOW_METHODS, estimate_flow
+from ivkernels.kernels.memory import release_free_memory
 from ivkernels.kernels.thread_count import check_threads, get_threads, iterate_with_threads
 from ivkernels.kernels.thread_count import threads as launch_threads
 from ivkernels.params import Params
@@ -394,8 +395,10 @@ def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
     """
     n_threads = _resolved_threads(threads)
     with launch_threads(n_threads):
-        return _collect(_Decomposer(frames, flow, temporal, backend, device, params, progress,
-                                    n_threads, flow_passes=flow_passes))
+        video = _collect(_Decomposer(frames, flow, temporal, backend, device, params, progress,
+                                     n_threads, flow_passes=flow_passes))
+    release_free_memory()       # the call's arrays are freed: their heap pages go back (kernels/memory.py)
+    return video
 
 
 def _flow_label(job: _Decomposer) -> str | None:

@@ -3,9 +3,15 @@ the objects that use them, and nothing sized by an image outlives ``decompose()`
 
 Warp CPU arrays are allocated outside Python's allocator (tracemalloc does not
 see them) and freed when their last reference goes, so the census here counts
-the bytes owned by live ``wp.array`` objects.
+the bytes owned by live ``wp.array`` objects.  The process's resident memory
+is measured too, in a fresh interpreter: freed arrays stay resident as the C
+heap's free memory unless it is given back (:mod:`ivkernels.kernels.memory`).
 """
 import gc
+import json
+import os
+import subprocess
+import sys
 import threading
 
 import numpy as np
@@ -16,6 +22,7 @@ import ivkernels as iv
 from ivkernels import Params
 from ivkernels.evaluation import synthetic
 from ivkernels.backends import get_backend
+from ivkernels.kernels import memory
 
 FAST = Params(outer_iterations=1, lbfgs_iterations=4)
 
@@ -63,6 +70,72 @@ def test_decompose_of_three_sizes_returns_memory_after_each():
     # one 36x52 frame of GSM scratch alone is ~225 kB; any per-shape buffer left shows up
     assert max(held) <= SLACK, f"bytes left behind after each decompose(): {held}"
     assert live_workspaces() == []
+
+
+#: Run in a fresh interpreter: a warm-up decompose(), then one per size; after
+#: each, the resident memory above the warm-up's, less the bytes of the frames
+#: and the IntrinsicVideo the caller still holds.
+_RESIDENT_AFTER_CALLS = """
+import json, sys
+import ivkernels as iv
+from ivkernels import Params
+from ivkernels.evaluation import synthetic
+from ivkernels.kernels.memory import release_free_memory, resident_bytes
+
+fast = Params(outer_iterations=1, lbfgs_iterations=4)
+sizes = json.loads(sys.argv[1])
+left = []
+for k, size in enumerate(sizes):
+    frames = synthetic.render_sequence("objects_camera", n_frames=3, size=tuple(size), seed=k).frames
+    video = iv.decompose(frames, params=fast)
+    held = frames.nbytes + sum(getattr(video, n).nbytes for n in
+                               ("albedo", "shading", "flow", "occlusion", "boundary"))
+    if k == 0:
+        del frames, video
+        release_free_memory()
+        base = resident_bytes()
+    else:
+        left.append(resident_bytes() - base - held)
+print(json.dumps(left))
+"""
+
+#: Resident memory a decompose() may leave behind above what its caller holds.
+#: Measured with these sizes (perf/RESULTS.md, "Resident memory after
+#: decompose()", three runs each): at most 2.0 MiB (at 129x175) with the
+#: heap's free pages given back; 24-31 MiB at 129x175 (12-13 MiB at 95x127)
+#: when they are kept.  8 MiB is four times the first and a third of the second.
+RESIDENT_SLACK = 8 * 2**20
+
+
+@pytest.mark.skipif(not memory.can_release() or memory.resident_bytes() is None,
+                    reason="needs /proc and glibc's malloc_trim")
+def test_decompose_of_four_sizes_leaves_no_resident_memory_behind():
+    """After a warm-up, decompose() on four growing frame sizes leaves the
+    process no larger than the arrays its caller holds: the call's freed
+    working set goes back to the OS instead of staying as free heap."""
+    sizes = [(20, 28), (41, 57), (63, 89), (95, 127), (129, 175)]
+    root = os.path.dirname(os.path.dirname(os.path.abspath(iv.__file__)))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p))
+    run = subprocess.run([sys.executable, "-c", _RESIDENT_AFTER_CALLS, json.dumps(sizes)],
+                         env=env, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr[-2000:]
+    left = json.loads(run.stdout.strip().splitlines()[-1])
+    shown = ", ".join(f"{h}x{w}: {b / 2**20:.1f} MiB" for (h, w), b in zip(sizes[1:], left))
+    assert max(left) <= RESIDENT_SLACK, f"resident memory left behind after each decompose(): {shown}"
+
+
+@pytest.mark.skipif(not memory.can_release() or memory.resident_bytes() is None,
+                    reason="needs /proc and glibc's malloc_trim")
+def test_release_free_memory_returns_heap_holes_and_keeps_live_arrays():
+    """Freed heap blocks pinned between live ones stay resident until
+    release_free_memory() gives their pages back; the live ones keep their values."""
+    blocks = [np.full(1 << 13, float(k)) for k in range(2048)]    # 2048 x 64 KiB, below the mmap threshold
+    del blocks[::2]                                                # 64 MiB of holes between live blocks
+    held = memory.resident_bytes()
+    assert memory.release_free_memory() is True
+    released = held - memory.resident_bytes()
+    assert released >= 48 * 2**20, f"released {released / 2**20:.1f} MiB of 64 MiB of holes"
+    assert all(b[0] == b[-1] == 2 * k + 1 for k, b in enumerate(blocks))
 
 
 def test_standalone_host_call_keeps_nothing(rng):
