@@ -101,9 +101,10 @@ print(json.dumps(left))
 
 #: Resident memory a decompose() may leave behind above what its caller holds.
 #: Measured with these sizes (perf/RESULTS.md, "Resident memory after
-#: decompose()", three runs each): at most 2.0 MiB (at 129x175) with the
-#: heap's free pages given back; 24-31 MiB at 129x175 (12-13 MiB at 95x127)
-#: when they are kept.  8 MiB is four times the first and a third of the second.
+#: decompose()"): 2.0-2.1 MiB at 129x175 with the heap's free pages given back
+#: (seven runs); 22.7-38.5 MiB at 129x175 (11.7-13.5 MiB at 95x127) when they
+#: are kept (eight runs).  8 MiB is four times the first and a third of the least
+#: of the second.
 RESIDENT_SLACK = 8 * 2**20
 
 

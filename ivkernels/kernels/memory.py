@@ -4,17 +4,20 @@ NumPy and Warp CPU arrays are allocated by the C library's ``malloc``.  glibc
 serves a large block by ``mmap`` (returned to the OS when freed) only until a
 block of that size has been freed: its mmap threshold then rises to the freed
 block's size (up to 32 MiB), and later blocks of up to that size come from
-its heap, which keeps freed memory for reuse rather than returning it.  So
-the arrays of a ``decompose()`` on large frames, freed when it returns, stay
-resident as free heap: after a warm-up, four calls on 60x80 to 240x320 frames
-left the process 134 MiB larger, all of it free heap (mallinfo2 ``fordblks``);
-live Warp arrays, Python objects, Warp modules and the kernels' caches did not
-grow (perf/RESULTS.md, "Resident memory after decompose()").
+its heap, which keeps freed memory for reuse rather than returning it (and
+cannot return the part pinned below a live block).  So the arrays of a
+``decompose()``, freed when it returns, stay resident as free heap: after a
+warm-up, four calls on 60x80 to 240x320 frames left the process 32 to 67 MiB
+larger than the arrays its caller held (three runs; 80 MiB with tracemalloc
+on), and the heap's free bytes (mallinfo2 ``fordblks``) account for all of
+it; live Warp arrays, Python objects, loaded Warp modules and the kernels'
+caches did not grow (perf/RESULTS.md, "Resident memory after decompose()").
 
 :func:`release_free_memory` asks the allocator to return its free pages
-(glibc's ``malloc_trim(0)``, a few milliseconds); :func:`ivkernels.decompose`
-calls it as it returns, so the process keeps what is live and no more.  Where
-the C library has no such call (not glibc) it does nothing.
+(glibc's ``malloc_trim(0)``, about a millisecond); :func:`ivkernels.decompose`
+calls it as it returns, so the process keeps what is live and no more (at
+most 1.1 MiB left in the same runs).  Where the C library has no such call
+(not glibc) it does nothing.
 """
 from __future__ import annotations
 
