@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ivkernels.kernels.checks import check_float, check_int, check_non_negative, check_positive, check_separate  # noqa: F401
+from ivkernels.kernels.contract import Frontend
 
 try:
     from numpy.lib.array_utils import byte_bounds
@@ -80,3 +81,32 @@ def check_vector(name: str, a, n: int | None = None, output: bool = False) -> np
             raise ValueError(f"{name} is written in place and must be C-contiguous")
         a = np.ascontiguousarray(a)
     return a
+
+
+class NdarrayFrontend(Frontend):
+    """``numpy.ndarray`` s for :func:`ivkernels.kernels.contract.check_call`: strided inputs are
+    copied contiguous, strided outputs refused (kernels taking ``ti.types.ndarray()``)."""
+
+    kind = "numpy.ndarray"
+    copies_inputs = True
+
+    def is_array(self, a) -> bool:
+        return isinstance(a, np.ndarray)
+
+    def has_dtype(self, a, dtype: str) -> bool:
+        return a.dtype == dtype
+
+    def dtype_name(self, a) -> str:
+        return a.dtype.name
+
+    def is_contiguous(self, a) -> bool:
+        return a.flags.c_contiguous
+
+    def contiguous(self, a):
+        return np.ascontiguousarray(a)
+
+    def span(self, a):
+        return memory_span(a)
+
+
+FRONT = NdarrayFrontend()

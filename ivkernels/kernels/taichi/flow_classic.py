@@ -6,11 +6,14 @@ over the ``T * H`` image rows in parallel and loops over ``x`` inside, like
 the Warp kernels.
 """
 
-import numpy as np
 import taichi as ti
 
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.host import GREY_WEIGHTS  # noqa: F401  (rgb2gray weights, re-exported)
-from ivkernels.kernels.taichi._checks import check_array, check_disjoint
+from ivkernels.kernels.ndarray_checks import FRONT
+from ivkernels.kernels.reference.flow_classic import FAMILY
+
+host = implements(FAMILY, FRONT)
 
 
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
@@ -407,200 +410,120 @@ def _thin_edges(sobel: nd4, cutoff: ti.types.ndarray(dtype=ti.f32, ndim=2), out:
 # Host functions
 # ----------------------------------------------------------------------------
 
+@host("srgb_grey")
 def srgb_grey(rgb, out) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.srgb_grey`."""
-    rgb = check_array("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
-    t, h, w, _ = rgb.shape
-    check_array("out", out, (t, h, w), "(T, H, W)", output=True)
     _srgb_grey(rgb, out, *GREY_WEIGHTS)
 
 
+@host("row_min_max")
 def row_min_max(src, out) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.row_min_max`."""
-    src = check_array("src", src, (None, None, None, None), "(T, H, W, C)")
-    t, h, w, c = src.shape
-    if w < 1:
-        raise ValueError(f"src must have at least one column, got shape {src.shape}")
-    check_array("out", out, (t * h, c, 2), "(T*H, C, 2)", output=True)
     _min_max(src, out)
 
 
+@host("scale_shift")
 def scale_shift(src, out, scale, shift) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.scale_shift`."""
-    src = check_array("src", src, (None, None, None, None), "(T, H, W, C)")
-    t, h, w, c = src.shape
-    check_array("out", out, (t, h, w, c), "(T, H, W, C)", output=True)
-    scale = check_array("scale", scale, (c,), "(C,)")
-    shift = check_array("shift", shift, (c,), "(C,)")
     _scale_shift(src, out, scale, shift)
 
 
+@host("rof_dual_step")
 def rof_dual_step(img, p_in, p_out, theta: float, delta: float) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.rof_dual_step`."""
-    img = check_array("img", img, (None, None, None), "(T, H, W)")
-    t, h, w = img.shape
-    p_in = check_array("p_in", p_in, (t, h, w, 2), "(T, H, W, 2)")
-    check_array("p_out", p_out, (t, h, w, 2), "(T, H, W, 2)", output=True)
-    check_disjoint("p_in", p_in, "p_out", p_out, "the step reads neighbours of p_in")
     _rof_dual_step(img, p_in, p_out, float(theta), float(delta))
 
 
+@host("rof_texture")
 def rof_texture(img, p, out, theta: float, alpha: float) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.rof_texture`."""
-    img = check_array("img", img, (None, None, None), "(T, H, W)")
-    t, h, w = img.shape
-    p = check_array("p", p, (t, h, w, 2), "(T, H, W, 2)")
-    check_array("out", out, (t, h, w), "(T, H, W)", output=True)
     _rof_texture(img, p, out, float(theta), float(alpha))
 
 
+@host("pack_image_gradient")
 def pack_image_gradient(img, gx, gy, out) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.pack_image_gradient`."""
-    img = check_array("img", img, (None, None, None), "(T, H, W)")
-    t, h, w = img.shape
-    gx = check_array("gx", gx, (t, h, w), "(T, H, W)")
-    gy = check_array("gy", gy, (t, h, w), "(T, H, W)")
-    check_array("out", out, (t, h, w, 3), "(T, H, W, 3)", output=True)
     _pack_image_gradient(img, gx, gy, out)
 
 
+@host("pack_gradient")
 def pack_gradient(gx, gy, out) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.pack_gradient`."""
-    gx = check_array("gx", gx, (None, None, None), "(T, H, W)")
-    t, h, w = gx.shape
-    gy = check_array("gy", gy, (t, h, w), "(T, H, W)")
-    check_array("out", out, (t, h, w, 2), "(T, H, W, 2)", output=True)
     _pack_gradient(gx, gy, out)
 
 
+@host("data_coefficients")
 def data_coefficients(i1, i1x, i1y, warped, inside, du, out, blend: float = 0.5, a: float = 0.45,
                       eps: float = 1e-3, quad_frac: float = 0.0, quad_weight: float = 2e6) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.data_coefficients`."""
-    i1 = check_array("i1", i1, (None, None, None), "(T, H, W)")
-    t, h, w = i1.shape
-    i1x = check_array("i1x", i1x, (t, h, w), "(T, H, W)")
-    i1y = check_array("i1y", i1y, (t, h, w), "(T, H, W)")
-    warped = check_array("warped", warped, (t, h, w, 3), "(T, H, W, 3)")
-    inside = check_array("inside", inside, (t, h, w), "(T, H, W)")
-    du = check_array("du", du, (t, h, w, 2), "(T, H, W, 2)")
-    check_array("out", out, (t, h, w, 5), "(T, H, W, 5)", output=True)
     _data_coefficients(i1, i1x, i1y, warped, inside, du, out, float(blend), float(a), float(eps),
                        float(quad_frac), float(quad_weight))
 
 
+@host("smoothness_weights")
 def smoothness_weights(flow, du, out, a: float = 0.45, eps: float = 1e-3, quad_frac: float = 0.0,
                        quad_weight: float = 2e6) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.smoothness_weights`."""
-    flow = check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
-    t, h, w, _ = flow.shape
-    du = check_array("du", du, (t, h, w, 2), "(T, H, W, 2)")
-    check_array("out", out, (t, h, w, 4), "(T, H, W, 4)", output=True)
     _smoothness_weights(flow, du, out, float(a), float(eps), float(quad_frac), float(quad_weight))
 
 
+@host("assemble_system")
 def assemble_system(flow, data, smooth, lam: float, out) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.assemble_system`."""
-    flow = check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
-    t, h, w, _ = flow.shape
-    data = check_array("data", data, (t, h, w, 5), "(T, H, W, 5)")
-    smooth = check_array("smooth", smooth, (t, h, w, 4), "(T, H, W, 4)")
-    check_array("out", out, (t, h, w, 5), "(T, H, W, 5)", output=True)
     _assemble_system(flow, data, smooth, out, float(lam))
 
 
+@host("sor_sweep")
 def sor_sweep(du, system, smooth, lam: float, omega: float, parity: int) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.sor_sweep`."""
-    check_array("du", du, (None, None, None, 2), "(T, H, W, 2)", output=True)
-    t, h, w, _ = du.shape
-    system = check_array("system", system, (t, h, w, 5), "(T, H, W, 5)")
-    smooth = check_array("smooth", smooth, (t, h, w, 4), "(T, H, W, 4)")
-    if parity not in (0, 1):
-        raise ValueError(f"parity must be 0 or 1, got {parity!r}")
     _sor_sweep(du, system, smooth, float(lam), float(omega), int(parity))
 
 
+@host("apply_update")
 def apply_update(flow, du, out, limit: float = 1.0) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.apply_update`."""
-    flow = check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
-    t, h, w, _ = flow.shape
-    du = check_array("du", du, (t, h, w, 2), "(T, H, W, 2)")
-    check_array("out", out, (t, h, w, 2), "(T, H, W, 2)", output=True)
     _apply_update(flow, du, out, float(limit))
 
 
+@host("select_masked")
 def select_masked(mask, inside_mask, outside_mask, out) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.select_masked`."""
-    mask = check_array("mask", mask, (None, None, None), "(T, H, W)")
-    t, h, w = mask.shape
-    inside_mask = check_array("inside_mask", inside_mask, (t, h, w, None), "(T, H, W, C)")
-    c = inside_mask.shape[3]
-    outside_mask = check_array("outside_mask", outside_mask, (t, h, w, c), "(T, H, W, C)")
-    check_array("out", out, (t, h, w, c), "(T, H, W, C)", output=True)
     _select_masked(mask, inside_mask, outside_mask, out)
 
 
+@host("flow_sobel_components")
 def flow_sobel_components(flow, out, row_energy) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.flow_sobel_components`."""
-    flow = check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
-    t, h, w, _ = flow.shape
-    check_array("out", out, (t, h, w, 4), "(T, H, W, 4)", output=True)
-    check_array("row_energy", row_energy, (t * h, 2), "(T*H, 2)", output=True)
     _flow_sobel_components(flow, out, row_energy)
 
 
+@host("thin_edges")
 def thin_edges(sobel, cutoff, out) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.thin_edges`."""
-    sobel = check_array("sobel", sobel, (None, None, None, 4), "(T, H, W, 4)")
-    t, h, w, _ = sobel.shape
-    cutoff = check_array("cutoff", cutoff, (t, 2), "(T, 2)")
-    check_array("out", out, (t, h, w), "(T, H, W)", output=True)
     _thin_edges(sobel, cutoff, out)
 
 
+@host("log_grey")
 def log_grey(rgb, out, floor: float = 1e-3) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.log_grey`."""
-    rgb = check_array("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
-    t, h, w, _ = rgb.shape
-    check_array("out", out, (t, h, w), "(T, H, W)", output=True)
-    if not floor > 0.0:
-        raise ValueError(f"floor must be > 0, got {floor!r}")
     _log_grey(rgb, out, *GREY_WEIGHTS, float(floor))
 
 
+@host("soft_census")
 def soft_census(img, out, radius: int = 1, eps: float = 4.0, scale: float = 1.0) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.soft_census`."""
-    img = check_array("img", img, (None, None, None), "(T, H, W)")
-    t, h, w = img.shape
-    radius = int(radius)
-    if radius < 1:
-        raise ValueError(f"radius must be >= 1, got {radius}")
-    if not eps > 0.0:
-        raise ValueError(f"eps must be > 0, got {eps!r}")
-    c = (2 * radius + 1) ** 2 - 1
-    check_array("out", out, (t, h, w, c), f"(T, H, W, {c})", output=True)
     _soft_census(img, out, radius, float(eps), float(scale))
 
 
+@host("pack_channels_gradient")
 def pack_channels_gradient(feat, gx, gy, out) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.pack_channels_gradient`."""
-    feat = check_array("feat", feat, (None, None, None, None), "(T, H, W, C)")
-    t, h, w, c = feat.shape
-    gx = check_array("gx", gx, (t, h, w, c), "(T, H, W, C)")
-    gy = check_array("gy", gy, (t, h, w, c), "(T, H, W, C)")
-    check_array("out", out, (t, h, w, 3 * c), "(T, H, W, 3C)", output=True)
     _pack_channels_gradient(feat, gx, gy, out)
 
 
+@host("data_coefficients_channels")
 def data_coefficients_channels(first, warped, inside, du, weights, out, blend: float = 0.5, a: float = 0.45,
                                eps: float = 1e-3, quad_frac: float = 0.0, quad_weight: float = 2e6) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.data_coefficients_channels`."""
-    weights = check_array("weights", weights, (None,), "(C,)")
-    c = weights.shape[0]
-    first = check_array("first", first, (None, None, None, 3 * c), "(T, H, W, 3C)")
-    t, h, w, _ = first.shape
-    warped = check_array("warped", warped, (t, h, w, 3 * c), "(T, H, W, 3C)")
-    inside = check_array("inside", inside, (t, h, w), "(T, H, W)")
-    du = check_array("du", du, (t, h, w, 2), "(T, H, W, 2)")
-    check_array("out", out, (t, h, w, 5), "(T, H, W, 5)", output=True)
     _data_coefficients_channels(first, warped, inside, du, weights, out, float(blend), float(a), float(eps),
                                 float(quad_frac), float(quad_weight))

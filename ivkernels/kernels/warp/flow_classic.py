@@ -39,9 +39,13 @@ from __future__ import annotations
 
 import warp as wp
 
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.host import GREY_WEIGHTS  # noqa: F401  (rgb2gray weights, re-exported)
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array, check_disjoint
+from ivkernels.kernels.reference.flow_classic import FAMILY
+from ivkernels.kernels.warp._checks import FRONT
+
+host = implements(FAMILY, FRONT)
 
 wp.set_module_options({"enable_backward": False})
 
@@ -527,6 +531,7 @@ def _rows(a) -> int:
     return a.shape[0] * a.shape[1]
 
 
+@host("srgb_grey")
 def srgb_grey(rgb, out) -> None:
     """Grey level of linear RGB frames, sRGB-encoded and scaled to [0, 255].
 
@@ -537,12 +542,11 @@ def srgb_grey(rgb, out) -> None:
     rgb : (T, H, W, 3) float32, linear RGB in [0, 1].
     out : (T, H, W) float32, grey in [0, 255] (gamma-encoded, not linear).
     """
-    check_array("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
     t, h, w, _ = rgb.shape
-    check_array("out", out, (t, h, w), "(T, H, W)", rgb.device)
     launch_rows(srgb_grey_rows, t * h, [rgb, out, *GREY_WEIGHTS], rgb.device)
 
 
+@host("log_grey")
 def log_grey(rgb, out, floor: float = 1e-3) -> None:
     """Natural log of the linear grey level: ``out = log(max(0.2989 R + 0.5870 G + 0.1140 B, floor))``.
 
@@ -552,14 +556,11 @@ def log_grey(rgb, out, floor: float = 1e-3) -> None:
     rgb : (T, H, W, 3) float32, linear RGB.
     out : (T, H, W) float32, log grey (<= 0 for input in [0, 1]).
     """
-    check_array("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
     t, h, w, _ = rgb.shape
-    check_array("out", out, (t, h, w), "(T, H, W)", rgb.device)
-    if not floor > 0.0:
-        raise ValueError(f"floor must be > 0, got {floor!r}")
     launch_rows(log_grey_rows, t * h, [rgb, out, *GREY_WEIGHTS, float(floor)], rgb.device)
 
 
+@host("row_min_max")
 def row_min_max(src, out) -> None:
     """Minimum and maximum of every image row and channel.
 
@@ -567,28 +568,22 @@ def row_min_max(src, out) -> None:
     out : (T*H, C, 2) float32; ``out[t*H + y, c] = (min, max)`` of ``src[t, y, :, c]``.
     The host finishes the reduction over rows (``out.min(0)``, ``out.max(0)``).
     """
-    check_array("src", src, (None, None, None, None), "(T, H, W, C)")
     t, h, w, c = src.shape
-    if w < 1:
-        raise ValueError(f"src must have at least one column, got shape {tuple(src.shape)}")
-    check_array("out", out, (t * h, c, 2), "(T*H, C, 2)", src.device)
     launch_rows(min_max_rows, t * h, [src, out], src.device)
 
 
+@host("scale_shift")
 def scale_shift(src, out, scale, shift) -> None:
     """Per-channel affine map ``out[..., c] = src[..., c] * scale[c] + shift[c]``.
 
     src, out : (T, H, W, C) float32 (may be the same array).
     scale, shift : (C,) float32 arrays on the same device.
     """
-    check_array("src", src, (None, None, None, None), "(T, H, W, C)")
     t, h, w, c = src.shape
-    check_array("out", out, (t, h, w, c), "(T, H, W, C)", src.device)
-    check_array("scale", scale, (c,), "(C,)", src.device)
-    check_array("shift", shift, (c,), "(C,)", src.device)
     launch_rows(scale_shift_rows, t * h, [src, out, scale, shift], src.device)
 
 
+@host("rof_dual_step")
 def rof_dual_step(img, p_in, p_out, theta: float, delta: float) -> None:
     """One step of Chambolle's projection for the ROF structure image.
 
@@ -601,14 +596,11 @@ def rof_dual_step(img, p_in, p_out, theta: float, delta: float) -> None:
     img : (T, H, W) float32 (the public code scales it to [-1, 1]).
     p_in, p_out : (T, H, W, 2) float32 dual field; must be different arrays.
     """
-    check_array("img", img, (None, None, None), "(T, H, W)")
     t, h, w = img.shape
-    check_array("p_in", p_in, (t, h, w, 2), "(T, H, W, 2)", img.device)
-    check_array("p_out", p_out, (t, h, w, 2), "(T, H, W, 2)", img.device)
-    check_disjoint("p_in", p_in, "p_out", p_out, "the step reads neighbours of p_in")
     launch_rows(rof_dual_step_rows, t * h, [img, p_in, p_out, float(theta), float(delta)], img.device)
 
 
+@host("rof_texture")
 def rof_texture(img, p, out, theta: float, alpha: float) -> None:
     """Texture part of the ROF decomposition: ``out = img - alpha * (img + theta * div p)``.
 
@@ -618,39 +610,32 @@ def rof_texture(img, p, out, theta: float, alpha: float) -> None:
     img : (T, H, W) float32; p : (T, H, W, 2) float32 from :func:`rof_dual_step`;
     out : (T, H, W) float32 (may be ``img``).
     """
-    check_array("img", img, (None, None, None), "(T, H, W)")
     t, h, w = img.shape
-    check_array("p", p, (t, h, w, 2), "(T, H, W, 2)", img.device)
-    check_array("out", out, (t, h, w), "(T, H, W)", img.device)
     launch_rows(rof_texture_rows, t * h, [img, p, out, float(theta), float(alpha)], img.device)
 
 
+@host("pack_image_gradient")
 def pack_image_gradient(img, gx, gy, out) -> None:
     """Stack an image and its two derivatives as channels: ``out = (img, gx, gy)``.
 
     img, gx, gy : (T, H, W) float32; out : (T, H, W, 3) float32.
     """
-    check_array("img", img, (None, None, None), "(T, H, W)")
     t, h, w = img.shape
-    check_array("gx", gx, (t, h, w), "(T, H, W)", img.device)
-    check_array("gy", gy, (t, h, w), "(T, H, W)", img.device)
-    check_array("out", out, (t, h, w, 3), "(T, H, W, 3)", img.device)
     launch_rows(pack_image_gradient_rows, t * h, [img, gx, gy, out], img.device)
 
 
+@host("pack_gradient")
 def pack_gradient(gx, gy, out) -> None:
     """Stack two derivatives as channels: ``out = (gx, gy)``, the feature of a gradient-constancy term.
 
     gx, gy : (T, H, W) float32 (e.g. from
     :func:`ivkernels.kernels.warp.derivatives.image_gradient`); out : (T, H, W, 2) float32.
     """
-    check_array("gx", gx, (None, None, None), "(T, H, W)")
     t, h, w = gx.shape
-    check_array("gy", gy, (t, h, w), "(T, H, W)", gx.device)
-    check_array("out", out, (t, h, w, 2), "(T, H, W, 2)", gx.device)
     launch_rows(pack_gradient_rows, t * h, [gx, gy, out], gx.device)
 
 
+@host("data_coefficients")
 def data_coefficients(i1, i1x, i1y, warped, inside, du, out, blend: float = 0.5, a: float = 0.45,
                       eps: float = 1e-3, quad_frac: float = 0.0, quad_weight: float = 2e6) -> None:
     """IRLS coefficients of the linearised brightness-constancy term.
@@ -667,20 +652,14 @@ def data_coefficients(i1, i1x, i1y, warped, inside, du, out, blend: float = 0.5,
     du : (T, H, W, 2) float32, current flow increment.
     out : (T, H, W, 5) float32 ``psi * (Ix Ix, Ix Iy, Iy Iy, Ix It, Iy It)``.
     """
-    check_array("i1", i1, (None, None, None), "(T, H, W)")
     t, h, w = i1.shape
     dev = i1.device
-    check_array("i1x", i1x, (t, h, w), "(T, H, W)", dev)
-    check_array("i1y", i1y, (t, h, w), "(T, H, W)", dev)
-    check_array("warped", warped, (t, h, w, 3), "(T, H, W, 3)", dev)
-    check_array("inside", inside, (t, h, w), "(T, H, W)", dev)
-    check_array("du", du, (t, h, w, 2), "(T, H, W, 2)", dev)
-    check_array("out", out, (t, h, w, 5), "(T, H, W, 5)", dev)
     launch_rows(data_coefficients_rows, t * h,
                 [i1, i1x, i1y, warped, inside, du, out, float(blend), float(a), float(eps),
                  float(quad_frac), float(quad_weight)], dev)
 
 
+@host("soft_census")
 def soft_census(img, out, radius: int = 1, eps: float = 4.0, scale: float = 1.0) -> None:
     """Soft ternary (census) transform: one channel per neighbour of a window.
 
@@ -695,31 +674,21 @@ def soft_census(img, out, radius: int = 1, eps: float = 4.0, scale: float = 1.0)
     img : (T, H, W) float32.
     out : (T, H, W, C) float32, ``C = (2 radius + 1)^2 - 1``.
     """
-    check_array("img", img, (None, None, None), "(T, H, W)")
     t, h, w = img.shape
-    radius = int(radius)
-    if radius < 1:
-        raise ValueError(f"radius must be >= 1, got {radius}")
-    if not eps > 0.0:
-        raise ValueError(f"eps must be > 0, got {eps!r}")
-    c = (2 * radius + 1) ** 2 - 1
-    check_array("out", out, (t, h, w, c), f"(T, H, W, {c})", img.device)
     launch_rows(soft_census_rows, t * h, [img, out, radius, float(eps), float(scale)], img.device)
 
 
+@host("pack_channels_gradient")
 def pack_channels_gradient(feat, gx, gy, out) -> None:
     """Interleave C channels with their derivatives: ``out[..., 3c : 3c + 3] = (feat_c, gx_c, gy_c)``.
 
     feat, gx, gy : (T, H, W, C) float32; out : (T, H, W, 3C) float32.
     """
-    check_array("feat", feat, (None, None, None, None), "(T, H, W, C)")
     t, h, w, c = feat.shape
-    check_array("gx", gx, (t, h, w, c), "(T, H, W, C)", feat.device)
-    check_array("gy", gy, (t, h, w, c), "(T, H, W, C)", feat.device)
-    check_array("out", out, (t, h, w, 3 * c), "(T, H, W, 3C)", feat.device)
     launch_rows(pack_channels_gradient_rows, t * h, [feat, gx, gy, out], feat.device)
 
 
+@host("data_coefficients_channels")
 def data_coefficients_channels(first, warped, inside, du, weights, out, blend: float = 0.5, a: float = 0.45,
                                eps: float = 1e-3, quad_frac: float = 0.0, quad_weight: float = 2e6) -> None:
     """IRLS coefficients of a constancy term on C feature channels, summed.
@@ -739,20 +708,14 @@ def data_coefficients_channels(first, warped, inside, du, weights, out, blend: f
     weights : (C,) float32 channel weights ``w_c``.
     out : (T, H, W, 5) float32 ``sum_c psi_c (Ix Ix, Ix Iy, Iy Iy, Ix It, Iy It)_c``.
     """
-    check_array("weights", weights, (None,), "(C,)")
-    c = weights.shape[0]
-    check_array("first", first, (None, None, None, 3 * c), "(T, H, W, 3C)", weights.device)
     t, h, w, _ = first.shape
     dev = first.device
-    check_array("warped", warped, (t, h, w, 3 * c), "(T, H, W, 3C)", dev)
-    check_array("inside", inside, (t, h, w), "(T, H, W)", dev)
-    check_array("du", du, (t, h, w, 2), "(T, H, W, 2)", dev)
-    check_array("out", out, (t, h, w, 5), "(T, H, W, 5)", dev)
     launch_rows(data_coefficients_channels_rows, t * h,
                 [first, warped, inside, du, weights, out, float(blend), float(a), float(eps),
                  float(quad_frac), float(quad_weight)], dev)
 
 
+@host("smoothness_weights")
 def smoothness_weights(flow, du, out, a: float = 0.45, eps: float = 1e-3, quad_frac: float = 0.0,
                        quad_weight: float = 2e6) -> None:
     """IRLS weights of the first-order smoothness term on ``u + du``.
@@ -762,14 +725,12 @@ def smoothness_weights(flow, du, out, a: float = 0.45, eps: float = 1e-3, quad_f
         neighbour and to the neighbour below, for u (channels 0, 1) and
         v (channels 2, 3); 0 where that neighbour does not exist.
     """
-    check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
     t, h, w, _ = flow.shape
-    check_array("du", du, (t, h, w, 2), "(T, H, W, 2)", flow.device)
-    check_array("out", out, (t, h, w, 4), "(T, H, W, 4)", flow.device)
     launch_rows(smoothness_weights_rows, t * h,
                 [flow, du, out, float(a), float(eps), float(quad_frac), float(quad_weight)], flow.device)
 
 
+@host("assemble_system")
 def assemble_system(flow, data, smooth, lam: float, out) -> None:
     """The 2x2 block and right-hand side of every pixel's IRLS equations.
 
@@ -783,15 +744,12 @@ def assemble_system(flow, data, smooth, lam: float, out) -> None:
     smooth : (T, H, W, 4) float32 from :func:`smoothness_weights`.
     out : (T, H, W, 5) float32.
     """
-    check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
     t, h, w, _ = flow.shape
     dev = flow.device
-    check_array("data", data, (t, h, w, 5), "(T, H, W, 5)", dev)
-    check_array("smooth", smooth, (t, h, w, 4), "(T, H, W, 4)", dev)
-    check_array("out", out, (t, h, w, 5), "(T, H, W, 5)", dev)
     launch_rows(assemble_system_rows, t * h, [flow, data, smooth, out, float(lam)], dev)
 
 
+@host("sor_sweep")
 def sor_sweep(du, system, smooth, lam: float, omega: float, parity: int) -> None:
     """One half-sweep of red-black block SOR on the IRLS system, in place on ``du``.
 
@@ -805,43 +763,33 @@ def sor_sweep(du, system, smooth, lam: float, omega: float, parity: int) -> None
     smooth : (T, H, W, 4) float32 from :func:`smoothness_weights` (the same
         ``lam`` as given to :func:`assemble_system`).
     """
-    check_array("du", du, (None, None, None, 2), "(T, H, W, 2)")
     t, h, w, _ = du.shape
     dev = du.device
-    check_array("system", system, (t, h, w, 5), "(T, H, W, 5)", dev)
-    check_array("smooth", smooth, (t, h, w, 4), "(T, H, W, 4)", dev)
-    if parity not in (0, 1):
-        raise ValueError(f"parity must be 0 or 1, got {parity!r}")
     launch_rows(sor_sweep_rows, t * h, [du, system, smooth, float(lam), float(omega), int(parity)], dev)
 
 
+@host("apply_update")
 def apply_update(flow, du, out, limit: float = 1.0) -> None:
     """``out = flow + clip(du, -limit, limit)`` (no clipping when ``limit <= 0``).
 
     flow, du, out : (T, H, W, 2) float32; ``out`` may be ``flow``.
     """
-    check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
     t, h, w, _ = flow.shape
-    check_array("du", du, (t, h, w, 2), "(T, H, W, 2)", flow.device)
-    check_array("out", out, (t, h, w, 2), "(T, H, W, 2)", flow.device)
     launch_rows(apply_update_rows, t * h, [flow, du, out, float(limit)], flow.device)
 
 
+@host("select_masked")
 def select_masked(mask, inside_mask, outside_mask, out) -> None:
     """``out = inside_mask`` where ``mask >= 0.5``, else ``outside_mask``.
 
     mask : (T, H, W) float32; inside_mask, outside_mask, out : (T, H, W, C) float32
     (``out`` may alias either input).
     """
-    check_array("mask", mask, (None, None, None), "(T, H, W)")
     t, h, w = mask.shape
-    check_array("inside_mask", inside_mask, (t, h, w, None), "(T, H, W, C)", mask.device)
-    c = inside_mask.shape[3]
-    check_array("outside_mask", outside_mask, (t, h, w, c), "(T, H, W, C)", mask.device)
-    check_array("out", out, (t, h, w, c), "(T, H, W, C)", mask.device)
     launch_rows(select_masked_rows, t * h, [mask, inside_mask, outside_mask, out], mask.device)
 
 
+@host("flow_sobel_components")
 def flow_sobel_components(flow, out, row_energy) -> None:
     """Sobel derivatives of both flow components and their per-row energy.
 
@@ -853,13 +801,11 @@ def flow_sobel_components(flow, out, row_energy) -> None:
     row_energy : (T*H, 2) float32, ``sum_x |grad u|^2`` and ``sum_x |grad v|^2``
         of each row (the host averages them into the edge thresholds).
     """
-    check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
     t, h, w, _ = flow.shape
-    check_array("out", out, (t, h, w, 4), "(T, H, W, 4)", flow.device)
-    check_array("row_energy", row_energy, (t * h, 2), "(T*H, 2)", flow.device)
     launch_rows(flow_sobel_components_rows, t * h, [flow, out, row_energy], flow.device)
 
 
+@host("thin_edges")
 def thin_edges(sobel, cutoff, out) -> None:
     """Thinned Sobel edges of a flow field (MATLAB ``edge(., 'sobel')`` of u OR of v).
 
@@ -873,8 +819,5 @@ def thin_edges(sobel, cutoff, out) -> None:
     cutoff : (T, 2) float32 squared-magnitude thresholds (pixels^2 / pixel^2).
     out : (T, H, W) float32, 1 on an edge of u or v, else 0.
     """
-    check_array("sobel", sobel, (None, None, None, 4), "(T, H, W, 4)")
     t, h, w, _ = sobel.shape
-    check_array("cutoff", cutoff, (t, 2), "(T, 2)", sobel.device)
-    check_array("out", out, (t, h, w), "(T, H, W)", sobel.device)
     launch_rows(thin_edges_rows, t * h, [sobel, cutoff, out], sobel.device)

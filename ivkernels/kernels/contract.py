@@ -1,0 +1,494 @@
+"""The contract of every kernel host function, declared once as data and checked by one routine.
+
+Each family's host functions are declared in its specification module
+(``kernels/reference/<family>.py``, beside the NumPy reference of each
+function) by :meth:`Family.declare`: the signature (names, kinds, defaults),
+one line of what the function does, and a spec per argument::
+
+    FAMILY.declare("data_term(I, A, S, w_lum, gA, gS, energy_rows, lam=10.0, eps=0.001)",
+                   "Add Eq. 3 and its gradient.",
+                   I="T H W 3", A="T H W 3", S="T H W", w_lum="T H W",
+                   gA=Out("T H W 3"), gS=Out("T H W"), energy_rows=Out("T*H", "float64"))
+
+Every backend reads the same declarations: its host functions are wrapped by
+:func:`checked`, which checks the arguments with :func:`check_call` through
+the backend's :class:`Frontend` (what a ``wp.array`` or a ``numpy.ndarray``
+is), so a rule is written once for all backends;
+:mod:`ivkernels.backends.protocols` builds the family protocols from them, and
+the tests read them to generate bad arguments.
+
+Shapes
+------
+An array's ``dims`` are its axes separated by spaces: an int (``3``), a name
+(``T``, ``T'``, ``h``) bound by the first array that has it and compared in
+every later one, an expression of bound names and scalar arguments (``T*H``,
+``T-1``, ``3*C``, ``(H-1)//spacing+2``; negative values count as 0), or
+``...`` alone: any shape, the same in every array declared ``...``.  Arrays
+are checked in signature order; one whose expression names a size bound only
+later is checked again at the end.  Messages name the argument, the layout
+(``(T, H, W, 3)``) and the sizes expected, with ``?`` for sizes not yet bound.
+
+Order of the checks: the scalars, then the arrays (type, dtype, shape,
+device, contiguity), each :class:`Rule` right after the array it follows,
+then the aliasing rules (:attr:`HostFunction.separate`).
+"""
+from __future__ import annotations
+
+import ast
+import dataclasses
+import functools
+import importlib
+import inspect
+import re
+from typing import Callable
+
+from ivkernels.kernels import FAMILIES
+
+from ivkernels.kernels.checks import check_float, check_int, check_non_negative, check_positive, check_separate
+from ivkernels.kernels.workspace import check_workspace
+
+_NAME = re.compile(r"^[A-Za-z_][A-Za-z_0-9]*'?$")
+
+
+# ----------------------------------------------------------------------------- argument specs
+
+@dataclasses.dataclass(frozen=True)
+class Array:
+    """An array argument: ``dims`` (see the module docstring) and ``dtype`` ("float32", "float64", "int32").
+
+    output : written in place (so never copied; a backend whose kernels need
+        contiguous memory refuses a strided output).
+    contiguous : refused unless C-contiguous on every backend.
+    optional : ``None`` is accepted (and not checked).
+    layout : the axes as the messages write them (default: ``dims`` as a tuple).
+    """
+
+    dims: str
+    dtype: str = "float32"
+    output: bool = False
+    contiguous: bool = False
+    optional: bool = False
+    layout: str | None = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "_axes", _parse_dims(self.dims))
+
+    @property
+    def axes(self) -> tuple:
+        return self._axes
+
+    def describe(self) -> str:
+        """``(T, H, W, 3)``: the axes as the messages and the protocols write them."""
+        if self.layout is not None:
+            return self.layout
+        if self.dims.strip() == "...":
+            return "(any shape)"
+        tokens = self.dims.split()
+        return "(" + ", ".join(tokens) + ("," if len(tokens) == 1 else "") + ")"
+
+
+def Out(dims: str, dtype: str = "float32", **kw) -> Array:
+    """An output array (written, accumulated or updated in place)."""
+    return Array(dims, dtype, output=True, **kw)
+
+
+@dataclasses.dataclass(frozen=True)
+class Vector:
+    """A non-empty 1-D float32 vector; every vector of a call has the length of the first,
+    bound as the size ``name`` (so that an :class:`Array` can be declared ``"k n"``)."""
+
+    output: bool = False
+    name: str = "n"
+
+
+@dataclasses.dataclass(frozen=True)
+class Scalar:
+    """A number, converted before the call: ``kind`` one of
+
+    ``"float"`` (``float(value)``), ``"finite"`` (a finite real, ``> 0`` with
+    ``positive``), ``"positive"`` (``> 0``), ``"non_negative"`` (``>= 0``),
+    ``"int"`` (an int ``>= minimum``, ``hint`` appended to the message),
+    ``"choice"`` (an int among ``choices``).
+    """
+
+    kind: str = "float"
+    positive: bool = False
+    minimum: int = 0
+    hint: str = ""
+    choices: tuple = ()
+
+    def check(self, name: str, value):
+        if self.kind == "float":
+            return float(value)
+        if self.kind == "finite":
+            return check_float(name, value, positive=self.positive)
+        if self.kind == "positive":
+            return check_positive(name, value)
+        if self.kind == "non_negative":
+            return check_non_negative(name, value)
+        if self.kind == "int":
+            return check_int(name, value, self.minimum, self.hint)
+        if self.kind == "choice":
+            if isinstance(value, bool) or value not in self.choices:
+                raise ValueError(f"{name} must be {' or '.join(map(str, self.choices))}, got {value!r}")
+            return int(value)
+        raise AssertionError(self.kind)
+
+
+Real = Scalar("float")
+Finite = Scalar("finite")
+FinitePositive = Scalar("finite", positive=True)
+Positive = Scalar("positive")
+NonNegative = Scalar("non_negative")
+
+
+def Int(minimum: int, hint: str = "") -> Scalar:
+    """An int ``>= minimum``."""
+    return Scalar("int", minimum=minimum, hint=hint)
+
+
+def Choice(*choices) -> Scalar:
+    """An int among ``choices``."""
+    return Scalar("choice", choices=tuple(choices))
+
+
+@dataclasses.dataclass(frozen=True)
+class Workspace:
+    """A :class:`ivkernels.kernels.workspace.Workspace` or ``None``."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Rule:
+    """A rule on sizes and values that shapes cannot state: ``check(sizes, args)`` raises
+    ValueError (``sizes``: the bound dims, ``args``: the checked arguments by name), and
+    may return a dict of arguments to replace (converted values).  Runs right after the
+    array named ``after`` (``None``: after every array)."""
+
+    check: Callable
+    after: str | None = None
+
+
+# ----------------------------------------------------------------------------- declarations
+
+@dataclasses.dataclass(frozen=True)
+class HostFunction:
+    """The declared contract of one host function (see :meth:`Family.declare`)."""
+
+    family: str
+    name: str
+    signature: inspect.Signature
+    doc: str
+    specs: dict
+    separate: tuple = ()
+    rules: tuple = ()
+
+    @property
+    def key(self) -> str:
+        return f"{self.family}.{self.name}"
+
+    def arrays(self) -> dict:
+        """Name -> :class:`Array` or :class:`Vector` of the array arguments, in signature order."""
+        return {n: s for n, s in self.specs.items() if isinstance(s, (Array, Vector))}
+
+    def outputs(self) -> tuple:
+        return tuple(n for n, s in self.arrays().items() if s.output)
+
+    def describe(self) -> str:
+        """The one-line doc followed by the declared shapes, as the protocols show them."""
+        parts = []
+        for name, spec in self.arrays().items():
+            if isinstance(spec, Vector):
+                parts.append(f"{name} (n,)")
+            else:
+                dtype = "" if spec.dtype == "float32" else f" {spec.dtype}"
+                parts.append(f"{name} {spec.describe()}{dtype}{' out' if spec.output else ''}")
+        return self.doc + ("\n\nArrays: " + ", ".join(parts) + "." if parts else "")
+
+
+class Family:
+    """The declared host functions of one kernel family, in declaration order."""
+
+    def __init__(self, name: str, doc: str):
+        self.name = name
+        self.doc = doc
+        self.functions: dict[str, HostFunction] = {}
+
+    def declare(self, signature: str, doc: str, *, separate: tuple = (), rules: tuple = (), order: tuple = (),
+                **specs) -> HostFunction:
+        """Declare ``signature`` (``"name(a, b, c=1.0, *, workspace=None)"``, defaults literal).
+
+        ``specs`` by argument name: an :class:`Array` (a string is an input
+        float32 array with those dims), :class:`Vector`, :class:`Scalar`,
+        :class:`Workspace`; arguments without a spec are passed unchecked.
+        ``order``: arguments checked before the others (else signature order).
+        ``separate``: ``(written, read, why)`` pairs that must not share memory, with
+        an optional fourth entry ``when(args)``: the rule holds only where it is true.
+        """
+        name, sig = _parse_signature(signature)
+        specs = {n: Array(s) if isinstance(s, str) else s for n, s in specs.items()}
+        unknown = set(specs) - set(sig.parameters) | {n for pair in separate for n in pair[:2]} - set(sig.parameters)
+        if unknown:
+            raise ValueError(f"{self.name}.{name}: specs of arguments not in the signature: {sorted(unknown)}")
+        ordered = {n: specs[n] for n in (*order, *sig.parameters) if n in specs}
+        fn = HostFunction(self.name, name, sig, doc, ordered, tuple(separate), tuple(rules))
+        self.functions[name] = fn
+        return fn
+
+
+def _parse_signature(text: str) -> tuple[str, inspect.Signature]:
+    node = ast.parse(f"def {text}: pass").body[0]
+    args = node.args
+    params = []
+    positional = args.args
+    defaults = [None] * (len(positional) - len(args.defaults)) + list(args.defaults)
+    for a, d in zip(positional, defaults):
+        params.append(inspect.Parameter(a.arg, inspect.Parameter.POSITIONAL_OR_KEYWORD,
+                                        default=inspect.Parameter.empty if d is None else ast.literal_eval(d)))
+    for a, d in zip(args.kwonlyargs, args.kw_defaults):
+        params.append(inspect.Parameter(a.arg, inspect.Parameter.KEYWORD_ONLY,
+                                        default=inspect.Parameter.empty if d is None else ast.literal_eval(d)))
+    return node.name, inspect.Signature(params)
+
+
+def _parse_dims(dims: str) -> tuple:
+    """Axes of ``dims``: ``("int", n)``, ``("name", s)``, ``("expr", code, names)``, ``("optional", s)``
+    (a last axis ``[C]`` that may be missing, in every array declaring it alike), or ``(("any",),)``."""
+    if dims.strip() == "...":
+        return (("any",),)
+    axes = []
+    for token in dims.split():
+        if token.startswith("[") and token.endswith("]"):
+            axes.append(("optional", token[1:-1]))
+        elif token.isdigit():
+            axes.append(("int", int(token)))
+        elif _NAME.match(token):
+            axes.append(("name", token))
+        else:
+            tree = ast.parse(token, mode="eval")
+            names = tuple(sorted({n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}))
+            axes.append(("expr", compile(tree, token, "eval"), names))
+    return tuple(axes)
+
+
+# ----------------------------------------------------------------------------- the one checking routine
+
+class Frontend:
+    """What a backend's arrays are: the few questions :func:`check_call` asks of them.
+
+    kind : how messages name the array type ("wp.array", "numpy.ndarray").
+    copies_inputs : a strided input is replaced by a contiguous copy (kernels
+        that take contiguous memory only), and a strided output refused.
+    """
+
+    kind = "array"
+    copies_inputs = False
+
+    def is_array(self, a) -> bool:
+        raise NotImplementedError
+
+    def has_dtype(self, a, dtype: str) -> bool:
+        raise NotImplementedError
+
+    def dtype_name(self, a) -> str:
+        raise NotImplementedError
+
+    def shape(self, a) -> tuple:
+        return tuple(a.shape)
+
+    def device(self, a):
+        """The array's device, or ``None`` where there is one device only."""
+        return None
+
+    def is_contiguous(self, a) -> bool:
+        raise NotImplementedError
+
+    def contiguous(self, a):
+        """A C-contiguous copy of ``a``."""
+        raise NotImplementedError
+
+    def span(self, a):
+        """``(device, first byte, one past the last byte)`` of ``a``'s memory; ``None`` if empty."""
+        raise NotImplementedError
+
+
+def check_call(fn: HostFunction, front: Frontend, args: dict) -> dict:
+    """Check ``args`` (argument name -> value, every parameter) against ``fn``'s declaration.
+
+    Returns the arguments to call the implementation with: scalars converted,
+    inputs made contiguous where ``front`` copies them.  Raises TypeError
+    (not an array of the front end, wrong dtype, not a workspace) or
+    ValueError (wrong shape, device or value, aliasing) naming the argument.
+    """
+    out = dict(args)
+    for name, spec in fn.specs.items():
+        if isinstance(spec, Scalar):
+            out[name] = spec.check(name, args[name])
+        elif isinstance(spec, Workspace):
+            check_workspace(args[name])
+    sizes: dict = {}
+    scalars = {n: out[n] for n, s in fn.specs.items() if isinstance(s, Scalar)}
+    device = [None]
+    deferred = []
+    after = {}
+    for rule in fn.rules:
+        after.setdefault(rule.after, []).append(rule)
+    vector_length = [None]
+    for name, spec in fn.specs.items():
+        if isinstance(spec, Vector):
+            out[name] = _vector(front, name, args[name], spec, vector_length, device)
+            sizes[spec.name] = vector_length[0]
+        elif isinstance(spec, Array):
+            if args[name] is None and spec.optional:
+                continue
+            a, complete = _array(front, name, args[name], spec, sizes, scalars, device)
+            out[name] = a
+            if not complete:
+                deferred.append(name)
+        else:
+            continue
+        for rule in after.get(name, ()):
+            out.update(rule.check(sizes, out) or {})
+    for name in deferred:
+        _array(front, name, out[name], fn.specs[name], sizes, scalars, device, final=True)
+    for rule in after.get(None, ()):
+        out.update(rule.check(sizes, out) or {})
+    for written, read, why, *when in fn.separate:
+        a, b = args[written], args[read]
+        if a is None or b is None or (when and not when[0](out)):
+            continue
+        check_separate(written, front.span(a), read, front.span(b), why)
+    return out
+
+
+def _array(front, name, a, spec: Array, sizes: dict, scalars: dict, device: list, final: bool = False):
+    if not front.is_array(a):
+        raise TypeError(f"{name} must be a {front.kind} of {spec.dtype} {spec.describe()}, got {type(a).__name__}")
+    if not front.has_dtype(a, spec.dtype):
+        raise TypeError(f"{name} must have dtype {spec.dtype}, got {front.dtype_name(a)}")
+    shape = front.shape(a)
+    complete = True
+    if spec.axes == (("any",),):
+        want = sizes.get("...")
+        if want is not None and shape != want:
+            raise ValueError(f"{name} must have shape {spec.describe()} = {want}, got {shape}")
+        new = {"...": shape}
+    else:
+        env = {**scalars, **sizes}
+        axes = spec.axes
+        if axes[-1][0] == "optional":
+            key = f"[{axes[-1][1]}]"
+            present = sizes.get(key, len(shape) == len(axes))
+            new_present = {key: present}
+            axes = axes if present else axes[:-1]
+            axes = tuple(("name", a[1]) if a[0] == "optional" else a for a in axes)
+        else:
+            new_present = {}
+        want = []
+        for axis in axes:
+            if axis[0] == "int":
+                want.append(axis[1])
+            elif axis[0] == "name":
+                want.append(sizes.get(axis[1]))
+            elif all(n in env for n in axis[2]):
+                want.append(max(int(eval(axis[1], {"__builtins__": {}}, env)), 0))
+            else:
+                want.append(None)
+                complete = False
+        new = dict(new_present)
+        bad = len(shape) != len(want) or any(e is not None and e != s for e, s in zip(want, shape))
+        if not bad:
+            for axis, s in zip(axes, shape):
+                if axis[0] == "name" and axis[1] not in sizes:
+                    bad = bad or new.setdefault(axis[1], s) != s
+        if bad:
+            shown = tuple("?" if e is None else e for e in want)
+            raise ValueError(f"{name} must have shape {spec.describe()} = {shown}, got {shape}")
+    if not final:
+        sizes.update(new)
+        dev = front.device(a)
+        if device[0] is None:
+            device[0] = dev
+        elif dev != device[0]:
+            raise ValueError(f"{name} is on device {dev}, expected {device[0]} (the device of the first array)")
+        if not front.is_contiguous(a):
+            if spec.output and (spec.contiguous or front.copies_inputs):
+                raise ValueError(f"{name} is written in place and must be C-contiguous")
+            if spec.contiguous:
+                raise ValueError(f"{name} must be C-contiguous")
+            if front.copies_inputs:
+                a = front.contiguous(a)
+    return a, complete
+
+
+def _vector(front, name, a, spec: Vector, length: list, device: list):
+    if not front.is_array(a):
+        raise TypeError(f"{name} must be a 1-D {front.kind} of float32, got {type(a).__name__}")
+    if not front.has_dtype(a, "float32"):
+        raise TypeError(f"{name} must have dtype float32, got {front.dtype_name(a)}")
+    shape = front.shape(a)
+    if len(shape) != 1 or shape[0] < 1:
+        raise ValueError(f"{name} must be a non-empty 1-D vector (n,), got shape {shape}")
+    if length[0] is None:
+        length[0] = shape[0]
+    elif shape[0] != length[0]:
+        raise ValueError(f"{name} must have the same length as the first vector ({length[0]}), got {shape[0]}")
+    dev = front.device(a)
+    if device[0] is None:
+        device[0] = dev
+    elif dev != device[0]:
+        raise ValueError(f"{name} is on device {dev}, expected {device[0]} (the device of the first array)")
+    if not front.is_contiguous(a) and front.copies_inputs:
+        if spec.output:
+            raise ValueError(f"{name} is written in place and must be C-contiguous")
+        a = front.contiguous(a)
+    return a
+
+
+def checked(fn: HostFunction, front: Frontend) -> Callable:
+    """Decorator: the implementation of ``fn`` on a backend, called with the arguments
+    :func:`check_call` returns.  The implementation must have the declared signature
+    (checked here, when the backend module is imported)."""
+    def wrap(impl: Callable) -> Callable:
+        have = [(p.name, p.kind, p.default) for p in inspect.signature(impl).parameters.values()]
+        want = [(p.name, p.kind, p.default) for p in fn.signature.parameters.values()]
+        if have != want:
+            raise TypeError(f"{impl.__module__}.{impl.__name__}{inspect.signature(impl)} is not the declared "
+                            f"{fn.key}{fn.signature}")
+        params = list(fn.signature.parameters.values())
+        positional = [p.name for p in params if p.kind is inspect.Parameter.POSITIONAL_OR_KEYWORD]
+        keyword = [p.name for p in params if p.kind is inspect.Parameter.KEYWORD_ONLY]
+        defaults = {p.name: p.default for p in params if p.default is not inspect.Parameter.empty}
+
+        @functools.wraps(impl)
+        def host(*a, **kw):
+            if len(a) > len(positional):
+                raise TypeError(f"{fn.name}() takes {len(positional)} positional arguments, got {len(a)}")
+            values = dict(defaults)
+            values.update(zip(positional, a))
+            for k, v in kw.items():
+                if k not in fn.signature.parameters or (k in positional and positional.index(k) < len(a)):
+                    raise TypeError(f"{fn.name}() got an unexpected or repeated argument {k!r}")
+                values[k] = v
+            missing = [n for n in (*positional, *keyword) if n not in values]
+            if missing:
+                raise TypeError(f"{fn.name}() missing arguments {missing}")
+            values = check_call(fn, front, values)
+            return impl(*(values[n] for n in positional), **{n: values[n] for n in keyword})
+
+        host.contract = fn
+        return host
+    return wrap
+
+
+def implements(family: Family, front: Frontend) -> Callable:
+    """``implements(FAMILY, FRONT)("data_term")``: :func:`checked` by function name (the form each
+    backend module uses: ``host = implements(spec.FAMILY, FRONT)`` then ``@host("data_term")``)."""
+    def by_name(name: str) -> Callable:
+        return checked(family.functions[name], front)
+    return by_name
+
+
+def families() -> dict:
+    """Family name -> its :class:`Family`, for every family of :data:`ivkernels.kernels.FAMILIES`."""
+    return {f: importlib.import_module(f"ivkernels.kernels.reference.{f}").FAMILY for f in FAMILIES}
+
