@@ -212,7 +212,7 @@ def test_every_family_is_declared_once_in_order():
         assert set(_declared(FAMILY_PROTOCOLS[name])) == set(family.functions)
 
 
-@pytest.mark.parametrize("name", [b.name for b in available_backends(oracles=False)])
+@pytest.mark.parametrize("name", backend_names())
 def test_every_backend_checks_through_the_declaration(name):
     """Each host function with declared arguments runs the one shared check (kernels.contract.checked)."""
     be = get_backend(name, "cpu")
@@ -245,16 +245,28 @@ def _bad_arguments():
 
 
 @pytest.mark.parametrize("case,name", _bad_arguments())
-def test_a_misshapen_or_mistyped_argument_is_named(backend, case, name):
+def test_a_misshapen_or_mistyped_argument_is_named(any_backend, case, name):
     """Generated from the declarations: an array with one axis too many, or of another dtype, is
     refused before any launch with a message naming the argument."""
+    be = any_backend
     values = case.make(np.random.default_rng(0), *(max(case.min_frames, 2), 7, 11))
     good = values[name]
     with pytest.raises(ValueError, match=rf"^{name} must (have shape|be a non-empty 1-D vector)"):
-        run(case, backend, values, {name: backend.asarray(np.zeros(good.shape + (1,), good.dtype))})
+        run(case, be, values, {name: be.asarray(np.zeros(good.shape + (1,), good.dtype))})
     other = np.float64 if good.dtype == np.float32 else np.float32
     with pytest.raises(TypeError, match=rf"^{name} must have dtype"):
-        run(case, backend, values, {name: backend.asarray(good.astype(other))})
+        run(case, be, values, {name: be.asarray(good.astype(other))})
+
+
+@pytest.mark.parametrize("case", all_cases(), ids=lambda c: c.key)
+def test_numpy_backend_is_its_cases_reference(case):
+    """The NumPy backend, made from the case table, gives each case's reference on odd sizes."""
+    be = get_backend("numpy")
+    values = case.make(np.random.default_rng(0), max(case.min_frames, 2), 5, 7)
+    got, want = run(case, be, values), case.reference(values)
+    for name, expected in want.items():
+        np.testing.assert_allclose(np.asarray(got[name], np.float64), np.asarray(expected, np.float64),
+                                   rtol=1e-6, atol=1e-6, err_msg=f"{case.key}: {name}")
 
 
 def test_declared_shapes_bind_and_compare():
@@ -280,3 +292,39 @@ def test_declared_shapes_bind_and_compare():
     with pytest.raises(ValueError, match="^c is written in place and must be C-contiguous"):
         check_call(fn, NDARRAY, {**ok, "c": strided})
     assert check_call(fn, NDARRAY, {**ok, "a": np.zeros((3, 4, 10), np.float32)[:, :, ::2]})["a"].flags.c_contiguous
+
+
+class _Reads(dict):
+    """A dict recording the keys read from it."""
+
+    def __init__(self, *args):
+        super().__init__(*args)
+        self.read = set()
+
+    def __getitem__(self, key):
+        self.read.add(key)
+        return super().__getitem__(key)
+
+    def get(self, key, default=None):
+        self.read.add(key)
+        return super().get(key, default)
+
+
+def _first_cases() -> list:
+    """The case each function of the NumPy backend is made from (its family's first of that function)."""
+    first = {}
+    for case in all_cases():
+        first.setdefault((case.family, case.function), case)
+    return [c for c in first.values() if c.family not in ("energy_albedo_entropy",)]
+
+
+@pytest.mark.parametrize("case", _first_cases(), ids=lambda c: c.key)
+def test_case_reference_is_a_function_of_the_arguments(case):
+    """The NumPy backend is made from the case references, so the reference of each function's
+    first case reads every argument (outputs added into or updated included) and nothing else."""
+    fn = families()[case.family].functions[case.function]
+    values = _Reads(case.make(np.random.default_rng(0), 2, 5, 7))
+    case.reference(values)
+    wanted = {n for n in fn.signature.parameters if n != "workspace"} - \
+        {n for n in fn.outputs() if not fn.specs[n].accumulate and n not in case.updates}
+    assert wanted <= values.read <= set(fn.signature.parameters), (wanted - values.read, values.read - wanted)

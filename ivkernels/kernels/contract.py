@@ -58,6 +58,8 @@ class Array:
 
     output : written in place (so never copied; a backend whose kernels need
         contiguous memory refuses a strided output).
+    accumulate : an output the function adds into (``out += ...``), which its
+        initial content therefore takes part in.
     contiguous : refused unless C-contiguous on every backend.
     optional : ``None`` is accepted (and not checked).
     layout : the axes as the messages write them (default: ``dims`` as a tuple).
@@ -66,6 +68,7 @@ class Array:
     dims: str
     dtype: str = "float32"
     output: bool = False
+    accumulate: bool = False
     contiguous: bool = False
     optional: bool = False
     layout: str | None = None
@@ -88,8 +91,13 @@ class Array:
 
 
 def Out(dims: str, dtype: str = "float32", **kw) -> Array:
-    """An output array (written, accumulated or updated in place)."""
+    """An output array (written, or updated in place)."""
     return Array(dims, dtype, output=True, **kw)
+
+
+def Acc(dims: str, dtype: str = "float32", **kw) -> Array:
+    """An output array the function adds into (``out += ...``)."""
+    return Array(dims, dtype, output=True, accumulate=True, **kw)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -99,6 +107,7 @@ class Vector:
 
     output: bool = False
     name: str = "n"
+    accumulate = False
 
 
 @dataclasses.dataclass(frozen=True)
@@ -201,7 +210,8 @@ class HostFunction:
                 parts.append(f"{name} (n,)")
             else:
                 dtype = "" if spec.dtype == "float32" else f" {spec.dtype}"
-                parts.append(f"{name} {spec.describe()}{dtype}{' out' if spec.output else ''}")
+                role = " added into" if spec.accumulate else " out" if spec.output else ""
+                parts.append(f"{name} {spec.describe()}{dtype}{role}")
         return self.doc + ("\n\nArrays: " + ", ".join(parts) + "." if parts else "")
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.kernels.contract import Array, Family, Int, Out, Positive
+from ivkernels.kernels.contract import Acc, Array, Family, Int, Out, Positive
 from ivkernels.kernels.host import MAX_EXPONENT, grid_shape
 
 FAMILY = Family("coarse_basis", "The solver's edge-aware coarse basis (nodes every ``spacing`` pixels).")
@@ -21,10 +21,10 @@ FAMILY.declare("coarse_weights(A, weights, spacing, sigma)", "16 tap weights per
                A="T H W C", weights=Out("T H W 16"), spacing=Int(1), sigma=Positive,
                separate=(("weights", "A", "the weights are written while A is read at the nodes"),))
 FAMILY.declare("prolong_add(z, weights, out, spacing)", "``out += P z``.", order=("weights",),
-               z=_GRID, weights="T H W 16", out=Out("T H W"), spacing=Int(1),
+               z=_GRID, weights="T H W 16", out=Acc("T H W"), spacing=Int(1),
                separate=(("out", "z", "each pixel reads 16 nodes of z"),))
 FAMILY.declare("restrict_add(values, weights, out, spacing)", "``out += P^T values``.", order=("weights",),
-               values="T H W", weights="T H W 16", out=Out(_GRID.dims, layout=_GRID.layout), spacing=Int(1),
+               values="T H W", weights="T H W 16", out=Acc(_GRID.dims, layout=_GRID.layout), spacing=Int(1),
                separate=(("out", "values", "each node sums values over 4 x 4 node spacings"),))
 
 #: Node offsets of the 4 x 4 taps along one axis, relative to ``floor(y / spacing)``.

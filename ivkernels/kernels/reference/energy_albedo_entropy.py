@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.kernels.contract import Array, Family, Finite, FinitePositive, Int, Out, Rule
+from ivkernels.kernels.contract import Acc, Array, Family, Finite, FinitePositive, Int, Out, Rule
 
 FAMILY = Family("energy_albedo_entropy", "The albedo's global sparsity (Eq. 12).")
 
@@ -51,16 +51,16 @@ FAMILY.declare("entropy_dot(hist, blurred, dots)", "``dots[t] = <hist_t, blurred
                rules=(_bins("hist"),))
 FAMILY.declare("entropy_slice_gradient(A, whiten, lo, h, blurred, dots, gA, lam)", "Add Eq. 12's gradient into gA.",
                A="T H W 3", whiten="3 3", lo=Finite, h=FinitePositive, blurred="T B B B",
-               dots=Array("T", "float64"), gA=Out("T H W 3"), lam=Finite, rules=(_bins("blurred"),),
+               dots=Array("T", "float64"), gA=Acc("T H W 3"), lam=Finite, rules=(_bins("blurred"),),
                separate=_SCATTER)
 FAMILY.declare("entropy_energy(dots, sigma_p, n_pixels, energy_rows, lam)",
                "Add Eq. 12's energy of each frame into the first row of the frame.",
                dots=Array("T", "float64"), sigma_p=FinitePositive, n_pixels=Int(1),
-               energy_rows=Out("R", "float64", layout="(T*H,)"), lam=Finite,
+               energy_rows=Acc("R", "float64", layout="(T*H,)"), lam=Finite,
                rules=(Rule(_rows_per_frame, after="energy_rows"),))
 FAMILY.declare("entropy_term(A, whiten, lo, h, taps, sigma_p, scratch, gA, energy_rows, lam)",
                "Add Eq. 12's energy and gradient (the five steps above).",
-               A="T H W 3", gA=Out("T H W 3"), energy_rows=Out("T*H", "float64"), separate=_SCATTER)
+               A="T H W 3", gA=Acc("T H W 3"), energy_rows=Acc("T*H", "float64"), separate=_SCATTER)
 
 
 def _bin_coords(A, whiten, lo: float, h: float, bins: int):

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.kernels.contract import Array, Family, Out, Positive, Workspace
+from ivkernels.kernels.contract import Acc, Array, Family, Out, Positive, Real, Workspace
 
 FAMILY = Family("energy_temporal", "The temporal terms (Eq. 4, 8).")
 
@@ -12,14 +12,15 @@ _WHY = "the gradients are scattered while A and S are read"
 FAMILY.declare("temporal_term(X, flow, occ, gX, energy_rows, lam, alpha=5.0, *, workspace=None)",
                "Add the Tukey temporal term of X (with or without a channel axis) and its gradient.",
                X=Array("T H W [C]", layout="(T, H, W, C) or (T, H, W)"), flow="T-1 H W 2", occ="T-1 H W",
-               gX=Out("T H W [C]", layout="(T, H, W, C) like X"), energy_rows=Out("T*H", "float64"),
-               alpha=Positive, workspace=Workspace(),
+               gX=Acc("T H W [C]", layout="(T, H, W, C) like X"), energy_rows=Acc("T*H", "float64"),
+               lam=Real, alpha=Positive, workspace=Workspace(),
                separate=(("gX", "X", "the gradient is scattered into gX while X is read"),))
 FAMILY.declare("temporal_terms(A, S, flow, occ, gA, gS, energy_rows, lam_albedo, lam_shading, alpha=5.0, *, "
                "workspace=None)", "Both temporal terms at once, sharing flow, occ and alpha.",
                A="T H W 3", S=Array("T H W", layout="(T, H, W) like A"), flow="T-1 H W 2", occ="T-1 H W",
-               gA=Out("T H W 3", layout="(T, H, W, 3) like A"), gS=Out("T H W", layout="(T, H, W) like S"),
-               energy_rows=Out("T*H", "float64"), alpha=Positive, workspace=Workspace(),
+               gA=Acc("T H W 3", layout="(T, H, W, 3) like A"), gS=Acc("T H W", layout="(T, H, W) like S"),
+               energy_rows=Acc("T*H", "float64"), lam_albedo=Real, lam_shading=Real,
+               alpha=Positive, workspace=Workspace(),
                separate=(("gA", "A", _WHY), ("gA", "S", _WHY), ("gS", "A", _WHY), ("gS", "S", _WHY)))
 
 

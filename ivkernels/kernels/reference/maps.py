@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.kernels.contract import Array, Family, Int, NonNegative, Out, Positive, Rule, Workspace
+from ivkernels.kernels.contract import Array, Family, Int, NonNegative, Out, Positive, Real, Rule, Workspace
 from ivkernels.kernels.reference.sampling import _corners, _sample_points, warp_bilinear
 
 FAMILY = Family("maps", "Occlusion, warp reliability, motion boundaries and the shading gate.")
@@ -21,7 +21,7 @@ _OCCLUSION = dict(lab=Array("F H W 3", layout="(T+1, H, W, 3)"),
 FAMILY.declare("occlusion_soft(lab, flow, div_neg, out, sigma_e=20.0, sigma_d=0.3)",
                "Eq. 7's occlusion likelihood times the inside-the-image indicator.", **_OCCLUSION)
 FAMILY.declare("occlusion_binary(lab, flow, div_neg, out, sigma_e=20.0, sigma_d=0.3, threshold=0.5)",
-               "Eq. 6's ``w_occ`` (0/1).", **_OCCLUSION)
+               "Eq. 6's ``w_occ`` (0/1).", threshold=Real, **_OCCLUSION)
 FAMILY.declare("warp_reliability(log_image, flow, occ, max_spread)",
                "Clear occ where the warp of log_image by flow straddles an edge; ``max_spread > 0``.",
                log_image="T H W 3", flow="T-1 H W 2", occ=Out("T-1 H W"), max_spread=Positive)
@@ -35,7 +35,7 @@ FAMILY.declare("shading_gate(log_image, flow, gate, tau, tau_chroma=0.0)",
                          ("gate", "flow", "the gate is written while flow is read")))
 FAMILY.declare("motion_boundary(sobel_mag, out, threshold, radius, *, workspace=None)",
                "``w_bnd``: sobel_mag above threshold, dilated by radius pixels.",
-               sobel_mag="T H W", out=Out("T H W"), radius=Int(0), workspace=Workspace(),
+               sobel_mag="T H W", out=Out("T H W"), threshold=Real, radius=Int(0), workspace=Workspace(),
                separate=(("out", "sobel_mag", "the dilation reads neighbours of sobel_mag",
                           lambda args: args["radius"]),))
 

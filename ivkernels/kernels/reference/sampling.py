@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.kernels.contract import Family, Out, Rule
+from ivkernels.kernels.contract import Acc, Family, Out, Rule
 
 FAMILY = Family("sampling", "Warping frames by a flow, and its adjoint.")
 
@@ -19,7 +19,7 @@ _WARP = dict(src="T H W C", flow="T H W 2", out=Out("T H W C"), inside=Out("T H 
 FAMILY.declare("warp_bilinear(src, flow, out, inside)",
                "``out = src[t](x + u)`` bilinear, ``inside`` 1 where ``x + u`` lies in the image, else 0.", **_WARP)
 FAMILY.declare("splat_bilinear(values, flow, out)", "Add the transpose of :meth:`warp_bilinear` of values into out.",
-               values="T H W C", flow="T H W 2", out=Out("T H W C"),
+               values="T H W C", flow="T H W 2", out=Acc("T H W C"),
                separate=(("out", "values", "the splat scatters into out while reading values"),))
 FAMILY.declare("warp_bicubic(src, flow, out, inside)", "``out = src[t](x + u)`` bicubic (Keys).", **_WARP)
 
