@@ -278,7 +278,8 @@ def test_declared_shapes_bind_and_compare():
     ok = {"a": np.zeros((3, 4, 5), np.float32), "b": np.zeros((2, 4, 4), np.float32),
           "c": np.zeros(12, np.float64), "n": 2, "d": None}
     assert check_call(fn, NDARRAY, ok)["n"] == 2
-    with pytest.raises(ValueError, match=r"^b must have shape \(T-1, H, \(W-1\)//n\+2\) = \(2, 4, 6\), got \(2, 4, 4\)"):
+    with pytest.raises(ValueError,
+                       match=r"^b must have shape \(T-1, H, \(W-1\)//n\+2\) = \(2, 4, 6\), got \(2, 4, 4\)"):
         check_call(fn, NDARRAY, {**ok, "n": 1})
     with pytest.raises(ValueError, match=r"^c must have shape \(T\*H,\) = \(12,\), got \(11,\)"):
         check_call(fn, NDARRAY, {**ok, "c": np.zeros(11, np.float64)})

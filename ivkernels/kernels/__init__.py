@@ -5,6 +5,7 @@ Layout
 ``kernels/warp/<family>.py``
     NVIDIA Warp kernels (``@wp.kernel``, ``@wp.func`` helpers) and the host
     functions that launch them.  Runs on Warp's CPU backend and on CUDA.
+    ``flow_classic`` is a package split by concern (``kernels/warp/flow_classic/``).
 ``kernels/taichi/<family>.py``
     The same host functions, same names and signatures, implemented with
     Taichi kernels taking ``ti.types.ndarray()`` arguments.

@@ -1,4 +1,5 @@
-"""``derivatives``: the declared contract of its host functions, and the NumPy references (float64, replicate border)."""
+"""``derivatives``: the declared contract of its host functions, and the NumPy references
+(float64, replicate border)."""
 from __future__ import annotations
 
 import numpy as np
