@@ -74,7 +74,14 @@ class Array:
     layout: str | None = None
 
     def __post_init__(self):
-        object.__setattr__(self, "_axes", _parse_dims(self.dims))
+        axes = _parse_dims(self.dims)
+        object.__setattr__(self, "_axes", axes)
+        object.__setattr__(self, "_any", axes == (("any",),))
+        object.__setattr__(self, "_optional", axes[-1][0] == "optional" if axes else False)
+        object.__setattr__(self, "_exprs", any(a[0] == "expr" for a in axes))
+        object.__setattr__(self, "_plain", all(a[0] in ("int", "name", "expr") for a in axes))
+        object.__setattr__(self, "_template", tuple(a[1] if a[0] != "expr" else a[1:] for a in axes)
+                           if self._plain else ())
 
     @property
     def axes(self) -> tuple:
@@ -129,6 +136,9 @@ class Scalar:
     def check(self, name: str, value):
         if self.kind == "float":
             return float(value)
+        return self._check(name, value)
+
+    def _check(self, name: str, value):
         if self.kind == "finite":
             return check_float(name, value, positive=self.positive)
         if self.kind == "positive":
@@ -190,6 +200,16 @@ class HostFunction:
     specs: dict
     separate: tuple = ()
     rules: tuple = ()
+
+    def __post_init__(self):
+        after = {}
+        for rule in self.rules:
+            after.setdefault(rule.after, []).append(rule)
+        object.__setattr__(self, "_after", after)
+        object.__setattr__(self, "_scalars", tuple((n, s) for n, s in self.specs.items() if isinstance(s, Scalar)))
+        object.__setattr__(self, "_workspaces", tuple(n for n, s in self.specs.items() if isinstance(s, Workspace)))
+        object.__setattr__(self, "_arrays", tuple((n, s) for n, s in self.specs.items()
+                                                  if isinstance(s, (Array, Vector))))
 
     @property
     def key(self) -> str:
@@ -274,10 +294,29 @@ def _parse_dims(dims: str) -> tuple:
         elif _NAME.match(token):
             axes.append(("name", token))
         else:
-            tree = ast.parse(token, mode="eval")
+            tree = ast.parse(token, mode="eval").body
             names = tuple(sorted({n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}))
-            axes.append(("expr", compile(tree, token, "eval"), names))
+            axes.append(("expr", _compile(tree), names))
     return tuple(axes)
+
+
+_OPERATORS = {ast.Add: lambda a, b: a + b, ast.Sub: lambda a, b: a - b, ast.Mult: lambda a, b: a * b,
+              ast.FloorDiv: lambda a, b: a // b, ast.Pow: lambda a, b: a ** b}
+
+
+def _compile(node) -> Callable:
+    """A dims expression (ints, names, ``+ - * // **``, parentheses) as a function of the env
+    (bound sizes and scalar arguments) returning its value; anything else is refused here."""
+    if isinstance(node, ast.Constant) and isinstance(node.value, int):
+        value = node.value
+        return lambda env: value
+    if isinstance(node, ast.Name):
+        key = node.id
+        return lambda env: env[key]
+    if isinstance(node, ast.BinOp) and type(node.op) in _OPERATORS:
+        op, left, right = _OPERATORS[type(node.op)], _compile(node.left), _compile(node.right)
+        return lambda env: op(left(env), right(env))
+    raise ValueError(f"dims expressions take ints, sizes, scalars and + - * // **, got {ast.unparse(node)!r}")
 
 
 # ----------------------------------------------------------------------------- the one checking routine
@@ -286,24 +325,20 @@ class Frontend:
     """What a backend's arrays are: the few questions :func:`check_call` asks of them.
 
     kind : how messages name the array type ("wp.array", "numpy.ndarray").
+    array_type, dtypes : the array class, and what its ``dtype`` is for each
+        declared dtype name; ``shape`` must be a tuple of ints.
     copies_inputs : a strided input is replaced by a contiguous copy (kernels
         that take contiguous memory only), and a strided output refused.
     """
 
     kind = "array"
     copies_inputs = False
-
-    def is_array(self, a) -> bool:
-        raise NotImplementedError
-
-    def has_dtype(self, a, dtype: str) -> bool:
-        raise NotImplementedError
+    #: the array class (``isinstance`` test) and dtype name -> the arrays' ``dtype`` value
+    array_type: type = object
+    dtypes: dict = {}
 
     def dtype_name(self, a) -> str:
         raise NotImplementedError
-
-    def shape(self, a) -> tuple:
-        return tuple(a.shape)
 
     def device(self, a):
         """The array's device, or ``None`` where there is one device only."""
@@ -324,101 +359,62 @@ class Frontend:
 def check_call(fn: HostFunction, front: Frontend, args: dict) -> dict:
     """Check ``args`` (argument name -> value, every parameter) against ``fn``'s declaration.
 
-    Returns the arguments to call the implementation with: scalars converted,
-    inputs made contiguous where ``front`` copies them.  Raises TypeError
-    (not an array of the front end, wrong dtype, not a workspace) or
-    ValueError (wrong shape, device or value, aliasing) naming the argument.
+    Returns ``args``, updated with the values to call the implementation with:
+    scalars converted, inputs made contiguous where ``front`` copies them.
+    Raises TypeError (not an array of the front end, wrong dtype, not a
+    workspace) or ValueError (wrong shape, device or value, aliasing) naming
+    the argument.
     """
-    out = dict(args)
-    for name, spec in fn.specs.items():
-        if isinstance(spec, Scalar):
-            out[name] = spec.check(name, args[name])
-        elif isinstance(spec, Workspace):
-            check_workspace(args[name])
+    separate = [(w, args[w], r, args[r], why, when) for w, r, why, *when in fn.separate]
+    scalars = {}
+    for name, spec in fn._scalars:
+        scalars[name] = args[name] = spec.check(name, args[name])
+    for name in fn._workspaces:
+        check_workspace(args[name])
     sizes: dict = {}
-    scalars = {n: out[n] for n, s in fn.specs.items() if isinstance(s, Scalar)}
     device = [None]
     deferred = []
-    after = {}
-    for rule in fn.rules:
-        after.setdefault(rule.after, []).append(rule)
-    vector_length = [None]
-    for name, spec in fn.specs.items():
-        if isinstance(spec, Vector):
-            out[name] = _vector(front, name, args[name], spec, vector_length, device)
-            sizes[spec.name] = vector_length[0]
-        elif isinstance(spec, Array):
-            if args[name] is None and spec.optional:
-                continue
-            a, complete = _array(front, name, args[name], spec, sizes, scalars, device)
-            out[name] = a
+    after = fn._after
+    for name, spec in fn._arrays:
+        value = args[name]
+        if type(spec) is Vector:
+            args[name] = _vector(front, name, value, spec, sizes, device)
+        elif value is None and spec.optional:
+            continue
+        else:
+            args[name], complete = _array(front, name, value, spec, sizes, scalars, device)
             if not complete:
                 deferred.append(name)
-        else:
-            continue
-        for rule in after.get(name, ()):
-            out.update(rule.check(sizes, out) or {})
+        if name in after:
+            for rule in after[name]:
+                args.update(rule.check(sizes, args) or {})
     for name in deferred:
-        _array(front, name, out[name], fn.specs[name], sizes, scalars, device, final=True)
+        _array(front, name, args[name], fn.specs[name], sizes, scalars, device, final=True)
     for rule in after.get(None, ()):
-        out.update(rule.check(sizes, out) or {})
-    for written, read, why, *when in fn.separate:
-        a, b = args[written], args[read]
-        if a is None or b is None or (when and not when[0](out)):
+        args.update(rule.check(sizes, args) or {})
+    for written, a, read, b, why, when in separate:
+        if a is None or b is None or (when and not when[0](args)):
             continue
         check_separate(written, front.span(a), read, front.span(b), why)
-    return out
+    return args
 
 
 def _array(front, name, a, spec: Array, sizes: dict, scalars: dict, device: list, final: bool = False):
-    if not front.is_array(a):
+    """Check one array argument (binding its sizes into ``sizes``); return it (or its contiguous copy)
+    and whether its shape was checked in full (``False``: an expression names a size not bound yet)."""
+    if not isinstance(a, front.array_type):
         raise TypeError(f"{name} must be a {front.kind} of {spec.dtype} {spec.describe()}, got {type(a).__name__}")
-    if not front.has_dtype(a, spec.dtype):
+    if a.dtype != front.dtypes[spec.dtype]:
         raise TypeError(f"{name} must have dtype {spec.dtype}, got {front.dtype_name(a)}")
-    shape = front.shape(a)
+    shape = a.shape
     complete = True
-    if spec.axes == (("any",),):
-        want = sizes.get("...")
-        if want is not None and shape != want:
-            raise ValueError(f"{name} must have shape {spec.describe()} = {want}, got {shape}")
-        new = {"...": shape}
-    else:
-        env = {**scalars, **sizes}
-        axes = spec.axes
-        if axes[-1][0] == "optional":
-            key = f"[{axes[-1][1]}]"
-            present = sizes.get(key, len(shape) == len(axes))
-            new_present = {key: present}
-            axes = axes if present else axes[:-1]
-            axes = tuple(("name", a[1]) if a[0] == "optional" else a for a in axes)
-        else:
-            new_present = {}
-        want = []
-        for axis in axes:
-            if axis[0] == "int":
-                want.append(axis[1])
-            elif axis[0] == "name":
-                want.append(sizes.get(axis[1]))
-            elif all(n in env for n in axis[2]):
-                want.append(max(int(eval(axis[1], {"__builtins__": {}}, env)), 0))
-            else:
-                want.append(None)
-                complete = False
-        new = dict(new_present)
-        bad = len(shape) != len(want) or any(e is not None and e != s for e, s in zip(want, shape))
-        if not bad:
-            for axis, s in zip(axes, shape):
-                if axis[0] == "name" and axis[1] not in sizes:
-                    bad = bad or new.setdefault(axis[1], s) != s
-        if bad:
-            shown = tuple("?" if e is None else e for e in want)
-            raise ValueError(f"{name} must have shape {spec.describe()} = {shown}, got {shape}")
+    if not (spec._plain and _bind_plain(spec._template, shape, sizes, scalars)):
+        complete = _bind(name, spec, shape, sizes, scalars)
     if not final:
-        sizes.update(new)
         dev = front.device(a)
         if device[0] is None:
             device[0] = dev
-        elif dev != device[0]:
+        elif dev is not device[0] and dev != device[0]:
             raise ValueError(f"{name} is on device {dev}, expected {device[0]} (the device of the first array)")
         if not front.is_contiguous(a):
             if spec.output and (spec.contiguous or front.copies_inputs):
@@ -430,22 +426,97 @@ def _array(front, name, a, spec: Array, sizes: dict, scalars: dict, device: list
     return a, complete
 
 
-def _vector(front, name, a, spec: Vector, length: list, device: list):
-    if not front.is_array(a):
+def _bind_plain(template: tuple, shape: tuple, sizes: dict, scalars: dict) -> bool:
+    """The common case, fast: axes of ints, names and expressions (``template``: the ints, the
+    names as strings, ``(function, names)`` for expressions).  Binds the new names and returns
+    True if ``shape`` matches and every expression could be evaluated; else leaves ``sizes`` as
+    it was and returns False (:func:`_bind` then words the error, or defers the array)."""
+    if len(shape) != len(template):
+        return False
+    bound = None
+    for x, n in zip(template, shape):
+        kind = x.__class__
+        if kind is int:
+            if x != n:
+                break
+        elif kind is str:
+            e = sizes.get(x)
+            if e is None:
+                sizes[x] = n
+                bound = (bound or []) + [x]
+            elif e != n:
+                break
+        else:
+            env = {**scalars, **sizes}
+            if not all(k in env for k in x[1]) or max(int(x[0](env)), 0) != n:
+                break
+    else:
+        return True
+    for x in bound or ():
+        del sizes[x]
+    return False
+
+
+def _bind(name: str, spec: Array, shape: tuple, sizes: dict, scalars: dict) -> bool:
+    """Every form of dims: bind the new sizes or raise the ValueError naming ``name``; return
+    False if an expression could not be evaluated yet (the array is checked again at the end)."""
+    complete = True
+    if spec._any:
+        want = sizes.get("...")
+        if want is not None and shape != want:
+            raise ValueError(f"{name} must have shape {spec.describe()} = {want}, got {shape}")
+        sizes["..."] = shape
+        return complete
+    axes = spec._axes
+    new = {}
+    if spec._optional:
+        key = f"[{axes[-1][1]}]"
+        present = sizes.get(key, len(shape) == len(axes))
+        new[key] = present
+        axes = axes[:-1] + ((("name", axes[-1][1]),) if present else ())
+    env = {**scalars, **sizes} if spec._exprs else None
+    want = []
+    for axis in axes:
+        kind = axis[0]
+        if kind == "int":
+            want.append(axis[1])
+        elif kind == "name":
+            want.append(sizes.get(axis[1]))
+        elif all(n in env for n in axis[2]):
+            want.append(max(int(axis[1](env)), 0))
+        else:
+            want.append(None)
+            complete = False
+    bad = len(shape) != len(want)
+    if not bad:
+        for axis, e, n in zip(axes, want, shape):
+            if e is None:
+                if axis[0] == "name" and new.setdefault(axis[1], n) != n:
+                    bad = True
+            elif e != n:
+                bad = True
+    if bad:
+        shown = tuple("?" if e is None else e for e in want)
+        raise ValueError(f"{name} must have shape {spec.describe()} = {shown}, got {shape}")
+    sizes.update(new)
+    return complete
+
+
+def _vector(front, name, a, spec: Vector, sizes: dict, device: list):
+    if not isinstance(a, front.array_type):
         raise TypeError(f"{name} must be a 1-D {front.kind} of float32, got {type(a).__name__}")
-    if not front.has_dtype(a, "float32"):
+    if a.dtype != front.dtypes["float32"]:
         raise TypeError(f"{name} must have dtype float32, got {front.dtype_name(a)}")
-    shape = front.shape(a)
+    shape = a.shape
     if len(shape) != 1 or shape[0] < 1:
         raise ValueError(f"{name} must be a non-empty 1-D vector (n,), got shape {shape}")
-    if length[0] is None:
-        length[0] = shape[0]
-    elif shape[0] != length[0]:
-        raise ValueError(f"{name} must have the same length as the first vector ({length[0]}), got {shape[0]}")
+    n = sizes.setdefault(spec.name, shape[0])
+    if shape[0] != n:
+        raise ValueError(f"{name} must have the same length as the first vector ({n}), got {shape[0]}")
     dev = front.device(a)
     if device[0] is None:
         device[0] = dev
-    elif dev != device[0]:
+    elif dev is not device[0] and dev != device[0]:
         raise ValueError(f"{name} is on device {dev}, expected {device[0]} (the device of the first array)")
     if not front.is_contiguous(a) and front.copies_inputs:
         if spec.output:
@@ -469,10 +540,15 @@ def checked(fn: HostFunction, front: Frontend) -> Callable:
         keyword = [p.name for p in params if p.kind is inspect.Parameter.KEYWORD_ONLY]
         defaults = {p.name: p.default for p in params if p.default is not inspect.Parameter.empty}
 
-        @functools.wraps(impl)
-        def host(*a, **kw):
-            if len(a) > len(positional):
-                raise TypeError(f"{fn.name}() takes {len(positional)} positional arguments, got {len(a)}")
+        n_positional = len(positional)
+        n_required = sum(1 for p in params if p.kind is inspect.Parameter.POSITIONAL_OR_KEYWORD
+                         and p.default is inspect.Parameter.empty)
+        required_keywords = any(p.kind is inspect.Parameter.KEYWORD_ONLY and p.default is inspect.Parameter.empty
+                                for p in params)
+
+        def bind(a: tuple, kw: dict) -> dict:
+            if len(a) > n_positional:
+                raise TypeError(f"{fn.name}() takes {n_positional} positional arguments, got {len(a)}")
             values = dict(defaults)
             values.update(zip(positional, a))
             for k, v in kw.items():
@@ -482,8 +558,19 @@ def checked(fn: HostFunction, front: Frontend) -> Callable:
             missing = [n for n in (*positional, *keyword) if n not in values]
             if missing:
                 raise TypeError(f"{fn.name}() missing arguments {missing}")
-            values = check_call(fn, front, values)
-            return impl(*(values[n] for n in positional), **{n: values[n] for n in keyword})
+            return values
+
+        @functools.wraps(impl)
+        def host(*a, **kw):
+            if kw or required_keywords or not n_required <= len(a) <= n_positional:
+                values = bind(a, kw)
+            else:
+                values = dict(defaults)
+                values.update(zip(positional, a))
+            check_call(fn, front, values)
+            if keyword:
+                return impl(*[values[n] for n in positional], **{n: values[n] for n in keyword})
+            return impl(*[values[n] for n in positional])
 
         host.contract = fn
         return host

@@ -34,12 +34,8 @@ class NdarrayFrontend(Frontend):
 
     kind = "numpy.ndarray"
     copies_inputs = True
-
-    def is_array(self, a) -> bool:
-        return isinstance(a, np.ndarray)
-
-    def has_dtype(self, a, dtype: str) -> bool:
-        return a.dtype == dtype
+    array_type = np.ndarray
+    dtypes = {"float32": np.dtype(np.float32), "float64": np.dtype(np.float64), "int32": np.dtype(np.int32)}
 
     def dtype_name(self, a) -> str:
         return a.dtype.name

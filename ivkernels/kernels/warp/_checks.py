@@ -27,13 +27,8 @@ class WarpFrontend(Frontend):
     (never copied), on the device of the first array."""
 
     kind = "wp.array"
-    _dtypes = {"float32": wp.float32, "float64": wp.float64, "int32": wp.int32}
-
-    def is_array(self, a) -> bool:
-        return isinstance(a, wp.array)
-
-    def has_dtype(self, a, dtype: str) -> bool:
-        return a.dtype == self._dtypes[dtype]
+    array_type = wp.array
+    dtypes = {"float32": wp.float32, "float64": wp.float64, "int32": wp.int32}
 
     def dtype_name(self, a) -> str:
         return wp.types.type_repr(a.dtype)
