@@ -8,7 +8,13 @@ one line of what the function does, and a spec per argument::
     FAMILY.declare("data_term(I, A, S, w_lum, gA, gS, energy_rows, lam=10.0, eps=0.001)",
                    "Add Eq. 3 and its gradient.",
                    I="T H W 3", A="T H W 3", S="T H W", w_lum="T H W",
-                   gA=Out("T H W 3"), gS=Out("T H W"), energy_rows=Out("T*H", "float64"))
+                   gA=Acc("T H W 3"), gS=Acc("T H W"), energy_rows=Acc("T*H", "float64"),
+                   lam=Real, eps=Real)
+
+(a string is a float32 input; :func:`Out` an output written in place,
+:func:`Acc` one added into; :class:`Vector`, :class:`Scalar` (``Real``,
+``Positive``, :func:`Int`, ...), :class:`Workspace`, :class:`Rule` for what
+shapes cannot say, ``separate=`` for arrays that must not share memory).
 
 Every backend reads the same declarations: its host functions are wrapped by
 :func:`checked`, which checks the arguments with :func:`check_call` through
@@ -22,10 +28,12 @@ Shapes
 An array's ``dims`` are its axes separated by spaces: an int (``3``), a name
 (``T``, ``T'``, ``h``) bound by the first array that has it and compared in
 every later one, an expression of bound names and scalar arguments (``T*H``,
-``T-1``, ``3*C``, ``(H-1)//spacing+2``; negative values count as 0), or
-``...`` alone: any shape, the same in every array declared ``...``.  Arrays
-are checked in signature order; one whose expression names a size bound only
-later is checked again at the end.  Messages name the argument, the layout
+``T-1``, ``3*C``, ``(H-1)//spacing+2``: ints, names, ``+ - * // **``;
+negative values count as 0), ``[C]``: a last axis that may be missing (alike
+in every array declaring it), or ``...`` alone: any shape, the same in every
+array declared ``...``.  Arrays are checked in signature order (or the
+``order`` given); one whose expression names a size bound only later is
+checked again at the end.  Messages name the argument, the layout
 (``(T, H, W, 3)``) and the sizes expected, with ``?`` for sizes not yet bound.
 
 Order of the checks: the scalars, then the arrays (type, dtype, shape,
@@ -43,7 +51,6 @@ import re
 from typing import Callable
 
 from ivkernels.kernels import FAMILIES
-
 from ivkernels.kernels.checks import check_float, check_int, check_non_negative, check_positive, check_separate
 from ivkernels.kernels.workspace import check_workspace
 
@@ -281,7 +288,7 @@ def _parse_signature(text: str) -> tuple[str, inspect.Signature]:
 
 
 def _parse_dims(dims: str) -> tuple:
-    """Axes of ``dims``: ``("int", n)``, ``("name", s)``, ``("expr", code, names)``, ``("optional", s)``
+    """Axes of ``dims``: ``("int", n)``, ``("name", s)``, ``("expr", function, names)``, ``("optional", s)``
     (a last axis ``[C]`` that may be missing, in every array declaring it alike), or ``(("any",),)``."""
     if dims.strip() == "...":
         return (("any",),)
