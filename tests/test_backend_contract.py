@@ -1,5 +1,7 @@
 """The backend contract: every registered backend against the declared protocols,
-the registry as the one list of backends, and the rules every backend shares."""
+the registry as the one list of backends, the rules every backend shares, and the
+declarations of the host functions (:mod:`ivkernels.kernels.contract`) that all of
+them and the case table read."""
 import inspect
 import subprocess
 import sys
@@ -11,6 +13,9 @@ from ivkernels import cli
 from ivkernels.backends import (FAMILIES, FAMILY_PROTOCOLS, BackendProtocol, NumpyBackend, available_backends,
                                 backend_names, backend_spec, get_backend, register_backend)
 from ivkernels.backends import registry
+from ivkernels.kernels.cases import all_cases, run
+from ivkernels.kernels.contract import Array, Family, Int, check_call, families
+from ivkernels.kernels.ndarray_checks import FRONT as NDARRAY
 
 
 def _declared(protocol) -> dict:
@@ -184,3 +189,143 @@ def test_median_spatial_table_is_built_once(monkeypatch):
         be.median.weighted_median_shading(S, np.zeros((1, 6, 7, 2), np.float32), np.ones((1, 6, 7), np.float32),
                                           np.empty_like(S), radius=2, sigma_s=3.25)
     assert calls.count((2, 3.25)) <= 1
+
+
+# ----------------------------------------------------------------------------- the declared contract
+
+def _declared_functions():
+    return [fn for family in families().values() for fn in family.functions.values()]
+
+
+def _bound(case, values) -> dict:
+    """Every parameter of ``case``'s host function: the case's values, defaults for the rest."""
+    fn = families()[case.family].functions[case.function]
+    args = {n: p.default for n, p in fn.signature.parameters.items() if p.default is not inspect.Parameter.empty}
+    args.update({n: values[n] for n in (*case.call, *case.keywords)})
+    return args
+
+
+def test_every_family_is_declared_once_in_order():
+    assert tuple(families()) == FAMILIES == tuple(FAMILY_PROTOCOLS)
+    for name, family in families().items():
+        assert family.name == name
+        assert set(_declared(FAMILY_PROTOCOLS[name])) == set(family.functions)
+
+
+@pytest.mark.parametrize("name", backend_names())
+def test_every_backend_checks_through_the_declaration(name):
+    """Each host function with declared arguments runs the one shared check (kernels.contract.checked)."""
+    be = get_backend(name, "cpu")
+    for fn in _declared_functions():
+        impl = getattr(getattr(be, fn.family), fn.name)
+        if fn.specs:
+            assert getattr(impl, "contract", None) is fn, f"{name}.{fn.key} does not check through its declaration"
+
+
+@pytest.mark.parametrize("case", all_cases(), ids=lambda c: c.key)
+def test_case_inputs_meet_the_declaration(case):
+    """The case table and the declarations agree: every case's inputs pass the declared checks."""
+    fn = families()[case.family].functions[case.function]
+    values = case.make(np.random.default_rng(0), *(max(case.min_frames, 2), 7, 11))
+    check_call(fn, NDARRAY, _bound(case, values))
+
+
+def _bad_arguments():
+    """(case, argument) for every declared array argument of every case (one case per function)."""
+    seen, out = set(), []
+    for case in all_cases():
+        if case.key.split("[")[0] in seen:
+            continue
+        seen.add(case.key.split("[")[0])
+        fn = families()[case.family].functions[case.function]
+        for name, spec in fn.arrays().items():
+            if name in (*case.call, *case.keywords) and getattr(spec, "dims", "") != "...":
+                out.append(pytest.param(case, name, id=f"{case.key}-{name}"))
+    return out
+
+
+@pytest.mark.parametrize("case,name", _bad_arguments())
+def test_a_misshapen_or_mistyped_argument_is_named(any_backend, case, name):
+    """Generated from the declarations: an array with one axis too many, or of another dtype, is
+    refused before any launch with a message naming the argument."""
+    be = any_backend
+    values = case.make(np.random.default_rng(0), *(max(case.min_frames, 2), 7, 11))
+    good = values[name]
+    with pytest.raises(ValueError, match=rf"^{name} must (have shape|be a non-empty 1-D vector)"):
+        run(case, be, values, {name: be.asarray(np.zeros(good.shape + (1,), good.dtype))})
+    other = np.float64 if good.dtype == np.float32 else np.float32
+    with pytest.raises(TypeError, match=rf"^{name} must have dtype"):
+        run(case, be, values, {name: be.asarray(good.astype(other))})
+
+
+@pytest.mark.parametrize("case", all_cases(), ids=lambda c: c.key)
+def test_numpy_backend_is_its_cases_reference(case):
+    """The NumPy backend, made from the case table, gives each case's reference on odd sizes."""
+    be = get_backend("numpy")
+    values = case.make(np.random.default_rng(0), max(case.min_frames, 2), 5, 7)
+    got, want = run(case, be, values), case.reference(values)
+    for name, expected in want.items():
+        np.testing.assert_allclose(np.asarray(got[name], np.float64), np.asarray(expected, np.float64),
+                                   rtol=1e-6, atol=1e-6, err_msg=f"{case.key}: {name}")
+
+
+def test_declared_shapes_bind_and_compare():
+    """The one checking routine: sizes bound by the first array, compared in the next, expressions
+    of bound sizes and scalars, an optional last axis, and messages with the sizes expected."""
+    family = Family("demo", "for the test")
+    fn = family.declare("f(a, b, c, n=1, *, d=None)", "demo", a="T H W [C]", b=Array("T-1 H (W-1)//n+2"),
+                        c=Array("T*H", "float64", output=True), d=Array("T H W [C]", optional=True), n=Int(1))
+    ok = {"a": np.zeros((3, 4, 5), np.float32), "b": np.zeros((2, 4, 4), np.float32),
+          "c": np.zeros(12, np.float64), "n": 2, "d": None}
+    assert check_call(fn, NDARRAY, ok)["n"] == 2
+    with pytest.raises(ValueError,
+                       match=r"^b must have shape \(T-1, H, \(W-1\)//n\+2\) = \(2, 4, 6\), got \(2, 4, 4\)"):
+        check_call(fn, NDARRAY, {**ok, "n": 1})
+    with pytest.raises(ValueError, match=r"^c must have shape \(T\*H,\) = \(12,\), got \(11,\)"):
+        check_call(fn, NDARRAY, {**ok, "c": np.zeros(11, np.float64)})
+    with pytest.raises(ValueError, match=r"^d must have shape \(T, H, W, \[C\]\) = \(3, 4, 5\)"):
+        check_call(fn, NDARRAY, {**ok, "d": np.zeros((3, 4, 5, 1), np.float32)})
+    with pytest.raises(TypeError, match="^c must have dtype float64, got float32"):
+        check_call(fn, NDARRAY, {**ok, "c": np.zeros(12, np.float32)})
+    with pytest.raises(ValueError, match=r"^n must be an int >= 1, got 0"):
+        check_call(fn, NDARRAY, {**ok, "n": 0})
+    strided = np.zeros(24, np.float64)[::2]
+    with pytest.raises(ValueError, match="^c is written in place and must be C-contiguous"):
+        check_call(fn, NDARRAY, {**ok, "c": strided})
+    assert check_call(fn, NDARRAY, {**ok, "a": np.zeros((3, 4, 10), np.float32)[:, :, ::2]})["a"].flags.c_contiguous
+
+
+class _Reads(dict):
+    """A dict recording the keys read from it."""
+
+    def __init__(self, *args):
+        super().__init__(*args)
+        self.read = set()
+
+    def __getitem__(self, key):
+        self.read.add(key)
+        return super().__getitem__(key)
+
+    def get(self, key, default=None):
+        self.read.add(key)
+        return super().get(key, default)
+
+
+def _first_cases() -> list:
+    """The case each function of the NumPy backend is made from (its family's first of that function)."""
+    first = {}
+    for case in all_cases():
+        first.setdefault((case.family, case.function), case)
+    return [c for c in first.values() if c.family not in ("energy_albedo_entropy",)]
+
+
+@pytest.mark.parametrize("case", _first_cases(), ids=lambda c: c.key)
+def test_case_reference_is_a_function_of_the_arguments(case):
+    """The NumPy backend is made from the case references, so the reference of each function's
+    first case reads every argument (outputs added into or updated included) and nothing else."""
+    fn = families()[case.family].functions[case.function]
+    values = _Reads(case.make(np.random.default_rng(0), 2, 5, 7))
+    case.reference(values)
+    wanted = {n for n in fn.signature.parameters if n != "workspace"} - \
+        {n for n in fn.outputs() if not fn.specs[n].accumulate and n not in case.updates}
+    assert wanted <= values.read <= set(fn.signature.parameters), (wanted - values.read, values.read - wanted)

@@ -9,10 +9,8 @@ from ivkernels.backends.base import Backend, as_shape
 class HostArrayBackend(Backend):
     """Arrays are C-contiguous ``numpy.ndarray`` on the CPU; ``numpy()`` returns them as they are."""
 
-    def __init__(self, device: str = "cpu"):
-        if device != "cpu":
-            raise ValueError(f"the {self.name} backend runs on device='cpu' only, got {device!r}")
-        super().__init__(device)
+    # ``device`` is checked by the registry (:func:`~ivkernels.backends.registry.check_device`):
+    # these backends declare the device "cpu" only.
 
     def asarray(self, a: np.ndarray) -> np.ndarray:
         return np.ascontiguousarray(a)

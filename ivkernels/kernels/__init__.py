@@ -5,12 +5,19 @@ Layout
 ``kernels/warp/<family>.py``
     NVIDIA Warp kernels (``@wp.kernel``, ``@wp.func`` helpers) and the host
     functions that launch them.  Runs on Warp's CPU backend and on CUDA.
+    ``flow_classic`` is a package split by concern (``kernels/warp/flow_classic/``).
 ``kernels/taichi/<family>.py``
     The same host functions, same names and signatures, implemented with
     Taichi kernels taking ``ti.types.ndarray()`` arguments.
 ``kernels/reference/<family>.py``
-    Plain NumPy references of the same operations, functional (they return
-    their results).  Used by the tests, the benchmarks and the NumPy backend.
+    The family's specification: the declared contract of each host function
+    (signature, shapes, dtypes, rules; :mod:`ivkernels.kernels.contract`) and
+    plain NumPy references of the same operations, functional (they return
+    their results).  Used by every backend's argument checks, the protocols,
+    the tests, the benchmarks and the NumPy backend.
+``kernels/cases/<family>.py``
+    The case table: inputs, outputs, reference and tolerances of each host
+    function, from which the tests and the benchmarks are generated.
 ``kernels/numpy/<family>.py``
     The same host functions again, as thin adapters writing the references'
     results into the outputs: the slow, exact ``"numpy"`` backend.
@@ -18,17 +25,18 @@ Layout
     Backend-neutral host code every backend shares: tables (Gaussian taps,
     the median's spatial weights and compare-exchange network), constants,
     scratch shapes and the one NumPy sRGB encoder.
-``kernels/checks.py``, ``kernels/warp/_checks.py``, ``kernels/ndarray_checks.py``
-    Argument checks: the rules that do not depend on the array type (scalars,
-    aliasing), and their ``wp.array`` and ``numpy.ndarray`` front ends.
+``kernels/contract.py``
+    The one routine that checks a call against its declaration, for every
+    backend, through the backend's front end (what its arrays are):
+    ``kernels/warp/_checks.py`` (``wp.array``), ``kernels/ndarray_checks.py``
+    (``numpy.ndarray``); ``kernels/checks.py`` holds the rules that do not
+    depend on the array type (scalars, aliasing).
 
-The host functions every backend must provide, with their signatures, are
-declared in :mod:`ivkernels.backends.protocols` and checked by the tests.
-
-Families: ``colour``, ``sampling``, ``derivatives``, ``maps``, ``pyramid``,
-``vecops``, ``median``, ``energy_data``, ``energy_temporal``,
-``energy_shading``, ``energy_albedo_gsm``, ``energy_albedo_entropy``,
-``flow_classic``.
+The host functions every backend must provide are the declared ones;
+:mod:`ivkernels.backends.protocols` builds the family protocols from the
+declarations, and the tests check every backend against them.  The families
+are listed once, in :data:`FAMILIES`; ``README.md`` beside this module walks
+through adding a kernel.
 
 Array convention (written down once, used everywhere)
 -----------------------------------------------------
@@ -62,3 +70,11 @@ cores available, :func:`ivkernels.kernels.thread_count.set_threads`).  Kernels t
 scatter (bilinear splat, histogram splat) split at frame boundaries so that the
 bands never write the same memory (Warp's CPU atomics are plain read-modify-writes).
 """
+
+#: The kernel families, in the order of the solver's layers; every list of families
+#: (backends, protocols, case table, benchmarks) reads this one.
+FAMILIES = (
+    "colour", "sampling", "derivatives", "maps", "pyramid", "vecops", "median",
+    "energy_data", "energy_temporal", "energy_shading", "energy_albedo_gsm",
+    "energy_albedo_entropy", "flow_classic", "coarse_basis",
+)

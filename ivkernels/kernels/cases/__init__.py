@@ -47,11 +47,8 @@ from typing import Callable, Mapping
 
 import numpy as np
 
-FAMILIES = (
-    "colour", "sampling", "derivatives", "maps", "pyramid", "vecops", "median",
-    "energy_data", "energy_temporal", "energy_shading", "energy_albedo_gsm",
-    "energy_albedo_entropy", "flow_classic", "coarse_basis",
-)
+from ivkernels.kernels import FAMILIES
+
 
 
 @dataclasses.dataclass(frozen=True)

@@ -31,12 +31,12 @@ def _shading(radius, lam):
         S = (rng.integers(0, 6, (T, H, W)) / 5.0).astype(F32)           # ties
         S += normal(rng, S.shape, 0.0, 0.02) * (rng.random(S.shape) < 0.5)
         return {"S": S, "flow": two_region_flow(rng, P, H, W)[0], "w_bnd": mask(rng, (P, H, W), 0.4),
-                "out": nans((T, H, W)), "radius": radius, "lam": lam}
+                "out": nans((T, H, W)), "radius": radius, "sigma_s": 7.0, "lam": lam}
 
     return Case("median", "weighted_median_shading", make, ("S", "flow", "w_bnd", "out"), ("out",),
                 lambda v: {"out": ref.weighted_median_shading(v["S"], v["flow"], v["w_bnd"], radius=v["radius"],
-                                                              lam=v["lam"])},
-                variant=f"radius={radius},lam={lam:g}", keywords=("radius", "lam"), tol=Tol(0.0, 1e-5),
+                                                              sigma_s=v["sigma_s"], lam=v["lam"])},
+                variant=f"radius={radius},lam={lam:g}", keywords=("radius", "sigma_s", "lam"), tol=Tol(0.0, 1e-5),
                 no_alias=(("S", "out"),))
 
 
@@ -46,12 +46,13 @@ def _flow(radius):
         occ = np.where(rng.random((P, H, W)) < 0.8, 1.0, rng.random((P, H, W))).astype(F32)
         return {"flow": (rng.integers(-4, 5, (P, H, W, 2)) / 2.0).astype(F32),      # ties
                 "lab": uniform(rng, (P, H, W, 3), 0.0, 30.0), "occ": occ, "mask": mask(rng, (P, H, W), 0.5),
-                "out": nans((P, H, W, 2)), "radius": radius, "sigma_i": 10.0}
+                "out": nans((P, H, W, 2)), "radius": radius, "sigma_x": 7.0, "sigma_i": 10.0}
 
     return Case("median", "weighted_median_flow", make, ("flow", "lab", "occ", "mask", "out"), ("out",),
                 lambda v: {"out": ref.weighted_median_flow(v["flow"], v["lab"], v["occ"], v["mask"],
-                                                           radius=v["radius"], sigma_i=v["sigma_i"])},
-                variant=f"radius={radius}", keywords=("radius", "sigma_i"), tol=EXACT,
+                                                           radius=v["radius"], sigma_x=v["sigma_x"],
+                                                           sigma_i=v["sigma_i"])},
+                variant=f"radius={radius}", keywords=("radius", "sigma_x", "sigma_i"), tol=EXACT,
                 no_alias=(("flow", "out"),))
 
 

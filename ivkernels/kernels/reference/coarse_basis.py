@@ -1,4 +1,4 @@
-"""NumPy reference of :mod:`ivkernels.kernels.warp.coarse_basis` (float64, vectorised).
+"""``coarse_basis``: the declared contract of its host functions, and the NumPy references (float64, vectorised).
 
 The edge-aware coarse basis: a grid of nodes every ``spacing`` pixels per
 frame, and for each pixel 16 interpolation weights over the 4 x 4 nodes
@@ -9,7 +9,23 @@ from __future__ import annotations
 
 import numpy as np
 
+from ivkernels.kernels.contract import Acc, Array, Family, Int, Out, Positive
 from ivkernels.kernels.host import MAX_EXPONENT, grid_shape
+
+FAMILY = Family("coarse_basis", "The solver's edge-aware coarse basis (nodes every ``spacing`` pixels).")
+
+_GRID = Array("T (H-1)//spacing+2 (W-1)//spacing+2",
+              layout="(T, Hc, Wc) = (T, (H-1)//spacing + 2, (W-1)//spacing + 2)")
+
+FAMILY.declare("coarse_weights(A, weights, spacing, sigma)", "16 tap weights per pixel from the guide A.",
+               A="T H W C", weights=Out("T H W 16"), spacing=Int(1), sigma=Positive,
+               separate=(("weights", "A", "the weights are written while A is read at the nodes"),))
+FAMILY.declare("prolong_add(z, weights, out, spacing)", "``out += P z``.", order=("weights",),
+               z=_GRID, weights="T H W 16", out=Acc("T H W"), spacing=Int(1),
+               separate=(("out", "z", "each pixel reads 16 nodes of z"),))
+FAMILY.declare("restrict_add(values, weights, out, spacing)", "``out += P^T values``.", order=("weights",),
+               values="T H W", weights="T H W 16", out=Acc(_GRID.dims, layout=_GRID.layout), spacing=Int(1),
+               separate=(("out", "values", "each node sums values over 4 x 4 node spacings"),))
 
 #: Node offsets of the 4 x 4 taps along one axis, relative to ``floor(y / spacing)``.
 TAP_OFFSETS = (-1, 0, 1, 2)

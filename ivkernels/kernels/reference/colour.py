@@ -1,7 +1,21 @@
-"""NumPy reference of :mod:`ivkernels.kernels.warp.colour` (float64)."""
+"""``colour``: the declared contract of its host functions, and the NumPy references (float64)."""
 from __future__ import annotations
 
 import numpy as np
+
+from ivkernels.kernels.contract import Family, Out, Positive
+
+FAMILY = Family("colour", "Transfer curves, log, Lab and luminance, element-wise.")
+
+FAMILY.declare("srgb_to_linear(src, out)", "sRGB-encoded -> linear, any shape (``out`` may be ``src``).",
+               src="...", out=Out("...", contiguous=True, layout="(same shape as src)"))
+FAMILY.declare("linear_to_srgb(src, out)", "Linear -> sRGB-encoded, any shape (``out`` may be ``src``).",
+               src="...", out=Out("...", contiguous=True, layout="(same shape as src)"))
+FAMILY.declare("log_floor(src, out, floor)", "``out = log(max(src, floor))``, any shape; ``floor > 0``.",
+               src="...", out=Out("...", contiguous=True, layout="(same shape as src)"), floor=Positive)
+FAMILY.declare("linear_rgb_to_lab(rgb, out)", "Linear RGB -> CIE Lab, D65 white (``out`` may be ``rgb``).",
+               rgb="T H W 3", out=Out("T H W 3"))
+FAMILY.declare("luminance(rgb, out)", "Linear RGB -> Rec. 709 luminance.", rgb="T H W 3", out=Out("T H W"))
 
 # Linear sRGB (D65) -> CIE XYZ (IEC 61966-2-1) and the D65 white it maps (1, 1, 1) to.
 RGB_TO_XYZ = np.array([[0.4124564, 0.3575761, 0.1804375],

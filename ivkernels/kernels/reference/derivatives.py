@@ -1,7 +1,20 @@
-"""NumPy reference of :mod:`ivkernels.kernels.warp.derivatives` (float64, replicate border)."""
+"""``derivatives``: the declared contract of its host functions, and the NumPy references
+(float64, replicate border)."""
 from __future__ import annotations
 
 import numpy as np
+
+from ivkernels.kernels.contract import Family, Out
+
+FAMILY = Family("derivatives", "Image gradients, flow Sobel magnitude, divergence.")
+
+FAMILY.declare("image_gradient(src, gx, gy)", "5-point x and y derivatives of src.",
+               src="T H W C", gx=Out("T H W C"), gy=Out("T H W C"),
+               separate=(("gx", "src", "the stencil reads neighbours of src while writing gx"),
+                         ("gy", "src", "the stencil reads neighbours of src while writing gy")))
+FAMILY.declare("flow_sobel_magnitude(flow, out)", "Sobel magnitude of a flow.", flow="T H W 2", out=Out("T H W"))
+FAMILY.declare("divergence_negative(flow, out)", "``min(div u, 0)`` of a flow (Eq. 7).",
+               flow="T H W 2", out=Out("T H W"))
 
 
 def correlate_xy(img: np.ndarray, kernel: np.ndarray) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""NumPy reference of :mod:`ivkernels.kernels.warp.energy_albedo_entropy` (Eq. 12), float64.
+"""``energy_albedo_entropy``: the declared contract of its host functions, and the NumPy references (Eq. 12), float64.
 
 Two references: :func:`entropy_term` follows the kernels' histogram algorithm
 step by step (splat, separable blur, dot, sliced gradient), and
@@ -8,6 +8,59 @@ O(N^2), for small inputs.
 from __future__ import annotations
 
 import numpy as np
+
+from ivkernels.kernels.contract import Acc, Array, Family, Finite, FinitePositive, Int, Out, Rule
+
+FAMILY = Family("energy_albedo_entropy", "The albedo's global sparsity (Eq. 12).")
+
+
+def _bins(name):
+    def check(sizes, args):
+        if sizes["B"] < 2:
+            raise ValueError(f"{name} must have shape (T, B, B, B) with B >= 2, got {tuple(args[name].shape)}")
+    return Rule(check, after=name)
+
+
+def _odd_taps(sizes, args):
+    if sizes["k"] % 2 != 1:
+        raise ValueError(f"taps must have an odd length 2r+1, got {sizes['k']}")
+
+
+def _rows_per_frame(sizes, args):
+    if sizes["T"] == 0 or sizes["R"] % sizes["T"]:
+        raise ValueError(f"energy_rows length {sizes['R']} is not a multiple of T = {sizes['T']}")
+
+
+_SCATTER = (("gA", "A", "the gradient is scattered into gA while A is read"),)
+_LIKE_HIST = "(T, B, B, B) like hist"
+
+FAMILY.declare("allocate_entropy_scratch(n_frames, bins, device='cpu')",
+               ":class:`ivkernels.kernels.host.EntropyScratch` of backend arrays for T frames, B^3 bins.")
+FAMILY.declare("entropy_histogram(A, whiten, lo, h, hist, row_flags)",
+               "Splat of ``W A`` into the histogram, flagging the rows it touched.",
+               A="T H W 3", whiten="3 3", lo=Finite, h=FinitePositive, hist=Out("T B B B"),
+               row_flags=Out("2 T B B", "int32"), rules=(_bins("hist"),))
+FAMILY.declare("entropy_blur(hist, taps, row_flags, tmp, blurred)", "``blurred = G * hist`` per frame.",
+               hist="T B B B", taps=Array("k", layout="(2r+1,)"), row_flags=Out("2 T B B", "int32"),
+               tmp=Out("T B B B", layout=_LIKE_HIST), blurred=Out("T B B B", layout=_LIKE_HIST),
+               rules=(_bins("hist"), Rule(_odd_taps, after="taps")),
+               separate=(("tmp", "hist", "the blur reads neighbours of hist while writing tmp"),
+                         ("blurred", "hist", "the blur reads neighbours of hist while writing blurred")))
+FAMILY.declare("entropy_dot(hist, blurred, dots)", "``dots[t] = <hist_t, blurred_t>``.",
+               hist="T B B B", blurred=Array("T B B B", layout=_LIKE_HIST), dots=Out("T", "float64"),
+               rules=(_bins("hist"),))
+FAMILY.declare("entropy_slice_gradient(A, whiten, lo, h, blurred, dots, gA, lam)", "Add Eq. 12's gradient into gA.",
+               A="T H W 3", whiten="3 3", lo=Finite, h=FinitePositive, blurred="T B B B",
+               dots=Array("T", "float64"), gA=Acc("T H W 3"), lam=Finite, rules=(_bins("blurred"),),
+               separate=_SCATTER)
+FAMILY.declare("entropy_energy(dots, sigma_p, n_pixels, energy_rows, lam)",
+               "Add Eq. 12's energy of each frame into the first row of the frame.",
+               dots=Array("T", "float64"), sigma_p=FinitePositive, n_pixels=Int(1),
+               energy_rows=Acc("R", "float64", layout="(T*H,)"), lam=Finite,
+               rules=(Rule(_rows_per_frame, after="energy_rows"),))
+FAMILY.declare("entropy_term(A, whiten, lo, h, taps, sigma_p, scratch, gA, energy_rows, lam)",
+               "Add Eq. 12's energy and gradient (the five steps above).",
+               A="T H W 3", gA=Acc("T H W 3"), energy_rows=Acc("T*H", "float64"), separate=_SCATTER)
 
 
 def _bin_coords(A, whiten, lo: float, h: float, bins: int):

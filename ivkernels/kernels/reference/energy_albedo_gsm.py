@@ -1,7 +1,25 @@
-"""NumPy reference of :mod:`ivkernels.kernels.warp.energy_albedo_gsm` (Eq. 11), float64."""
+"""``energy_albedo_gsm``: the declared contract of its host functions, and the NumPy references (Eq. 11), float64."""
 from __future__ import annotations
 
 import numpy as np
+
+from ivkernels.kernels.contract import Acc, Array, Family, Finite, FinitePositive, Int, Out, Rule, Workspace
+
+FAMILY = Family("energy_albedo_gsm", "The albedo's GSM smoothness (Eq. 11).")
+
+
+def _table(sizes, args):
+    if sizes["n"] < 2:
+        raise ValueError(f"table_g must hold at least 2 entries, got {sizes['n']}")
+
+
+FAMILY.declare("gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max, gA, energy_rows, lam, radius=2, *, "
+               "workspace=None)", "Add Eq. 11 and its gradient; tables (n,) over r2 in [0, r2_max].",
+               A="T H W 3", sigma_inv="3 3", table_g="n", table_dg=Array("n", layout="(n,) like table_g"),
+               r2_max=FinitePositive, gA=Acc("T H W 3"), energy_rows=Acc("T*H", "float64"), lam=Finite,
+               radius=Int(1, " (2 for the paper's 5x5 window)"), workspace=Workspace(),
+               rules=(Rule(_table, after="table_g"),),
+               separate=(("gA", "A", "the gradient is scattered into gA while A is read"),))
 
 
 def gsm_lookup(r2, table_g, table_dg, r2_max: float):

@@ -1,7 +1,22 @@
-"""NumPy reference of :mod:`ivkernels.kernels.warp.energy_data` (Eq. 3), float64."""
+"""``energy_data``: the declared contract of its host functions, and their NumPy references
+(Eq. 3), float64."""
 from __future__ import annotations
 
 import numpy as np
+
+from ivkernels.kernels.contract import Acc, Family, Out, Real
+
+FAMILY = Family("energy_data", "The data term (Eq. 3) and the constraint ``A = I - S``.")
+
+FAMILY.declare("data_term(I, A, S, w_lum, gA, gS, energy_rows, lam=10.0, eps=0.001)",
+               "Add Eq. 3 and its gradient (into gA, gS) and its energy per row (into energy_rows).",
+               I="T H W 3", A="T H W 3", S="T H W", w_lum="T H W", gA=Acc("T H W 3"), gS=Acc("T H W"),
+               energy_rows=Acc("T*H", "float64"), lam=Real, eps=Real)
+FAMILY.declare("constrained_albedo(I, S, A)", "``A = I - S``.",
+               I="T H W 3", S="T H W", A=Out("T H W 3"),
+               separate=(("A", "I", "constrained_albedo writes A while reading I"),))
+FAMILY.declare("constrained_gradient(gA, gS, out)", "``out = gS - sum_c gA`` (``out`` may be ``gS``).",
+               gA="T H W 3", gS="T H W", out=Out("T H W"))
 
 
 def data_term(I, A, S, w_lum, lam: float = 10.0, eps: float = 0.001):

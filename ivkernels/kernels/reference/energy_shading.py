@@ -1,8 +1,33 @@
-"""NumPy reference of :mod:`ivkernels.kernels.warp.energy_shading` (Eq. 9 local part,
+"""``energy_shading``: the declared contract of its host functions, and the NumPy references (Eq. 9 local part,
 ungated and gated, Eq. 13 coupling), float64."""
 from __future__ import annotations
 
 import numpy as np
+
+from ivkernels.kernels.contract import Acc, Array, Family, Out, Real, Rule
+
+FAMILY = Family("energy_shading", "Local smoothness and coupling of the shading (Eq. 9, 13).")
+
+
+def _fewer_boundary_frames(sizes, args):
+    fewer, frames = sizes["T'"], sizes["T"]
+    if fewer > frames:
+        raise ValueError(f"w_bnd has {fewer} frames but S only {frames}; expected T' <= T")
+
+
+FAMILY.declare("shading_smoothness(S, gS, energy_rows, lam=2.0, eps=0.001)",
+               "Add the 3x3 Charbonnier smoothness of S and its gradient.",
+               S="T H W", gS=Acc("T H W"), energy_rows=Acc("T*H", "float64"), lam=Real, eps=Real,
+               separate=(("gS", "S", "the gradient is scattered into gS while S is read"),))
+FAMILY.declare("shading_smoothness_gated(S, gate, gS, energy_rows, lam=2.0, eps=0.001)",
+               "The same with pair weights ``(gate(x) + gate(y)) / 2``.",
+               S="T H W", gate="T H W", gS=Acc("T H W"), energy_rows=Acc("T*H", "float64"), lam=Real, eps=Real,
+               separate=(("gS", "S", "the gradient is scattered into gS while S is read"),
+                         ("gS", "gate", "the gradient is scattered into gS while gate is read")))
+FAMILY.declare("coupling_term(S, S_tilde, w_bnd, gS, energy_rows, lam=10.0)",
+               "Add ``lam w_bnd (S - S~)^2`` (T' <= T boundary frames) and its gradient.",
+               S="T H W", S_tilde="T H W", w_bnd=Array("T' H W"), gS=Acc("T H W"),
+               energy_rows=Acc("T*H", "float64"), lam=Real, rules=(Rule(_fewer_boundary_frames, after="w_bnd"),))
 
 NEIGHBOURS_3X3 = tuple((dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if (dy, dx) != (0, 0))
 

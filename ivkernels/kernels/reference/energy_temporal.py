@@ -1,7 +1,27 @@
-"""NumPy reference of :mod:`ivkernels.kernels.warp.energy_temporal` (Eq. 4, 5, 8), float64."""
+"""``energy_temporal``: the declared contract of its host functions, and the NumPy references (Eq. 4, 5, 8), float64."""
 from __future__ import annotations
 
 import numpy as np
+
+from ivkernels.kernels.contract import Acc, Array, Family, Out, Positive, Real, Workspace
+
+FAMILY = Family("energy_temporal", "The temporal terms (Eq. 4, 8).")
+
+_WHY = "the gradients are scattered while A and S are read"
+
+FAMILY.declare("temporal_term(X, flow, occ, gX, energy_rows, lam, alpha=5.0, *, workspace=None)",
+               "Add the Tukey temporal term of X (with or without a channel axis) and its gradient.",
+               X=Array("T H W [C]", layout="(T, H, W, C) or (T, H, W)"), flow="T-1 H W 2", occ="T-1 H W",
+               gX=Acc("T H W [C]", layout="(T, H, W, C) like X"), energy_rows=Acc("T*H", "float64"),
+               lam=Real, alpha=Positive, workspace=Workspace(),
+               separate=(("gX", "X", "the gradient is scattered into gX while X is read"),))
+FAMILY.declare("temporal_terms(A, S, flow, occ, gA, gS, energy_rows, lam_albedo, lam_shading, alpha=5.0, *, "
+               "workspace=None)", "Both temporal terms at once, sharing flow, occ and alpha.",
+               A="T H W 3", S=Array("T H W", layout="(T, H, W) like A"), flow="T-1 H W 2", occ="T-1 H W",
+               gA=Acc("T H W 3", layout="(T, H, W, 3) like A"), gS=Acc("T H W", layout="(T, H, W) like S"),
+               energy_rows=Acc("T*H", "float64"), lam_albedo=Real, lam_shading=Real,
+               alpha=Positive, workspace=Workspace(),
+               separate=(("gA", "A", _WHY), ("gA", "S", _WHY), ("gS", "A", _WHY), ("gS", "S", _WHY)))
 
 
 def tukey(z, alpha: float = 5.0):

@@ -1,4 +1,4 @@
-"""NumPy reference of :mod:`ivkernels.kernels.warp.flow_classic`, float64.
+"""``flow_classic``: the declared contract of its host functions, and the NumPy references, float64.
 
 Vectorised where the operation is a plain map; the red-black sweep is written
 as the two masked Jacobi-like half steps it is.  Each function returns its
@@ -9,7 +9,65 @@ from __future__ import annotations
 import numpy as np
 
 from ivkernels.colour import srgb_encode
+from ivkernels.kernels.contract import Array, Choice, Family, Int, Out, Positive, Real, Rule
 from ivkernels.kernels.host import GREY_WEIGHTS
+
+FAMILY = Family("flow_classic", "The Classic+NL optical flow's per-pixel steps.")
+
+
+def _columns(sizes, args):
+    if sizes["W"] < 1:
+        raise ValueError(f"src must have at least one column, got shape {tuple(args['src'].shape)}")
+
+
+_IRLS = "a=0.45, eps=0.001, quad_frac=0.0, quad_weight=2000000.0"
+_ROBUST = dict(a=Real, eps=Real, quad_frac=Real, quad_weight=Real)
+
+FAMILY.declare("srgb_grey(rgb, out)", "Grey level of sRGB-encoded rgb in [0, 255].", rgb="T H W 3", out=Out("T H W"))
+FAMILY.declare("log_grey(rgb, out, floor=0.001)", "``log(max(grey(rgb), floor))``; ``floor > 0``.",
+               rgb="T H W 3", out=Out("T H W"), floor=Positive)
+FAMILY.declare("row_min_max(src, out)", "Per row and channel (min, max) of src.",
+               src="T H W C", out=Out("T*H C 2"), rules=(Rule(_columns, after="src"),))
+FAMILY.declare("scale_shift(src, out, scale, shift)", "``out = src * scale[c] + shift[c]``.",
+               src="T H W C", out=Out("T H W C"), scale="C", shift="C")
+FAMILY.declare("rof_dual_step(img, p_in, p_out, theta, delta)", "One Chambolle step of the ROF dual.",
+               img="T H W", p_in="T H W 2", p_out=Out("T H W 2"), theta=Real, delta=Real,
+               separate=(("p_in", "p_out", "the step reads neighbours of p_in"),))
+FAMILY.declare("rof_texture(img, p, out, theta, alpha)", "``out = img - alpha (img + theta div p)``.",
+               img="T H W", p="T H W 2", out=Out("T H W"), theta=Real, alpha=Real)
+FAMILY.declare("pack_image_gradient(img, gx, gy, out)", "``out = (img, gx, gy)``.",
+               img="T H W", gx="T H W", gy="T H W", out=Out("T H W 3"))
+FAMILY.declare("pack_gradient(gx, gy, out)", "``out = (gx, gy)``.", gx="T H W", gy="T H W", out=Out("T H W 2"))
+FAMILY.declare(f"data_coefficients(i1, i1x, i1y, warped, inside, du, out, blend=0.5, {_IRLS})",
+               "IRLS data coefficients of brightness constancy.",
+               i1="T H W", i1x="T H W", i1y="T H W", warped="T H W 3", inside="T H W", du="T H W 2",
+               out=Out("T H W 5"), blend=Real, **_ROBUST)
+FAMILY.declare("soft_census(img, out, radius=1, eps=4.0, scale=1.0)", "Soft census of img, one channel per neighbour.",
+               img="T H W", out=Out("T H W (2*radius+1)**2-1", layout="(T, H, W, (2r+1)^2 - 1)"),
+               radius=Int(1), eps=Positive, scale=Real)
+FAMILY.declare("pack_channels_gradient(feat, gx, gy, out)", "Interleave feat, gx, gy into out.",
+               feat="T H W C", gx="T H W C", gy="T H W C", out=Out("T H W 3*C", layout="(T, H, W, 3C)"))
+FAMILY.declare(f"data_coefficients_channels(first, warped, inside, du, weights, out, blend=0.5, {_IRLS})",
+               "IRLS data coefficients of C feature channels.", order=("weights",),
+               weights="C", first=Array("T H W 3*C", layout="(T, H, W, 3C)"),
+               warped=Array("T H W 3*C", layout="(T, H, W, 3C)"), inside="T H W", du="T H W 2", out=Out("T H W 5"),
+               blend=Real, **_ROBUST)
+FAMILY.declare(f"smoothness_weights(flow, du, out, {_IRLS})", "IRLS smoothness weights of flow + du.",
+               flow="T H W 2", du="T H W 2", out=Out("T H W 4"), **_ROBUST)
+FAMILY.declare("assemble_system(flow, data, smooth, lam, out)", "Per-pixel 2x2 system from data and smooth.",
+               flow="T H W 2", data="T H W 5", smooth="T H W 4", lam=Real, out=Out("T H W 5"))
+FAMILY.declare("sor_sweep(du, system, smooth, lam, omega, parity)", "Red-black SOR half sweep on du in place.",
+               du=Out("T H W 2"), system="T H W 5", smooth="T H W 4", lam=Real, omega=Real, parity=Choice(0, 1))
+FAMILY.declare("apply_update(flow, du, out, limit=1.0)", "``out = flow + clip(du, -limit, limit)``.",
+               flow="T H W 2", du="T H W 2", out=Out("T H W 2"), limit=Real)
+FAMILY.declare("select_masked(mask, inside_mask, outside_mask, out)",
+               "``out = mask >= 0.5 ? inside_mask : outside_mask`` (out may alias either).",
+               mask="T H W", inside_mask="T H W C", outside_mask="T H W C", out=Out("T H W C"))
+FAMILY.declare("flow_sobel_components(flow, out, row_energy)",
+               "Sobel x, y of both components and per-row energy of a flow.",
+               flow="T H W 2", out=Out("T H W 4"), row_energy=Out("T*H 2"))
+FAMILY.declare("thin_edges(sobel, cutoff, out)", "Thinned edges 0/1 of sobel above cutoff.",
+               sobel="T H W 4", cutoff="T 2", out=Out("T H W"))
 
 
 def robust_weight(z, a=0.45, eps=1e-3, quad_frac=0.0, quad_weight=2e6):

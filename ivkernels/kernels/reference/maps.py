@@ -1,9 +1,43 @@
-"""NumPy reference of :mod:`ivkernels.kernels.warp.maps` (float64)."""
+"""``maps``: the declared contract of its host functions, and the NumPy references (float64)."""
 from __future__ import annotations
 
 import numpy as np
 
+from ivkernels.kernels.contract import Array, Family, Int, NonNegative, Out, Positive, Real, Rule, Workspace
 from ivkernels.kernels.reference.sampling import _corners, _sample_points, warp_bilinear
+
+FAMILY = Family("maps", "Occlusion, warp reliability, motion boundaries and the shading gate.")
+
+
+def _two_frames(sizes, args):
+    if sizes["F"] < 2:
+        raise ValueError(f"lab must hold at least two frames (T+1, H, W, 3), got {tuple(args['lab'].shape)}")
+
+
+_OCCLUSION = dict(lab=Array("F H W 3", layout="(T+1, H, W, 3)"),
+                  flow=Array("F-1 H W 2", layout="(T, H, W, 2) with T = lab frames - 1"),
+                  div_neg=Array("F-1 H W", layout="(T, H, W)"), out=Out("F-1 H W", layout="(T, H, W)"),
+                  sigma_e=Positive, sigma_d=Positive, rules=(Rule(_two_frames, after="lab"),))
+FAMILY.declare("occlusion_soft(lab, flow, div_neg, out, sigma_e=20.0, sigma_d=0.3)",
+               "Eq. 7's occlusion likelihood times the inside-the-image indicator.", **_OCCLUSION)
+FAMILY.declare("occlusion_binary(lab, flow, div_neg, out, sigma_e=20.0, sigma_d=0.3, threshold=0.5)",
+               "Eq. 6's ``w_occ`` (0/1).", threshold=Real, **_OCCLUSION)
+FAMILY.declare("warp_reliability(log_image, flow, occ, max_spread)",
+               "Clear occ where the warp of log_image by flow straddles an edge; ``max_spread > 0``.",
+               log_image="T H W 3", flow="T-1 H W 2", occ=Out("T-1 H W"), max_spread=Positive)
+FAMILY.declare("chroma_consistency(log_image, flow, occ, max_change)",
+               "Clear occ where the log chromaticity of log_image changes along flow; ``max_change > 0``.",
+               log_image="T H W 3", flow="T-1 H W 2", occ=Out("T-1 H W"), max_change=Positive)
+FAMILY.declare("shading_gate(log_image, flow, gate, tau, tau_chroma=0.0)",
+               "Gate of Eq. 9's local term from the input's log change along the flow; ``tau > 0``.",
+               log_image="T H W 3", flow="T-1 H W 2", gate=Out("T H W"), tau=Positive, tau_chroma=NonNegative,
+               separate=(("gate", "log_image", "the gate is written while log_image is read"),
+                         ("gate", "flow", "the gate is written while flow is read")))
+FAMILY.declare("motion_boundary(sobel_mag, out, threshold, radius, *, workspace=None)",
+               "``w_bnd``: sobel_mag above threshold, dilated by radius pixels.",
+               sobel_mag="T H W", out=Out("T H W"), threshold=Real, radius=Int(0), workspace=Workspace(),
+               separate=(("out", "sobel_mag", "the dilation reads neighbours of sobel_mag",
+                          lambda args: args["radius"]),))
 
 
 def occlusion_soft(lab, flow, div_neg, sigma_e: float = 20.0, sigma_d: float = 0.3) -> np.ndarray:

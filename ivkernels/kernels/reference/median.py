@@ -1,4 +1,4 @@
-"""NumPy reference of :mod:`ivkernels.kernels.warp.median`, brute force, float64.
+"""``median``: the declared contract of its host functions, and the NumPy references, brute force, float64.
 
 Written pixel by pixel for clarity; use on small images only.
 """
@@ -6,7 +6,35 @@ from __future__ import annotations
 
 import numpy as np
 
+from ivkernels.kernels.contract import Family, Int, NonNegative, Out, Positive, Rule, Workspace
 from ivkernels.kernels.host import KMEANS_ITERATIONS, MIN_SEPARATION
+
+FAMILY = Family("median", "The flow's 5x5 median and the weighted medians (Eq. 10, 13).")
+
+
+def _fewer_flow_frames(sizes, args):
+    fewer, frames = sizes["T'"], sizes["T"]
+    if fewer > frames:
+        raise ValueError(f"flow has {fewer} frames but S only {frames}; expected T' <= T")
+
+
+FAMILY.declare("shading_scratch_shape(S_shape, radius)",
+               "Shape ``(T*H, 2*(2r+1)^2)`` of :meth:`weighted_median_shading`'s scratch.")
+FAMILY.declare("flow_scratch_shape(flow_shape, radius)",
+               "Shape ``(T*H, 3*(2r+1)^2)`` of :meth:`weighted_median_flow`'s scratch.")
+FAMILY.declare("median5x5(src, out)", "5x5 median of every channel, replicate border.",
+               src="T H W C", out=Out("T H W C"),
+               separate=(("out", "src", "the median reads a window of src around each pixel"),))
+FAMILY.declare("weighted_median_shading(S, flow, w_bnd, out, radius=7, sigma_s=7.0, lam=0.001, *, workspace=None)",
+               "The S~ update of Eq. 13 (T' <= T flow frames).",
+               S="T H W", flow="T' H W 2", w_bnd="T' H W", out=Out("T H W"), radius=Int(0), sigma_s=Positive,
+               lam=NonNegative, workspace=Workspace(), rules=(Rule(_fewer_flow_frames, after="flow"),),
+               separate=(("out", "S", "the median reads a window of S around each pixel"),))
+FAMILY.declare("weighted_median_flow(flow, lab, occ, mask, out, radius=7, sigma_x=7.0, sigma_i=7.0, *, "
+               "workspace=None)", "Classic+NL's weighted flow median.",
+               flow="T H W 2", lab="T H W 3", occ="T H W", mask="T H W", out=Out("T H W 2"), radius=Int(0),
+               sigma_x=Positive, sigma_i=Positive, workspace=Workspace(),
+               separate=(("out", "flow", "the median reads a window of flow around each pixel"),))
 
 
 def median5x5(src):

@@ -1,9 +1,31 @@
-"""NumPy reference of :mod:`ivkernels.kernels.warp.pyramid` (float64)."""
+"""``pyramid``: the declared contract of its host functions, and the NumPy references (float64)."""
 from __future__ import annotations
 
 import math
 
 import numpy as np
+
+from ivkernels.kernels.contract import Array, Family, Finite, Out, Rule
+
+FAMILY = Family("pyramid", "Gaussian blur and bilinear resizing of frames and flows.")
+
+
+def _sizes(sizes, args):
+    if min(sizes["h"], sizes["w"], sizes["H"], sizes["W"]) < 1:
+        raise ValueError(f"image sizes must be >= 1, got src {tuple(args['src'].shape)}, "
+                         f"out {tuple(args['out'].shape)}")
+
+
+FAMILY.declare("gaussian_kernel(sigma)", "Normalised 1-D Gaussian taps, float32 (2r+1,), r = max(1, ceil(3 sigma)).")
+FAMILY.declare("gaussian_blur(src, out, scratch, sigma)",
+               "Separable blur of src into out (``out`` may be ``src``; ``sigma <= 0`` copies).",
+               src="T H W C", out=Out("T H W C"), scratch=Out("T H W C"), sigma=Finite,
+               separate=(("scratch", "src", "it holds the x-blurred image"),
+                         ("scratch", "out", "it holds the x-blurred image")))
+FAMILY.declare("resize_bilinear(src, out)", "Resize src to out's size, pixel-centre mapping.",
+               src=Array("T h w C"), out=Out("T H W C"), rules=(Rule(_sizes),))
+FAMILY.declare("resize_flow(src, out)", "Resize a flow to out's size, vectors rescaled.",
+               src=Array("T h w 2", layout="(T, h, w, 2)"), out=Out("T H W 2"), rules=(Rule(_sizes),))
 
 
 def gaussian_blur(src: np.ndarray, sigma: float) -> np.ndarray:

@@ -1,7 +1,27 @@
-"""NumPy reference of :mod:`ivkernels.kernels.warp.sampling` (float64, vectorised)."""
+"""``sampling``: the declared contract of its host functions, and the NumPy references (float64, vectorised)."""
 from __future__ import annotations
 
 import numpy as np
+
+from ivkernels.kernels.contract import Acc, Family, Out, Rule
+
+FAMILY = Family("sampling", "Warping frames by a flow, and its adjoint.")
+
+
+def _channels(sizes, args):
+    if sizes["C"] < 1:
+        raise ValueError(f"src must have at least one channel, got shape {tuple(args['src'].shape)}")
+
+
+_WARP = dict(src="T H W C", flow="T H W 2", out=Out("T H W C"), inside=Out("T H W"),
+             rules=(Rule(_channels, after="src"),),
+             separate=(("out", "src", "the warp reads neighbours of src while writing out"),))
+FAMILY.declare("warp_bilinear(src, flow, out, inside)",
+               "``out = src[t](x + u)`` bilinear, ``inside`` 1 where ``x + u`` lies in the image, else 0.", **_WARP)
+FAMILY.declare("splat_bilinear(values, flow, out)", "Add the transpose of :meth:`warp_bilinear` of values into out.",
+               values="T H W C", flow="T H W 2", out=Acc("T H W C"),
+               separate=(("out", "values", "the splat scatters into out while reading values"),))
+FAMILY.declare("warp_bicubic(src, flow, out, inside)", "``out = src[t](x + u)`` bicubic (Keys).", **_WARP)
 
 
 def _corners(p: np.ndarray, n: int):

@@ -12,8 +12,12 @@ no two iterations write the same memory and no atomics are needed.
 """
 import taichi as ti
 
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.host import MAX_EXPONENT, grid_shape
-from ivkernels.kernels.taichi._checks import check_array, check_disjoint, check_int, check_positive
+from ivkernels.kernels.ndarray_checks import FRONT
+from ivkernels.kernels.reference.coarse_basis import FAMILY
+
+host = implements(FAMILY, FRONT)
 
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
@@ -112,6 +116,7 @@ def restrict_add_rows(values: nd3, weights: nd4, out: nd3, spacing: ti.i32):
 # Host functions
 # ----------------------------------------------------------------------------
 
+@host("coarse_weights")
 def coarse_weights(A, weights, spacing: int, sigma: float) -> None:
     """Interpolation weights of the edge-aware coarse basis; see
     :func:`ivkernels.kernels.warp.coarse_basis.coarse_weights` (NumPy arrays here).
@@ -124,28 +129,13 @@ def coarse_weights(A, weights, spacing: int, sigma: float) -> None:
     ``sigma`` the albedo distance (in the units of ``A``) at which the affinity
     falls to ``1/e``, > 0.
     """
-    A = check_array("A", A, (None, None, None, None), "(T, H, W, C)")
     t, h, w, _ = A.shape
-    check_array("weights", weights, (t, h, w, 16), "(T, H, W, 16)", output=True)
-    check_disjoint("weights", weights, "A", A, "the weights are written while A is read at the nodes")
-    spacing = check_int("spacing", spacing, 1)
-    sigma = check_positive("sigma", sigma)
     if weights.size:
         grid_h, grid_w = grid_shape(h, w, spacing)
         coarse_weights_rows(A, weights, spacing, 1.0 / (sigma * sigma), grid_h, grid_w)
 
 
-def _check_grid(z_name: str, z, weights, spacing: int, output: bool):
-    """Check ``weights`` (T, H, W, 16), ``spacing`` and the node field ``z`` (T, Hc, Wc);
-    return ``(z, weights, spacing)``, the arrays C-contiguous."""
-    weights = check_array("weights", weights, (None, None, None, 16), "(T, H, W, 16)")
-    t, h, w, _ = weights.shape
-    spacing = check_int("spacing", spacing, 1)
-    z = check_array(z_name, z, (t, *grid_shape(h, w, spacing)), "(T, Hc, Wc) = (T, (H-1)//spacing + 2, "
-                    "(W-1)//spacing + 2)", output=output)
-    return z, weights, spacing
-
-
+@host("prolong_add")
 def prolong_add(z, weights, out, spacing: int) -> None:
     """``out += P z``: each pixel adds its 16 nodes' ``z``, weighted by ``weights``; see
     :func:`ivkernels.kernels.warp.coarse_basis.prolong_add` (NumPy arrays here).
@@ -154,14 +144,11 @@ def prolong_add(z, weights, out, spacing: int) -> None:
     ``weights`` float32 (T, H, W, 16) from :func:`coarse_weights` (same
     ``spacing``); ``out`` float32 (T, H, W), added into, must not overlap ``z``.
     """
-    z, weights, spacing = _check_grid("z", z, weights, spacing, False)
-    t, h, w, _ = weights.shape
-    check_array("out", out, (t, h, w), "(T, H, W)", output=True)
-    check_disjoint("out", out, "z", z, "each pixel reads 16 nodes of z")
     if out.size:
         prolong_add_rows(z, weights, out, spacing)
 
 
+@host("restrict_add")
 def restrict_add(values, weights, out, spacing: int) -> None:
     """``out += P^T values``, the transpose of :func:`prolong_add`, gathered per node; see
     :func:`ivkernels.kernels.warp.coarse_basis.restrict_add` (NumPy arrays here).
@@ -171,9 +158,5 @@ def restrict_add(values, weights, out, spacing: int) -> None:
     float32 (T, Hc, Wc), added into: each node sums ``weights * values`` over
     the pixels whose taps reach it, must not overlap ``values``.
     """
-    out, weights, spacing = _check_grid("out", out, weights, spacing, True)
-    t, h, w, _ = weights.shape
-    values = check_array("values", values, (t, h, w), "(T, H, W)")
-    check_disjoint("out", out, "values", values, "each node sums values over 4 x 4 node spacings")
     if out.size and values.size:
         restrict_add_rows(values, weights, out, spacing)

@@ -6,8 +6,12 @@ Element-wise functions run a parallel loop over the flat buffer; the image
 functions run a parallel loop over the ``T * H`` rows.
 """
 import taichi as ti
+from ivkernels.kernels.contract import implements
+from ivkernels.kernels.ndarray_checks import FRONT
+from ivkernels.kernels.reference.colour import FAMILY
 
-from ivkernels.kernels.taichi._checks import check_array, check_positive
+host = implements(FAMILY, FRONT)
+
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
@@ -101,43 +105,41 @@ def luminance_rows(rgb: nd4, out: nd3):
 # ----------------------------------------------------------------------------
 
 def _run_flat(kernel, src, out, *extra) -> None:
-    src = check_array("src", src, None, "(any shape)")
-    check_array("out", out, src.shape, "(same shape as src)", output=True)
     if src.size:
         kernel(src.reshape(-1), out.reshape(-1), *extra)
 
 
+@host("srgb_to_linear")
 def srgb_to_linear(src, out) -> None:
     """sRGB-encoded -> linear (IEC 61966-2-1), any shape; see
     :func:`ivkernels.kernels.warp.colour.srgb_to_linear` (NumPy arrays here)."""
     _run_flat(srgb_to_linear_flat, src, out)
 
 
+@host("linear_to_srgb")
 def linear_to_srgb(src, out) -> None:
     """Linear -> sRGB-encoded, any shape; see :func:`ivkernels.kernels.warp.colour.linear_to_srgb`."""
     _run_flat(linear_to_srgb_flat, src, out)
 
 
+@host("log_floor")
 def log_floor(src, out, floor: float) -> None:
     """``out = log(max(src, floor))``, any shape, ``floor > 0``; see
     :func:`ivkernels.kernels.warp.colour.log_floor`."""
-    floor = check_positive("floor", floor)
     _run_flat(log_floor_flat, src, out, floor)
 
 
+@host("linear_rgb_to_lab")
 def linear_rgb_to_lab(rgb, out) -> None:
     """Linear sRGB (T, H, W, 3) -> CIE L*a*b* (D65, L in [0, 100]); see
     :func:`ivkernels.kernels.warp.colour.linear_rgb_to_lab`."""
-    rgb = check_array("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
-    check_array("out", out, rgb.shape, "(T, H, W, 3)", output=True)
     if rgb.size:
         lab_rows(rgb, out)
 
 
+@host("luminance")
 def luminance(rgb, out) -> None:
     """Rec. 709 luminance (T, H, W, 3) -> (T, H, W) of linear RGB; see
     :func:`ivkernels.kernels.warp.colour.luminance`."""
-    rgb = check_array("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
-    check_array("out", out, rgb.shape[:3], "(T, H, W)", output=True)
     if rgb.size:
         luminance_rows(rgb, out)

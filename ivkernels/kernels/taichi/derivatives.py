@@ -5,8 +5,12 @@ functions and signatures, NumPy arrays passed as ``ti.types.ndarray()``.
 Parallel over the ``T * H`` rows; neighbour indices clamped (replicate border).
 """
 import taichi as ti
+from ivkernels.kernels.contract import implements
+from ivkernels.kernels.ndarray_checks import FRONT
+from ivkernels.kernels.reference.derivatives import FAMILY
 
-from ivkernels.kernels.taichi._checks import check_array, check_disjoint
+host = implements(FAMILY, FRONT)
+
 
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
@@ -75,31 +79,25 @@ def divergence_negative_rows(flow: nd4, out: nd3):
             out[t, y, x] = ti.min(div, 0.0)
 
 
+@host("image_gradient")
 def image_gradient(src, gx, gy) -> None:
     """x and y derivatives with ``[1 -8 0 8 -1] / 12``, replicate border; see
     :func:`ivkernels.kernels.warp.derivatives.image_gradient` (NumPy arrays here)."""
-    src = check_array("src", src, (None, None, None, None), "(T, H, W, C)")
-    check_array("gx", gx, src.shape, "(T, H, W, C)", output=True)
-    check_array("gy", gy, src.shape, "(T, H, W, C)", output=True)
-    check_disjoint("gx", gx, "src", src, "the stencil reads neighbours of src while writing gx")
-    check_disjoint("gy", gy, "src", src, "the stencil reads neighbours of src while writing gy")
     if src.size:
         five_point_gradient_rows(src, gx, gy)
 
 
+@host("flow_sobel_magnitude")
 def flow_sobel_magnitude(flow, out) -> None:
     """``sqrt(sum_c Sx(u_c)^2 + Sy(u_c)^2)`` with 1/8-normalised Sobel kernels; see
     :func:`ivkernels.kernels.warp.derivatives.flow_sobel_magnitude`."""
-    flow = check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
-    check_array("out", out, flow.shape[:3], "(T, H, W)", output=True)
     if flow.size:
         flow_sobel_magnitude_rows(flow, out)
 
 
+@host("divergence_negative")
 def divergence_negative(flow, out) -> None:
     """One-sided divergence ``min(du/dx + dv/dy, 0)`` of Eq. 7, central differences; see
     :func:`ivkernels.kernels.warp.derivatives.divergence_negative`."""
-    flow = check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
-    check_array("out", out, flow.shape[:3], "(T, H, W)", output=True)
     if flow.size:
         divergence_negative_rows(flow, out)

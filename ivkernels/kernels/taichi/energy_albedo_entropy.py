@@ -13,8 +13,12 @@ import sys
 import numpy as np
 import taichi as ti
 
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.host import EntropyScratch, allocate_entropy_scratch_with, run_entropy_steps
-from ivkernels.kernels.taichi._checks import check_array, check_disjoint, check_float, check_int
+from ivkernels.kernels.ndarray_checks import FRONT
+from ivkernels.kernels.reference.energy_albedo_entropy import FAMILY
+
+host = implements(FAMILY, FRONT)
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
 nd2 = ti.types.ndarray(dtype=ti.f32, ndim=2)
@@ -163,16 +167,6 @@ def _entropy_energy_frames(dots: nd1_f64, log_norm: ti.f64, lam: ti.f32, rows_pe
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _check_hist(name: str, hist, T, *, output: bool = False):
-    """``(hist, B)``: a (T, B, B, B) float32 cube with B >= 2 (``T`` None: any), an input copied
-    if not C-contiguous, an output refused."""
-    hist = check_array(name, hist, (T, None, None, None), "(T, B, B, B)", output=output)
-    B = hist.shape[1]
-    if hist.shape[2] != B or hist.shape[3] != B or B < 2:
-        raise ValueError(f"{name} must have shape (T, B, B, B) with B >= 2, got {hist.shape}")
-    return hist, B
-
-
 def allocate_entropy_scratch(n_frames: int, bins: int, device="cpu") -> EntropyScratch:
     """Allocate :class:`EntropyScratch` for ``n_frames`` frames and a ``bins^3`` cube."""
     if device != "cpu":
@@ -180,84 +174,51 @@ def allocate_entropy_scratch(n_frames: int, bins: int, device="cpu") -> EntropyS
     return allocate_entropy_scratch_with(np.empty, n_frames, bins)
 
 
+@host("entropy_histogram")
 def entropy_histogram(A, whiten, lo: float, h: float, hist, row_flags) -> None:
     """Overwrite ``hist`` (T, B, B, B) with the trilinear splat of ``W A(x)``; flag touched rows
     in ``row_flags[0]`` (see the Warp module)."""
-    A = check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
     T, H, W, _ = A.shape
-    whiten = check_array("whiten", whiten, (3, 3), "(3, 3)")
-    _, B = _check_hist("hist", hist, T, output=True)
-    check_array("row_flags", row_flags, (2, T, B, B), "(2, T, B, B)", dtype=np.int32, output=True)
-    lo, h = check_float("lo", lo), check_float("h", h, positive=True)
     hist.fill(0.0)
     row_flags.fill(0)
     if T * H and W:
         _splat_whitened_rows(A, whiten, lo, h, hist, row_flags)
 
 
+@host("entropy_blur")
 def entropy_blur(hist, taps, row_flags, tmp, blurred) -> None:
     """``blurred = G * hist`` per frame with the separable 1-D ``taps`` (see the Warp module)."""
-    hist, B = _check_hist("hist", hist, None)
-    T = hist.shape[0]
-    taps = check_array("taps", taps, (None,), "(2r+1,)")
-    if taps.shape[0] % 2 != 1:
-        raise ValueError(f"taps must have an odd length 2r+1, got {taps.shape[0]}")
-    check_array("row_flags", row_flags, (2, T, B, B), "(2, T, B, B)", dtype=np.int32, output=True)
-    check_array("tmp", tmp, hist.shape, "(T, B, B, B) like hist", output=True)
-    check_array("blurred", blurred, hist.shape, "(T, B, B, B) like hist", output=True)
-    check_disjoint("tmp", tmp, "hist", hist, "the blur reads neighbours of hist while writing tmp")
-    check_disjoint("blurred", blurred, "hist", hist, "the blur reads neighbours of hist while writing blurred")
     _blur_along_rows(hist, taps, row_flags, blurred)
     _blur_across_rows(blurred, taps, 2, 0, 1, row_flags, tmp)
     _blur_across_rows(tmp, taps, 1, 1, -1, row_flags, blurred)
 
 
+@host("entropy_dot")
 def entropy_dot(hist, blurred, dots) -> None:
     """Overwrite ``dots`` (float64 (T,)) with ``<hist_t, blurred_t>`` per frame."""
-    hist, _ = _check_hist("hist", hist, None)
-    T = hist.shape[0]
-    blurred = check_array("blurred", blurred, hist.shape, "(T, B, B, B) like hist")
-    check_array("dots", dots, (T,), "(T,)", dtype=np.float64, output=True)
     dots.fill(0.0)
     _frame_dot_rows(hist, blurred, dots)
 
 
+@host("entropy_slice_gradient")
 def entropy_slice_gradient(A, whiten, lo: float, h: float, blurred, dots, gA, lam: float) -> None:
     """Add ``-2 lam W^T grad V(W A(x)) / dots[t]`` into ``gA`` (see the Warp module)."""
-    A = check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
     T, H, W, _ = A.shape
-    whiten = check_array("whiten", whiten, (3, 3), "(3, 3)")
-    blurred, _ = _check_hist("blurred", blurred, T)
-    dots = check_array("dots", dots, (T,), "(T,)", dtype=np.float64)
-    check_array("gA", gA, (T, H, W, 3), "(T, H, W, 3)", output=True)
-    check_disjoint("gA", gA, "A", A, "the gradient is scattered into gA while A is read")
-    lo, h = check_float("lo", lo), check_float("h", h, positive=True)
-    lam = check_float("lam", lam)
     if T * H and W:
         _slice_gradient_rows(A, whiten, lo, h, blurred, dots, lam, gA)
 
 
+@host("entropy_energy")
 def entropy_energy(dots, sigma_p: float, n_pixels: int, energy_rows, lam: float) -> None:
     """Add ``E_t = -lam log(dots[t] / (n_pixels^2 sqrt(4 pi sigma_p^2)))`` into
     ``energy_rows[t * (len(energy_rows) // T)]``."""
-    dots = check_array("dots", dots, (None,), "(T,)", dtype=np.float64)
     T = dots.shape[0]
-    check_array("energy_rows", energy_rows, (None,), "(T*H,)", dtype=np.float64, output=True)
-    if T == 0 or energy_rows.shape[0] % T:
-        raise ValueError(f"energy_rows length {energy_rows.shape[0]} is not a multiple of T = {T}")
-    sigma_p = check_float("sigma_p", sigma_p, positive=True)
-    lam = check_float("lam", lam)
-    n_pixels = check_int("n_pixels", n_pixels, 1)
     log_norm = -2.0 * math.log(n_pixels) - 0.5 * math.log(4.0 * math.pi * sigma_p ** 2)
     _entropy_energy_frames(dots, log_norm, lam, energy_rows.shape[0] // T, energy_rows)
 
 
+@host("entropy_term")
 def entropy_term(A, whiten, lo: float, h: float, taps, sigma_p: float, scratch: EntropyScratch,
                  gA, energy_rows, lam: float) -> None:
     """Add Eq. 12's energy (row ``t*H``) and gradient for every frame (see the Warp module)."""
-    A = check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
-    T, H, W, _ = A.shape
-    check_array("gA", gA, (T, H, W, 3), "(T, H, W, 3)", output=True)
-    check_array("energy_rows", energy_rows, (T * H,), "(T*H,)", dtype=np.float64, output=True)
-    check_disjoint("gA", gA, "A", A, "the gradient is scattered into gA while A is read")
     run_entropy_steps(sys.modules[__name__], A, whiten, lo, h, taps, sigma_p, scratch, gA, energy_rows, lam)

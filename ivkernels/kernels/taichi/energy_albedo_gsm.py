@@ -45,8 +45,12 @@ import math
 import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.taichi._checks import check_array, check_disjoint, check_float, check_int
-from ivkernels.kernels.workspace import check_workspace, scratch_buffer
+from ivkernels.kernels.contract import implements
+from ivkernels.kernels.ndarray_checks import FRONT
+from ivkernels.kernels.reference.energy_albedo_gsm import FAMILY
+from ivkernels.kernels.workspace import scratch_buffer
+
+host = implements(FAMILY, FRONT)
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
 nd2 = ti.types.ndarray(dtype=ti.f32, ndim=2)
@@ -208,6 +212,7 @@ def _scratch(workspace, name: str, shape: tuple) -> np.ndarray:
                           lambda: np.empty(shape, np.float32))
 
 
+@host("gsm_smoothness")
 def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_rows,
                    lam: float, radius: int = 2, *, workspace=None) -> None:
     """Add Eq. 11's GSM smoothness energy and gradient (see the Warp module).
@@ -218,21 +223,8 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
     (T*H,) float64 accumulated (C-contiguous); ``workspace`` an optional
     :class:`ivkernels.kernels.workspace.Workspace` keeping the scratch buffers.
     """
-    A = check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
     T, H, W, _ = A.shape
-    sigma_inv = check_array("sigma_inv", sigma_inv, (3, 3), "(3, 3)")
-    table_g = check_array("table_g", table_g, (None,), "(n,)")
     n = table_g.shape[0]
-    if n < 2:
-        raise ValueError(f"table_g must hold at least 2 entries, got {n}")
-    table_dg = check_array("table_dg", table_dg, (n,), "(n,) like table_g")
-    check_array("gA", gA, (T, H, W, 3), "(T, H, W, 3)", output=True)
-    check_array("energy_rows", energy_rows, (T * H,), "(T*H,)", dtype=np.float64, output=True)
-    check_disjoint("gA", gA, "A", A, "the gradient is scattered into gA while A is read")
-    r2_max = check_float("r2_max", r2_max, positive=True)
-    lam = check_float("lam", lam)
-    radius = check_int("radius", radius, 1, " (2 for the paper's 5x5 window)")
-    check_workspace(workspace)
     if T * H == 0 or W == 0:
         return
     n_forward = radius + radius * (2 * radius + 1)      # 12 for the 5x5 window

@@ -6,10 +6,13 @@ looping over ``x``; the gradient and row energy of a row are written by the
 iteration that owns it.
 """
 
-import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.taichi._checks import check_array, check_disjoint
+from ivkernels.kernels.contract import implements
+from ivkernels.kernels.ndarray_checks import FRONT
+from ivkernels.kernels.reference.energy_data import FAMILY
+
+host = implements(FAMILY, FRONT)
 
 nd1_f64 = ti.types.ndarray(dtype=ti.f64, ndim=1)
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
@@ -45,17 +48,11 @@ def data_term_rows(I: nd4, A: nd4, S: nd3, w_lum: nd3, gA: nd4, gS: nd3, energy_
         energy_rows[r] += ti.cast(lam, ti.f64) * e
 
 
+@host("data_term")
 def data_term(I, A, S, w_lum, gA, gS, energy_rows, lam: float = 10.0, eps: float = 0.001) -> None:
     """Add the data term of Eq. 3 and its gradient; see
     :func:`ivkernels.kernels.warp.energy_data.data_term` (NumPy arrays here)."""
-    I = check_array("I", I, (None, None, None, 3), "(T, H, W, 3)")
     t, h, w, _ = I.shape
-    A = check_array("A", A, (t, h, w, 3), "(T, H, W, 3)")
-    S = check_array("S", S, (t, h, w), "(T, H, W)")
-    w_lum = check_array("w_lum", w_lum, (t, h, w), "(T, H, W)")
-    check_array("gA", gA, (t, h, w, 3), "(T, H, W, 3)", output=True)
-    check_array("gS", gS, (t, h, w), "(T, H, W)", output=True)
-    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dtype=np.float64, output=True)
     if t * h * w == 0:
         return
     data_term_rows(I, A, S, w_lum, gA, gS, energy_rows, float(lam), float(eps))
@@ -75,24 +72,19 @@ def constrained_gradient_rows(gA: nd4, gS: nd3, out: nd3):
         out[t, y, x] = gS[t, y, x] - (gA[t, y, x, 0] + gA[t, y, x, 1] + gA[t, y, x, 2])
 
 
+@host("constrained_albedo")
 def constrained_albedo(I, S, A) -> None:
     """``A = I - S``; see :func:`ivkernels.kernels.warp.energy_data.constrained_albedo`."""
-    I = check_array("I", I, (None, None, None, 3), "(T, H, W, 3)")
     t, h, w, _ = I.shape
-    S = check_array("S", S, (t, h, w), "(T, H, W)")
-    check_array("A", A, (t, h, w, 3), "(T, H, W, 3)", output=True)
     if t * h * w == 0:
         return
-    check_disjoint("A", A, "I", I, "constrained_albedo writes A while reading I")
     constrained_albedo_rows(I, S, A)
 
 
+@host("constrained_gradient")
 def constrained_gradient(gA, gS, out) -> None:
     """``out = gS - sum_c gA``; see :func:`ivkernels.kernels.warp.energy_data.constrained_gradient`."""
-    gA = check_array("gA", gA, (None, None, None, 3), "(T, H, W, 3)")
     t, h, w, _ = gA.shape
-    gS = check_array("gS", gS, (t, h, w), "(T, H, W)")
-    check_array("out", out, (t, h, w), "(T, H, W)", output=True)
     if t * h * w == 0:
         return
     constrained_gradient_rows(gA, gS, out)

@@ -4,11 +4,14 @@ passed as ``ti.types.ndarray()``.  The outermost loop runs over rows in parallel
 The local term's Charbonnier penalty is the data term's (:mod:`ivkernels.kernels.taichi.energy_data`).
 """
 
-import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.taichi._checks import check_array, check_disjoint
+from ivkernels.kernels.contract import implements
+from ivkernels.kernels.ndarray_checks import FRONT
+from ivkernels.kernels.reference.energy_shading import FAMILY
 from ivkernels.kernels.taichi.energy_data import charbonnier
+
+host = implements(FAMILY, FRONT)
 
 nd1_f64 = ti.types.ndarray(dtype=ti.f64, ndim=1)
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
@@ -64,12 +67,14 @@ def coupling_rows(S: nd3, S_tilde: nd3, w_bnd: nd3, gS: nd3, energy_rows: nd1_f6
         energy_rows[r] += ti.cast(lam, ti.f64) * e
 
 
+@host("shading_smoothness")
 def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
     """Add the local shading smoothness of Eq. 9 and its gradient; see
     :func:`ivkernels.kernels.warp.energy_shading.shading_smoothness`."""
     _local_term(S, None, gS, energy_rows, lam, eps)
 
 
+@host("shading_smoothness_gated")
 def shading_smoothness_gated(S, gate, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
     """Add Eq. 9's local shading smoothness with a per-pixel gate on its pair terms; see
     :func:`ivkernels.kernels.warp.energy_shading.shading_smoothness_gated`."""
@@ -77,33 +82,19 @@ def shading_smoothness_gated(S, gate, gS, energy_rows, lam: float = 2.0, eps: fl
 
 
 def _local_term(S, gate, gS, energy_rows, lam: float, eps: float) -> None:
-    """Checks and launch of Eq. 9's local term, gated unless ``gate`` is None."""
-    S = check_array("S", S, (None, None, None), "(T, H, W)")
+    """Launch of Eq. 9's local term (arguments checked), gated unless ``gate`` is None."""
     t, h, w = S.shape
-    if gate is not None:
-        gate = check_array("gate", gate, (t, h, w), "(T, H, W)")
-    check_array("gS", gS, (t, h, w), "(T, H, W)", output=True)
-    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dtype=np.float64, output=True)
-    check_disjoint("gS", gS, "S", S, "the gradient is scattered into gS while S is read")
-    if gate is not None:
-        check_disjoint("gS", gS, "gate", gate, "the gradient is scattered into gS while gate is read")
     if t * h * w == 0:
         return
     shading_smoothness_rows(S, S if gate is None else gate, gate is not None, gS, energy_rows,
                             float(lam), float(eps))
 
 
+@host("coupling_term")
 def coupling_term(S, S_tilde, w_bnd, gS, energy_rows, lam: float = 10.0) -> None:
     """Add the coupling term of Eq. 13 and its gradient in S; see
     :func:`ivkernels.kernels.warp.energy_shading.coupling_term`."""
-    S = check_array("S", S, (None, None, None), "(T, H, W)")
     t, h, w = S.shape
-    S_tilde = check_array("S_tilde", S_tilde, (t, h, w), "(T, H, W)")
-    w_bnd = check_array("w_bnd", w_bnd, (None, h, w), "(T', H, W)")
-    if w_bnd.shape[0] > t:
-        raise ValueError(f"w_bnd has {w_bnd.shape[0]} frames but S only {t}; expected T' <= T")
-    check_array("gS", gS, (t, h, w), "(T, H, W)", output=True)
-    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dtype=np.float64, output=True)
     if w_bnd.shape[0] * h * w == 0:
         return
     coupling_rows(S, S_tilde, w_bnd, gS, energy_rows, float(lam))

@@ -8,11 +8,13 @@ launches nothing needs to be split at frame boundaries.  Bilinear sampling
 uses corners clamped to the image and weights from the unclamped fractional
 position, as :mod:`ivkernels.kernels.warp.sampling` does.
 """
-import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.taichi._checks import check_array, check_disjoint
-from ivkernels.kernels.workspace import check_workspace
+from ivkernels.kernels.contract import implements
+from ivkernels.kernels.ndarray_checks import FRONT
+from ivkernels.kernels.reference.energy_temporal import FAMILY
+
+host = implements(FAMILY, FRONT)
 
 nd1_f64 = ti.types.ndarray(dtype=ti.f64, ndim=1)
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
@@ -119,49 +121,30 @@ def temporal_pair_rows(A: nd4, S: nd4, flow: nd4, occ: nd3, gA: nd4, gS: nd4, en
         energy_rows[r] += ti.cast(lam_albedo, ti.f64) * e_albedo + ti.cast(lam_shading, ti.f64) * e_shading
 
 
+@host("temporal_term")
 def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0, *,
                   workspace=None) -> None:
     """Add the temporal term of Eq. 4 (albedo) or Eq. 8 (shading) and its gradient; see
     :func:`ivkernels.kernels.warp.energy_temporal.temporal_term` (NumPy arrays here;
     ``X`` (T, H, W, C) or (T, H, W), ``gX`` shaped like ``X``).  The single
     kernel needs no scratch: ``workspace`` is accepted, checked and unused."""
-    if isinstance(X, np.ndarray) and X.ndim == 3:
-        X = check_array("X", X, (None, None, None), "(T, H, W)")
-        check_array("gX", gX, X.shape, "(T, H, W) like X", output=True)
+    if X.ndim == 3:
         X = X.reshape(*X.shape, 1)
         gX = gX.reshape(*gX.shape, 1)
-    X = check_array("X", X, (None, None, None, None), "(T, H, W, C) or (T, H, W)")
     t, h, w, c = X.shape
-    check_array("gX", gX, (t, h, w, c), "(T, H, W, C) like X", output=True)
-    flow = check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)")
-    occ = check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)")
-    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dtype=np.float64, output=True)
-    check_disjoint("gX", gX, "X", X, "the gradient is scattered into gX while X is read")
-    check_workspace(workspace)
     if t < 2 or h * w * c == 0:
         return
     temporal_rows(X, flow, occ, gX, energy_rows, float(lam), float(alpha))
 
 
+@host("temporal_terms")
 def temporal_terms(A, S, flow, occ, gA, gS, energy_rows, lam_albedo: float, lam_shading: float,
                    alpha: float = 5.0, *, workspace=None) -> None:
     """Add both temporal terms, Eq. 4 on ``A`` (T, H, W, 3) and Eq. 8 on ``S``
     (T, H, W), in one kernel; see
     :func:`ivkernels.kernels.warp.energy_temporal.temporal_terms` (NumPy arrays
     here; ``workspace`` is accepted, checked and unused)."""
-    A = check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
     t, h, w, _ = A.shape
-    S = check_array("S", S, (t, h, w), "(T, H, W) like A")
-    check_array("gA", gA, (t, h, w, 3), "(T, H, W, 3) like A", output=True)
-    check_array("gS", gS, (t, h, w), "(T, H, W) like S", output=True)
-    flow = check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)")
-    occ = check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)")
-    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dtype=np.float64, output=True)
-    why = "the gradients are scattered while A and S are read"
-    for grad_name, grad in (("gA", gA), ("gS", gS)):
-        check_disjoint(grad_name, grad, "A", A, why)
-        check_disjoint(grad_name, grad, "S", S, why)
-    check_workspace(workspace)
     if t < 2 or h * w == 0:
         return
     temporal_pair_rows(A, S.reshape(t, h, w, 1), flow, occ, gA, gS.reshape(t, h, w, 1), energy_rows,

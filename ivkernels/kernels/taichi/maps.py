@@ -9,9 +9,13 @@ of :mod:`ivkernels.kernels.taichi.sampling`.  Parallel over the ``T * H`` rows.
 import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.taichi._checks import check_array, check_disjoint, check_int, check_non_negative, check_positive
+from ivkernels.kernels.contract import implements
+from ivkernels.kernels.ndarray_checks import FRONT
+from ivkernels.kernels.reference.maps import FAMILY
 from ivkernels.kernels.taichi.sampling import bilinear_at, clamped_corners, inside_image
-from ivkernels.kernels.workspace import check_workspace, scratch_buffer
+from ivkernels.kernels.workspace import scratch_buffer
+
+host = implements(FAMILY, FRONT)
 
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
@@ -222,85 +226,60 @@ def boundary_dilate_y_rows(hits: nd3, out: nd3, radius: ti.i32):
             out[t, y, x] = m
 
 
-def _check_occlusion_args(lab, flow, div_neg, out, sigma_e, sigma_d):
-    lab = check_array("lab", lab, (None, None, None, 3), "(T+1, H, W, 3)")
-    if lab.shape[0] < 2:
-        raise ValueError(f"lab must hold at least two frames (T+1, H, W, 3), got {lab.shape}")
-    t, h, w = lab.shape[0] - 1, lab.shape[1], lab.shape[2]
-    flow = check_array("flow", flow, (t, h, w, 2), "(T, H, W, 2) with T = lab frames - 1")
-    div_neg = check_array("div_neg", div_neg, (t, h, w), "(T, H, W)")
-    check_array("out", out, (t, h, w), "(T, H, W)", output=True)
-    return lab, flow, div_neg, check_positive("sigma_e", sigma_e), check_positive("sigma_d", sigma_d)
-
-
+@host("occlusion_soft")
 def occlusion_soft(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: float = 0.3) -> None:
     """Occlusion likelihood ``o(x)`` of Eq. 7 times the inside indicator; see
     :func:`ivkernels.kernels.warp.maps.occlusion_soft` (NumPy arrays here)."""
-    lab, flow, div_neg, sigma_e, sigma_d = _check_occlusion_args(lab, flow, div_neg, out, sigma_e, sigma_d)
     if out.size:
         occlusion_soft_rows(lab, flow, div_neg, out, sigma_e, sigma_d)
 
 
+@host("occlusion_binary")
 def occlusion_binary(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: float = 0.3,
                      threshold: float = 0.5) -> None:
     """Occlusion map ``w_occ`` of Eq. 6 (1 = visible in t+1); see
     :func:`ivkernels.kernels.warp.maps.occlusion_binary`."""
-    lab, flow, div_neg, sigma_e, sigma_d = _check_occlusion_args(lab, flow, div_neg, out, sigma_e, sigma_d)
     if out.size:
         occlusion_binary_rows(lab, flow, div_neg, out, sigma_e, sigma_d, float(threshold))
 
 
-def _clear_occlusion_where(kernel, log_image, flow, occ, name: str, threshold: float) -> None:
-    """Check the arguments of a test that clears ``occ`` from ``log_image`` sampled along
-    ``flow`` and run ``kernel`` with the positive ``threshold`` (see the Warp module)."""
-    log_image = check_array("log_image", log_image, (None, None, None, 3), "(T, H, W, 3)")
-    t, h, w, _ = log_image.shape
-    flow = check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)")
-    check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", output=True)
-    threshold = check_positive(name, threshold)
+def _clear_occlusion_where(kernel, log_image, flow, occ, threshold: float) -> None:
+    """Run ``kernel``, a test that clears ``occ`` from ``log_image`` sampled along ``flow``,
+    with the positive ``threshold`` (see the Warp module)."""
     if occ.size:
         kernel(log_image, flow, occ, threshold)
 
 
+@host("warp_reliability")
 def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
     """Clear ``occ`` where the bilinear sample at ``x + u`` straddles an edge; see
     :func:`ivkernels.kernels.warp.maps.warp_reliability`."""
-    _clear_occlusion_where(warp_reliability_rows, log_image, flow, occ, "max_spread", max_spread)
+    _clear_occlusion_where(warp_reliability_rows, log_image, flow, occ, max_spread)
 
 
+@host("chroma_consistency")
 def chroma_consistency(log_image, flow, occ, max_change: float) -> None:
     """Clear ``occ`` where the log chromaticity changes along the flow; see
     :func:`ivkernels.kernels.warp.maps.chroma_consistency`."""
-    _clear_occlusion_where(chroma_consistency_rows, log_image, flow, occ, "max_change", max_change)
+    _clear_occlusion_where(chroma_consistency_rows, log_image, flow, occ, max_change)
 
 
+@host("shading_gate")
 def shading_gate(log_image, flow, gate, tau: float, tau_chroma: float = 0.0) -> None:
     """The per-pixel gate of the local shading smoothness (Eq. 9) from the input's log
     change along the flow; see :func:`ivkernels.kernels.warp.maps.shading_gate`."""
-    log_image = check_array("log_image", log_image, (None, None, None, 3), "(T, H, W, 3)")
     t, h, w, _ = log_image.shape
-    flow = check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)")
-    check_array("gate", gate, (t, h, w), "(T, H, W)", output=True)
-    check_disjoint("gate", gate, "log_image", log_image, "the gate is written while log_image is read")
-    check_disjoint("gate", gate, "flow", flow, "the gate is written while flow is read")
-    tau = check_positive("tau", tau)
-    tau_chroma = check_non_negative("tau_chroma", tau_chroma)
     if t == 1:
         gate[...] = 1.0
     elif gate.size:
         shading_gate_rows(log_image, flow, gate, tau, tau_chroma)
 
 
+@host("motion_boundary")
 def motion_boundary(sobel_mag, out, threshold: float, radius: int, *, workspace=None) -> None:
     """``w_bnd``: 1 where the (2r+1)^2 window holds ``sobel_mag > threshold``; see
     :func:`ivkernels.kernels.warp.maps.motion_boundary` (the (T, H, W) float32
     scratch comes from ``workspace``, or is allocated for this call)."""
-    sobel_mag = check_array("sobel_mag", sobel_mag, (None, None, None), "(T, H, W)")
-    check_array("out", out, sobel_mag.shape, "(T, H, W)", output=True)
-    radius = check_int("radius", radius, 0)
-    if radius:
-        check_disjoint("out", out, "sobel_mag", sobel_mag, "the dilation reads neighbours of sobel_mag")
-    check_workspace(workspace)
     if out.size:
         shape = tuple(sobel_mag.shape)
         hits = scratch_buffer(workspace, f"{__name__}.boundary_hits", shape, np.float32,

@@ -11,10 +11,14 @@ import numpy as np
 import taichi as ti
 
 from ivkernels.kernels.cache import cached
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.host import (KMEANS_ITERATIONS, MIN_SEPARATION, flow_scratch_shape,  # noqa: F401
                                     median_network, shading_scratch_shape, spatial_weights)
-from ivkernels.kernels.taichi._checks import check_array, check_disjoint, check_int, check_positive
-from ivkernels.kernels.workspace import check_workspace, scratch_buffer
+from ivkernels.kernels.ndarray_checks import FRONT
+from ivkernels.kernels.reference.median import FAMILY
+from ivkernels.kernels.workspace import scratch_buffer
+
+host = implements(FAMILY, FRONT)
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
 nd2 = ti.types.ndarray(dtype=ti.f32, ndim=2)
@@ -283,57 +287,30 @@ def _scratch(workspace, name: str, shape: tuple) -> np.ndarray:
                           lambda: np.empty(shape, np.float32))
 
 
+@host("median5x5")
 def median5x5(src, out) -> None:
     """5x5 median of every channel, replicate border; see
     :func:`ivkernels.kernels.warp.median.median5x5` (NumPy arrays here)."""
-    src = check_array("src", src, (None, None, None, None), "(T, H, W, C)")
-    t, h, w, c = src.shape
-    check_array("out", out, (t, h, w, c), "(T, H, W, C)", output=True)
-    check_disjoint("out", out, "src", src, "the median reads a window of src around each pixel")
     if src.size:
         median5x5_rows(src, out)
 
 
+@host("weighted_median_shading")
 def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float = 7.0,
                             lam: float = 0.001, *, workspace=None) -> None:
     """S~ update of Eq. 13 (weighted median with surf of Eq. 10 and Li & Osher's
     quadratic pull); see :func:`ivkernels.kernels.warp.median.weighted_median_shading`."""
-    S = check_array("S", S, (None, None, None), "(T, H, W)")
-    t, h, w = S.shape
-    flow = check_array("flow", flow, (None, h, w, 2), "(T', H, W, 2)")
-    tp = flow.shape[0]
-    if tp > t:
-        raise ValueError(f"flow has {tp} frames but S only {t}; expected T' <= T")
-    w_bnd = check_array("w_bnd", w_bnd, (tp, h, w), "(T', H, W)")
-    check_array("out", out, (t, h, w), "(T, H, W)", output=True)
-    check_disjoint("out", out, "S", S, "the median reads a window of S around each pixel")
-    radius = check_int("radius", radius, 0)
-    sigma_s = check_positive("sigma_s", sigma_s)
-    lam = float(lam)
-    if not lam >= 0.0:
-        raise ValueError(f"lam must be >= 0, got {lam!r}")
-    check_workspace(workspace)
     buf = _scratch(workspace, "shading_window", shading_scratch_shape(S.shape, radius))
     if S.size:
         weighted_median_shading_rows(S, flow, w_bnd, out, buf, _spatial_table(radius, sigma_s), radius, lam,
                                      KMEANS_ITERATIONS, MIN_SEPARATION)
 
 
+@host("weighted_median_flow")
 def weighted_median_flow(flow, lab, occ, mask, out, radius: int = 7, sigma_x: float = 7.0,
                          sigma_i: float = 7.0, *, workspace=None) -> None:
     """Classic+NL's non-local flow median; see
     :func:`ivkernels.kernels.warp.median.weighted_median_flow` (NumPy arrays here)."""
-    flow = check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
-    t, h, w, _ = flow.shape
-    lab = check_array("lab", lab, (t, h, w, 3), "(T, H, W, 3)")
-    occ = check_array("occ", occ, (t, h, w), "(T, H, W)")
-    mask = check_array("mask", mask, (t, h, w), "(T, H, W)")
-    check_array("out", out, (t, h, w, 2), "(T, H, W, 2)", output=True)
-    check_disjoint("out", out, "flow", flow, "the median reads a window of flow around each pixel")
-    radius = check_int("radius", radius, 0)
-    sigma_x = check_positive("sigma_x", sigma_x)
-    sigma_i = check_positive("sigma_i", sigma_i)
-    check_workspace(workspace)
     buf = _scratch(workspace, "flow_window", flow_scratch_shape(flow.shape, radius))
     if flow.size:
         weighted_median_flow_rows(flow, lab, occ, mask, out, buf, radius, sigma_x, sigma_i)

@@ -5,14 +5,17 @@ functions and signatures, NumPy arrays passed as ``ti.types.ndarray()``.
 Parallel over output rows; the bilinear helpers come from
 :mod:`ivkernels.kernels.taichi.sampling`.
 """
-import math
 
 import numpy as np
 import taichi as ti
 
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.host import gaussian_kernel
-from ivkernels.kernels.taichi._checks import check_array, check_disjoint
+from ivkernels.kernels.ndarray_checks import FRONT
+from ivkernels.kernels.reference.pyramid import FAMILY
 from ivkernels.kernels.taichi.sampling import bilinear_at, clamped_corners
+
+host = implements(FAMILY, FRONT)
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
@@ -73,18 +76,11 @@ def resize_flow_rows(src: nd4, out: nd4, scale_x: ti.f32, scale_y: ti.f32, gain_
             out[t, y, x, 1] = bilinear_at(src, t, 1, x0, x1, fx, y0, y1, fy) * gain_y
 
 
+@host("gaussian_blur")
 def gaussian_blur(src, out, scratch, sigma: float) -> None:
     """Separable Gaussian blur truncated at 3 sigma, replicate border; ``sigma <= 0``
     copies.  Pyramid choice: ``sigma = 1 / sqrt(2 * scale)`` before resampling by
     ``scale < 1``.  See :func:`ivkernels.kernels.warp.pyramid.gaussian_blur`."""
-    src = check_array("src", src, (None, None, None, None), "(T, H, W, C)")
-    check_array("out", out, src.shape, "(T, H, W, C)", output=True)
-    check_array("scratch", scratch, src.shape, "(T, H, W, C)", output=True)
-    check_disjoint("scratch", scratch, "src", src, "it holds the x-blurred image")
-    check_disjoint("scratch", scratch, "out", out, "it holds the x-blurred image")
-    sigma = float(sigma)
-    if not math.isfinite(sigma):
-        raise ValueError(f"sigma must be finite, got {sigma}")
     if sigma <= 0.0:
         if out is not src:
             np.copyto(out, src)
@@ -97,26 +93,24 @@ def gaussian_blur(src, out, scratch, sigma: float) -> None:
     blur_y_rows(scratch, out, taps, radius)
 
 
-def _check_resize(src, out, channels):
-    src = check_array("src", src, (None, None, None, channels), "(T, h, w, C)" if channels is None else "(T, h, w, 2)")
-    t, h, w, c = src.shape
-    check_array("out", out, (t, None, None, c), "(T, H, W, C)" if channels is None else "(T, H, W, 2)", output=True)
-    if min(h, w, out.shape[1], out.shape[2]) < 1:
-        raise ValueError(f"image sizes must be >= 1, got src {src.shape}, out {out.shape}")
-    return src, src.shape[2] / out.shape[2], src.shape[1] / out.shape[1]
+def _scales(src, out):
+    """Source pixels per target pixel along x and y."""
+    return src.shape[2] / out.shape[2], src.shape[1] / out.shape[1]
 
 
+@host("resize_bilinear")
 def resize_bilinear(src, out) -> None:
     """Bilinear resize (T, h, w, C) -> (T, H, W, C), pixel-centre mapping, clamped; see
     :func:`ivkernels.kernels.warp.pyramid.resize_bilinear` (NumPy arrays here)."""
-    src, scale_x, scale_y = _check_resize(src, out, None)
+    scale_x, scale_y = _scales(src, out)
     if out.size:
         resize_bilinear_rows(src, out, scale_x, scale_y)
 
 
+@host("resize_flow")
 def resize_flow(src, out) -> None:
     """Resize a flow (T, h, w, 2) -> (T, H, W, 2) and scale dx by W / w, dy by H / h; see
     :func:`ivkernels.kernels.warp.pyramid.resize_flow`."""
-    src, scale_x, scale_y = _check_resize(src, out, 2)
+    scale_x, scale_y = _scales(src, out)
     if out.size:
         resize_flow_rows(src, out, scale_x, scale_y, out.shape[2] / src.shape[2], out.shape[1] / src.shape[1])

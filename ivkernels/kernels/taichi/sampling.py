@@ -7,8 +7,12 @@ looping over ``x``.  The splat scatters with ``+=`` on the output ndarray,
 which Taichi makes atomic inside the parallel loop.
 """
 import taichi as ti
+from ivkernels.kernels.contract import implements
+from ivkernels.kernels.ndarray_checks import FRONT
+from ivkernels.kernels.reference.sampling import FAMILY
 
-from ivkernels.kernels.taichi._checks import check_array, check_disjoint
+host = implements(FAMILY, FRONT)
+
 
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
@@ -146,41 +150,25 @@ def bicubic_warp_rows(src: nd4, flow: nd4, out: nd4, inside: nd3):
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _check_warp_args(src, flow, out, inside):
-    src = check_array("src", src, (None, None, None, None), "(T, H, W, C)")
-    t, h, w, c = src.shape
-    if c < 1:
-        raise ValueError(f"src must have at least one channel, got shape {src.shape}")
-    flow = check_array("flow", flow, (t, h, w, 2), "(T, H, W, 2)")
-    check_array("out", out, (t, h, w, c), "(T, H, W, C)", output=True)
-    check_array("inside", inside, (t, h, w), "(T, H, W)", output=True)
-    check_disjoint("out", out, "src", src, "the warp reads neighbours of src while writing out")
-    return src, flow
-
-
+@host("warp_bilinear")
 def warp_bilinear(src, flow, out, inside) -> None:
     """Bilinear warp ``out = src[t](x + u)`` and the inside-the-image map; see
     :func:`ivkernels.kernels.warp.sampling.warp_bilinear` (NumPy arrays here)."""
-    src, flow = _check_warp_args(src, flow, out, inside)
     if src.size:
         bilinear_warp_rows(src, flow, out, inside)
 
 
+@host("splat_bilinear")
 def splat_bilinear(values, flow, out) -> None:
     """``out +=`` the transpose of :func:`warp_bilinear` applied to ``values`` (atomic
     adds); see :func:`ivkernels.kernels.warp.sampling.splat_bilinear`."""
-    values = check_array("values", values, (None, None, None, None), "(T, H, W, C)")
-    t, h, w, c = values.shape
-    flow = check_array("flow", flow, (t, h, w, 2), "(T, H, W, 2)")
-    check_array("out", out, (t, h, w, c), "(T, H, W, C)", output=True)
-    check_disjoint("out", out, "values", values, "the splat scatters into out while reading values")
     if values.size:
         bilinear_splat_rows(values, flow, out)
 
 
+@host("warp_bicubic")
 def warp_bicubic(src, flow, out, inside) -> None:
     """Bicubic (Keys, a = -0.5) warp with clamped taps and the inside map; see
     :func:`ivkernels.kernels.warp.sampling.warp_bicubic`."""
-    src, flow = _check_warp_args(src, flow, out, inside)
     if src.size:
         bicubic_warp_rows(src, flow, out, inside)

@@ -9,8 +9,11 @@ the host finishes, so both backends reduce in the same order.
 import numpy as np
 import taichi as ti
 
-from ivkernels.kernels.checks import check_basis_rows
-from ivkernels.kernels.taichi._checks import check_array, check_vector
+from ivkernels.kernels.contract import implements
+from ivkernels.kernels.ndarray_checks import FRONT
+from ivkernels.kernels.reference.vecops import FAMILY
+
+host = implements(FAMILY, FRONT)
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
 nd1_f64 = ti.types.ndarray(dtype=ti.f64, ndim=1)
@@ -106,71 +109,62 @@ def _chunks(n: int) -> int:
     return (n + CHUNK - 1) // CHUNK
 
 
+@host("dot")
 def dot(a, b) -> float:
     """``sum(a * b)`` as a Python float (float64 per chunk, summed on the host); see
     :func:`ivkernels.kernels.warp.vecops.dot` (NumPy arrays here)."""
-    a = check_vector("a", a)
-    b = check_vector("b", b, a.shape[0])
     partial = np.empty(_chunks(a.shape[0]), np.float64)
     dot_chunks(a, b, partial, CHUNK)
     return float(partial.sum())
 
 
+@host("norm_inf")
 def norm_inf(x) -> float:
     """``max |x|`` as a Python float."""
-    x = check_vector("x", x)
     partial = np.empty(_chunks(x.shape[0]), np.float32)
     max_abs_chunks(x, partial, CHUNK)
     return float(partial.max())
 
 
+@host("axpy")
 def axpy(alpha: float, x, y) -> None:
     """``y += alpha * x`` (float32)."""
-    x = check_vector("x", x)
-    check_vector("y", y, x.shape[0], output=True)
     axpy_flat(float(alpha), x, y)
 
 
+@host("scale")
 def scale(alpha: float, x) -> None:
     """``x *= alpha`` (float32)."""
-    check_vector("x", x, output=True)
     scale_flat(float(alpha), x)
 
 
+@host("lincomb")
 def lincomb(out, a: float, x, b: float, y) -> None:
     """``out = a * x + b * y`` (float32); ``out`` may be ``x`` or ``y``."""
-    check_vector("out", out, output=True)
-    x = check_vector("x", x, out.shape[0])
-    y = check_vector("y", y, out.shape[0])
     lincomb_flat(out, float(a), x, float(b), y)
 
 
+@host("copy")
 def copy(src, dst) -> None:
     """``dst[:] = src``."""
-    src = check_vector("src", src)
-    check_vector("dst", dst, src.shape[0], output=True)
     copy_flat(src, dst)
 
 
+@host("fill")
 def fill(x, value: float) -> None:
     """``x[:] = value``."""
-    check_vector("x", x, output=True)
     fill_flat(x, float(value))
 
 
+@host("dots")
 def dots(basis, x, rows=None) -> np.ndarray:
     """``basis[rows] @ x`` as float64 in one pass; see :func:`ivkernels.kernels.warp.vecops.dots`."""
-    x = check_vector("x", x)
-    basis = check_array("basis", basis, (None, x.shape[0]), "(k, n)")
-    rows, _ = check_basis_rows(basis.shape[0], rows)
     partial = np.empty((len(rows), _chunks(x.shape[0])), np.float64)
     basis_dots_chunks(basis, x, rows, partial, CHUNK)
     return partial.sum(axis=1)
 
 
+@host("combine")
 def combine(out, basis, rows, coeffs) -> None:
     """``out = sum_r coeffs[r] * basis[rows[r]]``; see :func:`ivkernels.kernels.warp.vecops.combine`."""
-    check_vector("out", out, output=True)
-    basis = check_array("basis", basis, (None, out.shape[0]), "(k, n)")
-    rows, coeffs = check_basis_rows(basis.shape[0], rows, coeffs)
     basis_combine_chunks(out, basis, rows, coeffs, CHUNK)

@@ -1,17 +1,17 @@
-"""Argument checks of the Warp host functions.
+"""What a ``wp.array`` is, for the one argument check of every backend.
 
-Every host function checks its arguments up front, before any launch, and
-raises a ``TypeError`` (not a ``wp.array``, wrong dtype) or a ``ValueError``
-(wrong shape, wrong device, bad scalar) naming the argument, what was
-expected and what was given.  :mod:`ivkernels.kernels.taichi._checks` holds
-the same checks for NumPy arrays; the rules that do not depend on the array
-type (scalars, aliasing) live in :mod:`ivkernels.kernels.checks`.
+The host functions of :mod:`ivkernels.kernels.warp` check their arguments by
+their declarations (:mod:`ivkernels.kernels.contract`) before any launch;
+:data:`FRONT` answers the few questions the check asks of a ``wp.array``.
+Warp kernels read strided arrays, so nothing is copied; every array must be
+on the device of the first one.  :mod:`ivkernels.kernels.ndarray_checks` is
+the same for NumPy arrays.
 """
 from __future__ import annotations
 
 import warp as wp
 
-from ivkernels.kernels.checks import check_float, check_int, check_non_negative, check_positive, check_separate  # noqa: F401
+from ivkernels.kernels.contract import Frontend
 
 
 def memory_span(a):
@@ -22,44 +22,28 @@ def memory_span(a):
     return (str(a.device), a.ptr, a.ptr + extent)
 
 
-def check_disjoint(name_a: str, a, name_b: str, b, why: str) -> None:
-    """Raise ValueError if ``wp.array`` s ``a`` and ``b`` share memory (:func:`ivkernels.kernels.checks.check_separate`)."""
-    check_separate(name_a, memory_span(a), name_b, memory_span(b), why)
+class WarpFrontend(Frontend):
+    """``wp.array`` s for :func:`ivkernels.kernels.contract.check_call`: read with their strides
+    (never copied), on the device of the first array."""
+
+    kind = "wp.array"
+    array_type = wp.array
+    dtypes = {"float32": wp.float32, "float64": wp.float64, "int32": wp.int32}
+
+    def dtype_name(self, a) -> str:
+        return wp.types.type_repr(a.dtype)
+
+    def device(self, a):
+        return a.device
+
+    def is_contiguous(self, a) -> bool:
+        return a.size == 0 or a.is_contiguous
+
+    def contiguous(self, a):
+        return a.contiguous()
+
+    def span(self, a):
+        return memory_span(a)
 
 
-def check_array(name: str, a, shape: tuple | None, layout: str, device=None, *, dtype=wp.float32) -> None:
-    """Raise unless ``a`` is a ``wp.array`` of ``dtype`` and ``shape`` on ``device``.
-
-    ``shape`` is a tuple whose ``None`` entries match any size, or ``None`` for
-    any shape; ``layout`` names the axes in the messages (``"(T, H, W, 3)"``).
-    ``device``: the device of the function's first array (``None``: any).
-    """
-    if not isinstance(a, wp.array):
-        raise TypeError(f"{name} must be a wp.array of {wp.types.type_repr(dtype)} {layout}, "
-                        f"got {type(a).__name__}")
-    if a.dtype != dtype:
-        raise TypeError(f"{name} must have dtype {wp.types.type_repr(dtype)}, got {wp.types.type_repr(a.dtype)}")
-    if shape is not None and (len(a.shape) != len(shape)
-                              or any(e is not None and e != s for e, s in zip(shape, a.shape))):
-        want = tuple("?" if e is None else e for e in shape)
-        raise ValueError(f"{name} must have shape {layout} = {want}, got {tuple(a.shape)}")
-    if device is not None and a.device != device:
-        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
-
-
-def check_vector(name: str, a, n: int | None = None, device=None) -> int:
-    """Raise unless ``a`` is a non-empty 1-D float32 ``wp.array`` (of length ``n``, on ``device``).
-
-    Returns its length.
-    """
-    if not isinstance(a, wp.array):
-        raise TypeError(f"{name} must be a 1-D wp.array of float32, got {type(a).__name__}")
-    if a.dtype != wp.float32:
-        raise TypeError(f"{name} must have dtype float32, got {wp.types.type_repr(a.dtype)}")
-    if a.ndim != 1 or a.shape[0] < 1:
-        raise ValueError(f"{name} must be a non-empty 1-D vector (n,), got shape {tuple(a.shape)}")
-    if n is not None and a.shape[0] != n:
-        raise ValueError(f"{name} must have the same length as the first vector ({n}), got {a.shape[0]}")
-    if device is not None and a.device != device:
-        raise ValueError(f"{name} is on device {a.device}, expected {device} (the device of the first array)")
-    return a.shape[0]
+FRONT = WarpFrontend()

@@ -36,9 +36,13 @@ from __future__ import annotations
 
 import warp as wp
 
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.host import MAX_EXPONENT, grid_shape
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array, check_disjoint, check_int, check_positive
+from ivkernels.kernels.reference.coarse_basis import FAMILY
+from ivkernels.kernels.warp._checks import FRONT
+
+host = implements(FAMILY, FRONT)
 
 wp.set_module_options({"enable_backward": False})
 
@@ -144,6 +148,7 @@ def restrict_add_rows(row_begin: int, values: wp.array3d(dtype=float), weights: 
 # Host functions
 # ----------------------------------------------------------------------------
 
+@host("coarse_weights")
 def coarse_weights(A, weights, spacing: int, sigma: float) -> None:
     """Interpolation weights of the edge-aware coarse basis.
 
@@ -158,26 +163,13 @@ def coarse_weights(A, weights, spacing: int, sigma: float) -> None:
     sigma : albedo distance (in the units of ``A``) at which the affinity
         falls to ``1/e``; > 0.
     """
-    check_array("A", A, (None, None, None, None), "(T, H, W, C)")
     t, h, w, _ = A.shape
-    check_array("weights", weights, (t, h, w, 16), "(T, H, W, 16)", A.device)
-    check_disjoint("weights", weights, "A", A, "the weights are written while A is read at the nodes")
-    spacing = check_int("spacing", spacing, 1)
-    sigma = check_positive("sigma", sigma)
     grid_h, grid_w = grid_shape(h, w, spacing)
     launch_rows(coarse_weights_rows, t * h, [A, weights, spacing, 1.0 / (sigma * sigma), grid_h, grid_w],
                 device=A.device)
 
 
-def _check_grid(z_name: str, z, weights, spacing: int) -> int:
-    check_array("weights", weights, (None, None, None, 16), "(T, H, W, 16)")
-    t, h, w, _ = weights.shape
-    spacing = check_int("spacing", spacing, 1)
-    check_array(z_name, z, (t, *grid_shape(h, w, spacing)), "(T, Hc, Wc) = (T, (H-1)//spacing + 2, "
-                "(W-1)//spacing + 2)", weights.device)
-    return spacing
-
-
+@host("prolong_add")
 def prolong_add(z, weights, out, spacing: int) -> None:
     """``out += P z``: each pixel adds its 16 nodes' ``z``, weighted by ``weights``.
 
@@ -188,13 +180,11 @@ def prolong_add(z, weights, out, spacing: int) -> None:
     out : wp.array float32 (T, H, W), added into.  Must not overlap ``z``.
     spacing : pixels between nodes, as for the weights.
     """
-    spacing = _check_grid("z", z, weights, spacing)
     t, h, w, _ = weights.shape
-    check_array("out", out, (t, h, w), "(T, H, W)", weights.device)
-    check_disjoint("out", out, "z", z, "each pixel reads 16 nodes of z")
     launch_rows(prolong_add_rows, t * h, [z, weights, out, spacing], device=weights.device)
 
 
+@host("restrict_add")
 def restrict_add(values, weights, out, spacing: int) -> None:
     """``out += P^T values``, the transpose of :func:`prolong_add`.
 
@@ -206,8 +196,5 @@ def restrict_add(values, weights, out, spacing: int) -> None:
         values`` of every pixel whose taps reach it.  Must not overlap ``values``.
     spacing : pixels between nodes, as for the weights.
     """
-    spacing = _check_grid("out", out, weights, spacing)
     t, h, w, _ = weights.shape
-    check_array("values", values, (t, h, w), "(T, H, W)", weights.device)
-    check_disjoint("out", out, "values", values, "each node sums values over 4 x 4 node spacings")
     launch_rows(restrict_add_rows, t * h, [values, weights, out, spacing], device=weights.device, align=h)

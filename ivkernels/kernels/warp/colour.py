@@ -18,8 +18,12 @@ from __future__ import annotations
 
 import warp as wp
 
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array, check_positive
+from ivkernels.kernels.reference.colour import FAMILY
+from ivkernels.kernels.warp._checks import FRONT
+
+host = implements(FAMILY, FRONT)
 
 wp.set_module_options({"enable_backward": False})
 
@@ -132,20 +136,17 @@ def luminance_rows(row_begin: int, rgb: wp.array4d(dtype=float), out: wp.array3d
 # ----------------------------------------------------------------------------
 
 def _launch_chunks(kernel, src, out, *extra) -> None:
-    """Run an element-wise ``kernel`` on the flat buffers of ``src`` and ``out``, float32 arrays of
-    the same (any) shape: ``out`` C-contiguous, ``src`` copied first if it is not; empty: nothing to do."""
-    check_array("src", src, None, "(any shape)")
-    check_array("out", out, tuple(src.shape), "(same shape as src)", src.device)
+    """Run an element-wise ``kernel`` on the flat buffers of ``src`` and ``out`` (checked: float32
+    arrays of the same shape, ``out`` C-contiguous), ``src`` copied first if it is not contiguous;
+    empty: nothing to do."""
     if src.size == 0:
         return
-    if not out.is_contiguous:
-        raise ValueError("out is written in place and must be C-contiguous "
-                         "(element-wise kernels run on the flat buffer)")
     flat_src, flat_out = src.contiguous().flatten(), out.flatten()
     n = flat_src.shape[0]
     launch_rows(kernel, (n + CHUNK - 1) // CHUNK, [flat_src, flat_out, CHUNK, *extra], device=src.device)
 
 
+@host("srgb_to_linear")
 def srgb_to_linear(src, out) -> None:
     """sRGB-encoded values in [0, 1] -> linear (IEC 61966-2-1 piecewise curve).
 
@@ -156,6 +157,7 @@ def srgb_to_linear(src, out) -> None:
     _launch_chunks(srgb_to_linear_chunks, src, out)
 
 
+@host("linear_to_srgb")
 def linear_to_srgb(src, out) -> None:
     """Linear values in [0, 1] -> sRGB-encoded (inverse of :func:`srgb_to_linear`).
 
@@ -165,16 +167,17 @@ def linear_to_srgb(src, out) -> None:
     _launch_chunks(linear_to_srgb_chunks, src, out)
 
 
+@host("log_floor")
 def log_floor(src, out, floor: float) -> None:
     """``out = log(max(src, floor))`` element-wise (linear -> log domain), any shape.
 
     ``floor`` must be > 0 (it bounds the log from below: ``log(floor)``).
     float32, ``out`` C-contiguous and may be ``src``.
     """
-    floor = check_positive("floor", floor)
     _launch_chunks(log_floor_chunks, src, out, floor)
 
 
+@host("linear_rgb_to_lab")
 def linear_rgb_to_lab(rgb, out) -> None:
     """Linear sRGB -> CIE L*a*b* with the D65 white (``i^Lab`` of Eq. 7).
 
@@ -184,11 +187,10 @@ def linear_rgb_to_lab(rgb, out) -> None:
     out : wp.array float32 (T, H, W, 3), written: (L*, a*, b*), L* in [0, 100]
         (white (1, 1, 1) -> (100, 0, 0)).  May be ``rgb``.
     """
-    check_array("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
-    check_array("out", out, tuple(rgb.shape), "(T, H, W, 3)", rgb.device)
     launch_rows(lab_rows, rgb.shape[0] * rgb.shape[1], [rgb, out], device=rgb.device)
 
 
+@host("luminance")
 def luminance(rgb, out) -> None:
     """Rec. 709 luminance ``0.2126 R + 0.7152 G + 0.0722 B`` of linear RGB.
 
@@ -197,6 +199,4 @@ def luminance(rgb, out) -> None:
     rgb : wp.array float32 (T, H, W, 3), linear.
     out : wp.array float32 (T, H, W), written, linear.
     """
-    check_array("rgb", rgb, (None, None, None, 3), "(T, H, W, 3)")
-    check_array("out", out, tuple(rgb.shape[:3]), "(T, H, W)", rgb.device)
     launch_rows(luminance_rows, rgb.shape[0] * rgb.shape[1], [rgb, out], device=rgb.device)

@@ -14,8 +14,12 @@ from __future__ import annotations
 
 import warp as wp
 
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array, check_disjoint
+from ivkernels.kernels.reference.derivatives import FAMILY
+from ivkernels.kernels.warp._checks import FRONT
+
+host = implements(FAMILY, FRONT)
 
 wp.set_module_options({"enable_backward": False})
 
@@ -92,6 +96,7 @@ def divergence_negative_rows(row_begin: int, flow: wp.array4d(dtype=float), out:
 # Host functions
 # ----------------------------------------------------------------------------
 
+@host("image_gradient")
 def image_gradient(src, gx, gy) -> None:
     """x and y derivatives with the 5-point filter ``[1 -8 0 8 -1] / 12``.
 
@@ -104,14 +109,10 @@ def image_gradient(src, gx, gy) -> None:
     src : wp.array float32 (T, H, W, C), any C >= 1.
     gx, gy : wp.array float32 (T, H, W, C), written (must not overlap src).
     """
-    check_array("src", src, (None, None, None, None), "(T, H, W, C)")
-    check_array("gx", gx, tuple(src.shape), "(T, H, W, C)", src.device)
-    check_array("gy", gy, tuple(src.shape), "(T, H, W, C)", src.device)
-    check_disjoint("gx", gx, "src", src, "the stencil reads neighbours of src while writing gx")
-    check_disjoint("gy", gy, "src", src, "the stencil reads neighbours of src while writing gy")
     launch_rows(five_point_gradient_rows, src.shape[0] * src.shape[1], [src, gx, gy], device=src.device)
 
 
+@host("flow_sobel_magnitude")
 def flow_sobel_magnitude(flow, out) -> None:
     """Sobel edge magnitude of a flow field, ``sqrt(sum_c Sx(u_c)^2 + Sy(u_c)^2)``.
 
@@ -124,11 +125,10 @@ def flow_sobel_magnitude(flow, out) -> None:
     flow : wp.array float32 (T, H, W, 2), pixels.
     out : wp.array float32 (T, H, W), written, pixels per pixel.
     """
-    check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
-    check_array("out", out, tuple(flow.shape[:3]), "(T, H, W)", flow.device)
     launch_rows(flow_sobel_magnitude_rows, flow.shape[0] * flow.shape[1], [flow, out], device=flow.device)
 
 
+@host("divergence_negative")
 def divergence_negative(flow, out) -> None:
     """One-sided divergence ``d = min(du/dx + dv/dy, 0)`` of Eq. 7.
 
@@ -140,6 +140,4 @@ def divergence_negative(flow, out) -> None:
     flow : wp.array float32 (T, H, W, 2), pixels.
     out : wp.array float32 (T, H, W), written, <= 0.
     """
-    check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
-    check_array("out", out, tuple(flow.shape[:3]), "(T, H, W)", flow.device)
     launch_rows(divergence_negative_rows, flow.shape[0] * flow.shape[1], [flow, out], device=flow.device)

@@ -47,9 +47,13 @@ import sys
 
 import warp as wp
 
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.host import EntropyScratch, allocate_entropy_scratch_with, run_entropy_steps
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array, check_disjoint, check_float, check_int
+from ivkernels.kernels.reference.energy_albedo_entropy import FAMILY
+from ivkernels.kernels.warp._checks import FRONT
+
+host = implements(FAMILY, FRONT)
 
 wp.set_module_options({"enable_backward": False})
 
@@ -245,14 +249,6 @@ def entropy_energy_frames(row_begin: int, dots: wp.array(dtype=wp.float64), log_
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _check_hist(name: str, hist, T: int | None, device) -> int:
-    check_array(name, hist, (T, None, None, None), "(T, B, B, B)", device)
-    B = hist.shape[1]
-    if hist.shape[2] != B or hist.shape[3] != B or B < 2:
-        raise ValueError(f"{name} must have shape (T, B, B, B) with B >= 2, got {tuple(hist.shape)}")
-    return B
-
-
 def allocate_entropy_scratch(n_frames: int, bins: int, device="cpu") -> EntropyScratch:
     """Allocate :class:`EntropyScratch` for ``n_frames`` frames and a ``bins^3`` cube on ``device``."""
     def empty(shape, dtype):
@@ -261,6 +257,7 @@ def allocate_entropy_scratch(n_frames: int, bins: int, device="cpu") -> EntropyS
     return allocate_entropy_scratch_with(empty, n_frames, bins)
 
 
+@host("entropy_histogram")
 def entropy_histogram(A, whiten, lo: float, h: float, hist, row_flags) -> None:
     """Overwrite ``hist`` with the trilinear splat of the whitened albedo ``W A(x)`` (Eq. 12).
 
@@ -277,18 +274,14 @@ def entropy_histogram(A, whiten, lo: float, h: float, hist, row_flags) -> None:
         is 1 where the row ``hist[t, i, j, :]`` received mass, else 0 (plane
         1 is zeroed; :func:`entropy_blur` uses both to skip empty rows).
     """
-    check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
     T, H, W, _ = A.shape
     dev = A.device
-    check_array("whiten", whiten, (3, 3), "(3, 3)", dev)
-    B = _check_hist("hist", hist, T, dev)
-    check_array("row_flags", row_flags, (2, T, B, B), "(2, T, B, B)", dev, dtype=wp.int32)
-    lo, h = check_float("lo", lo), check_float("h", h, positive=True)
     hist.zero_()
     row_flags.zero_()
     launch_rows(splat_whitened_rows, T * H, [A, whiten, lo, h, hist, row_flags], device=dev, align=H)
 
 
+@host("entropy_blur")
 def entropy_blur(hist, taps, row_flags, tmp, blurred) -> None:
     """``blurred = G * hist`` per frame, ``G`` separable with 1-D ``taps`` (zero outside the cube).
 
@@ -305,34 +298,26 @@ def entropy_blur(hist, taps, row_flags, tmp, blurred) -> None:
     Three passes (along k, j, i); rows whose sources are all empty cost only
     a flag check, so the cost follows the occupied part of the cube.
     """
-    dev = hist.device if isinstance(hist, wp.array) else None
-    B = _check_hist("hist", hist, None, dev)
+    dev = hist.device
+    B = hist.shape[1]
     T = hist.shape[0]
-    check_array("taps", taps, (None,), "(2r+1,)", dev)
-    if taps.shape[0] % 2 != 1:
-        raise ValueError(f"taps must have an odd length 2r+1, got {taps.shape[0]}")
-    check_array("row_flags", row_flags, (2, T, B, B), "(2, T, B, B)", dev, dtype=wp.int32)
-    check_array("tmp", tmp, tuple(hist.shape), "(T, B, B, B) like hist", dev)
-    check_array("blurred", blurred, tuple(hist.shape), "(T, B, B, B) like hist", dev)
-    check_disjoint("tmp", tmp, "hist", hist, "the blur reads neighbours of hist while writing tmp")
-    check_disjoint("blurred", blurred, "hist", hist, "the blur reads neighbours of hist while writing blurred")
     n = T * B * B
     launch_rows(blur_along_rows, n, [hist, taps, row_flags, blurred], device=dev)
     launch_rows(blur_across_rows, n, [blurred, taps, 2, 0, 1, row_flags, tmp], device=dev)
     launch_rows(blur_across_rows, n, [tmp, taps, 1, 1, -1, row_flags, blurred], device=dev)
 
 
+@host("entropy_dot")
 def entropy_dot(hist, blurred, dots) -> None:
     """Overwrite ``dots`` (wp.array float64 (T,)) with ``<hist_t, blurred_t>`` per frame."""
-    dev = hist.device if isinstance(hist, wp.array) else None
-    B = _check_hist("hist", hist, None, dev)
+    dev = hist.device
+    B = hist.shape[1]
     T = hist.shape[0]
-    check_array("blurred", blurred, tuple(hist.shape), "(T, B, B, B) like hist", dev)
-    check_array("dots", dots, (T,), "(T,)", dev, dtype=wp.float64)
     dots.zero_()
     launch_rows(frame_dot_rows, T * B * B, [hist, blurred, dots], device=dev, align=B * B)
 
 
+@host("entropy_slice_gradient")
 def entropy_slice_gradient(A, whiten, lo: float, h: float, blurred, dots, gA, lam: float) -> None:
     """Add Eq. 12's gradient ``-2 lam W^T grad V(W A(x)) / dots[t]`` into ``gA``.
 
@@ -340,36 +325,23 @@ def entropy_slice_gradient(A, whiten, lo: float, h: float, blurred, dots, gA, la
     the histogram), ``dots`` from :func:`entropy_dot`.  ``gA`` float32
     (T, H, W, 3) is accumulated; it must not overlap ``A``.
     """
-    check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
     T, H, W, _ = A.shape
     dev = A.device
-    check_array("whiten", whiten, (3, 3), "(3, 3)", dev)
-    _check_hist("blurred", blurred, T, dev)
-    check_array("dots", dots, (T,), "(T,)", dev, dtype=wp.float64)
-    check_array("gA", gA, (T, H, W, 3), "(T, H, W, 3)", dev)
-    check_disjoint("gA", gA, "A", A, "the gradient is scattered into gA while A is read")
-    lo, h = check_float("lo", lo), check_float("h", h, positive=True)
-    lam = check_float("lam", lam)
     launch_rows(slice_gradient_rows, T * H, [A, whiten, lo, h, blurred, dots, lam, gA], device=dev)
 
 
+@host("entropy_energy")
 def entropy_energy(dots, sigma_p: float, n_pixels: int, energy_rows, lam: float) -> None:
     """Add ``E_t = -lam log(dots[t] / (n_pixels^2 sqrt(4 pi sigma_p^2)))`` into
     ``energy_rows[t * (len(energy_rows) // T)]`` (the first row of frame ``t``)."""
-    dev = dots.device if isinstance(dots, wp.array) else None
-    check_array("dots", dots, (None,), "(T,)", dev, dtype=wp.float64)
+    dev = dots.device
     T = dots.shape[0]
-    check_array("energy_rows", energy_rows, (None,), "(T*H,)", dev, dtype=wp.float64)
-    if T == 0 or energy_rows.shape[0] % T:
-        raise ValueError(f"energy_rows length {energy_rows.shape[0]} is not a multiple of T = {T}")
-    sigma_p = check_float("sigma_p", sigma_p, positive=True)
-    lam = check_float("lam", lam)
-    n_pixels = check_int("n_pixels", n_pixels, 1)
     log_norm = -2.0 * math.log(n_pixels) - 0.5 * math.log(4.0 * math.pi * sigma_p ** 2)
     launch_rows(entropy_energy_frames, T,
                 [dots, wp.float64(log_norm), lam, energy_rows.shape[0] // T, energy_rows], device=dev)
 
 
+@host("entropy_term")
 def entropy_term(A, whiten, lo: float, h: float, taps, sigma_p: float, scratch: EntropyScratch,
                  gA, energy_rows, lam: float) -> None:
     """Add Eq. 12's energy and gradient for every frame of ``A``, in O(pixels + bins).
@@ -390,9 +362,4 @@ def entropy_term(A, whiten, lo: float, h: float, taps, sigma_p: float, scratch: 
     energy_rows : wp.array float64 (T*H,), row ``t*H`` accumulates ``E_t``.
     lam : Eq. 12's ``lambda_Ap``.
     """
-    check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
-    T, H, W, _ = A.shape
-    check_array("gA", gA, (T, H, W, 3), "(T, H, W, 3)", A.device)
-    check_array("energy_rows", energy_rows, (T * H,), "(T*H,)", A.device, dtype=wp.float64)
-    check_disjoint("gA", gA, "A", A, "the gradient is scattered into gA while A is read")
     run_entropy_steps(sys.modules[__name__], A, whiten, lo, h, taps, sigma_p, scratch, gA, energy_rows, lam)

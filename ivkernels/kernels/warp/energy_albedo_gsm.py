@@ -46,9 +46,13 @@ import math
 
 import warp as wp
 
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array, check_disjoint, check_float, check_int
-from ivkernels.kernels.workspace import check_workspace, scratch_buffer
+from ivkernels.kernels.reference.energy_albedo_gsm import FAMILY
+from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.workspace import scratch_buffer
+
+host = implements(FAMILY, FRONT)
 
 wp.set_module_options({"enable_backward": False})
 
@@ -246,6 +250,7 @@ def _scratch(workspace, name: str, shape: tuple, dtype, device):
                           lambda: wp.empty(shape, dtype=dtype, device=device), device)
 
 
+@host("gsm_smoothness")
 def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_rows,
                    lam: float, radius: int = 2, *, workspace=None) -> None:
     """Add Eq. 11's GSM smoothness energy and gradient.
@@ -272,22 +277,9 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
         per table entry) between calls; without one they are allocated for
         this call.
     """
-    check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
     T, H, W, _ = A.shape
     dev = A.device
-    check_array("sigma_inv", sigma_inv, (3, 3), "(3, 3)", dev)
-    check_array("table_g", table_g, (None,), "(n,)", dev)
     n = table_g.shape[0]
-    if n < 2:
-        raise ValueError(f"table_g must hold at least 2 entries, got {n}")
-    check_array("table_dg", table_dg, (n,), "(n,) like table_g", dev)
-    check_array("gA", gA, (T, H, W, 3), "(T, H, W, 3)", dev)
-    check_array("energy_rows", energy_rows, (T * H,), "(T*H,)", dev, dtype=wp.float64)
-    check_disjoint("gA", gA, "A", A, "the gradient is scattered into gA while A is read")
-    r2_max = check_float("r2_max", r2_max, positive=True)
-    lam = check_float("lam", lam)
-    radius = check_int("radius", radius, 1, " (2 for the paper's 5x5 window)")
-    check_workspace(workspace)
     cells_per_root = (n - 1) / math.sqrt(r2_max)
     n_forward = radius + radius * (2 * radius + 1)      # 12 for the 5x5 window
     B = _scratch(workspace, "whitened", (T * H, W), wp.vec3, dev)

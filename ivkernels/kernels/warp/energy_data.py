@@ -14,8 +14,12 @@ from __future__ import annotations
 
 import warp as wp
 
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array, check_disjoint
+from ivkernels.kernels.reference.energy_data import FAMILY
+from ivkernels.kernels.warp._checks import FRONT
+
+host = implements(FAMILY, FRONT)
 
 wp.set_module_options({"enable_backward": False})
 
@@ -51,6 +55,7 @@ def data_term_rows(row_begin: int, I: wp.array4d(dtype=float), A: wp.array4d(dty
     energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
 
 
+@host("data_term")
 def data_term(I, A, S, w_lum, gA, gS, energy_rows, lam: float = 10.0, eps: float = 0.001) -> None:
     """Add the data term of Eq. 3 and its gradient.
 
@@ -68,15 +73,8 @@ def data_term(I, A, S, w_lum, gA, gS, energy_rows, lam: float = 10.0, eps: float
         the energy of image row ``y`` of frame ``t``.
     lam : lambda_D.  eps : Charbonnier epsilon.
     """
-    check_array("I", I, (None, None, None, 3), "(T, H, W, 3)")
     t, h, w, _ = I.shape
     dev = I.device
-    check_array("A", A, (t, h, w, 3), "(T, H, W, 3)", dev)
-    check_array("S", S, (t, h, w), "(T, H, W)", dev)
-    check_array("w_lum", w_lum, (t, h, w), "(T, H, W)", dev)
-    check_array("gA", gA, (t, h, w, 3), "(T, H, W, 3)", dev)
-    check_array("gS", gS, (t, h, w), "(T, H, W)", dev)
-    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dev, dtype=wp.float64)
     launch_rows(data_term_rows, t * h, [I, A, S, w_lum, gA, gS, energy_rows, float(lam), float(eps)],
                 device=dev)
 
@@ -105,6 +103,7 @@ def constrained_gradient_rows(row_begin: int, gA: wp.array4d(dtype=float), gS: w
         out[t, y, x] = gS[t, y, x] - (gA[t, y, x, 0] + gA[t, y, x, 1] + gA[t, y, x, 2])
 
 
+@host("constrained_albedo")
 def constrained_albedo(I, S, A) -> None:
     """Write ``A = I - S`` (log albedo on the data-consistent set of Eq. 3).
 
@@ -114,15 +113,12 @@ def constrained_albedo(I, S, A) -> None:
     S : wp.array float32 (T, H, W), log shading.
     A : wp.array float32 (T, H, W, 3), output (may not alias ``I``).
     """
-    check_array("I", I, (None, None, None, 3), "(T, H, W, 3)")
     t, h, w, _ = I.shape
     dev = I.device
-    check_array("S", S, (t, h, w), "(T, H, W)", dev)
-    check_array("A", A, (t, h, w, 3), "(T, H, W, 3)", dev)
-    check_disjoint("A", A, "I", I, "constrained_albedo writes A while reading I")
     launch_rows(constrained_albedo_rows, t * h, [I, S, A], device=dev)
 
 
+@host("constrained_gradient")
 def constrained_gradient(gA, gS, out) -> None:
     """Chain rule of ``A = I - S``: ``out = gS - sum_c gA[..., c]``.
 
@@ -130,9 +126,6 @@ def constrained_gradient(gA, gS, out) -> None:
     in (A, S); ``out`` (T, H, W) receives dE/dS along the constraint (it may
     be ``gS`` itself: each pixel reads before it writes).
     """
-    check_array("gA", gA, (None, None, None, 3), "(T, H, W, 3)")
     t, h, w, _ = gA.shape
     dev = gA.device
-    check_array("gS", gS, (t, h, w), "(T, H, W)", dev)
-    check_array("out", out, (t, h, w), "(T, H, W)", dev)
     launch_rows(constrained_gradient_rows, t * h, [gA, gS, out], device=dev)

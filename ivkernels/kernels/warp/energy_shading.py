@@ -13,9 +13,13 @@ import functools
 
 import warp as wp
 
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array, check_disjoint
+from ivkernels.kernels.reference.energy_shading import FAMILY
+from ivkernels.kernels.warp._checks import FRONT
 from ivkernels.kernels.warp.energy_data import charbonnier
+
+host = implements(FAMILY, FRONT)
 
 wp.set_module_options({"enable_backward": False})
 
@@ -107,6 +111,7 @@ def coupling_rows(row_begin: int, S: wp.array3d(dtype=float), S_tilde: wp.array3
     energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
 
 
+@host("shading_smoothness")
 def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
     """Add the local shading smoothness of Eq. 9 and its gradient.
 
@@ -125,6 +130,7 @@ def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001)
     _local_term(S, None, gS, energy_rows, lam, eps)
 
 
+@host("shading_smoothness_gated")
 def shading_smoothness_gated(S, gate, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
     """Add Eq. 9's local shading smoothness with a per-pixel gate on its pair terms, and its gradient.
 
@@ -147,20 +153,13 @@ def shading_smoothness_gated(S, gate, gS, energy_rows, lam: float = 2.0, eps: fl
 
 
 def _local_term(S, gate, gS, energy_rows, lam: float, eps: float) -> None:
-    """Checks and launch of Eq. 9's local term, gated unless ``gate`` is None."""
-    check_array("S", S, (None, None, None), "(T, H, W)")
+    """Launch of Eq. 9's local term (arguments checked), gated unless ``gate`` is None."""
     t, h, w = S.shape
-    if gate is not None:
-        check_array("gate", gate, (t, h, w), "(T, H, W)", S.device)
-    check_array("gS", gS, (t, h, w), "(T, H, W)", S.device)
-    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", S.device, dtype=wp.float64)
-    check_disjoint("gS", gS, "S", S, "the gradient is scattered into gS while S is read")
-    if gate is not None:
-        check_disjoint("gS", gS, "gate", gate, "the gradient is scattered into gS while gate is read")
     launch_rows(_local_kernel_for(gate is not None), t * h,
                 [S, S if gate is None else gate, gS, energy_rows, float(lam), float(eps)], device=S.device)
 
 
+@host("coupling_term")
 def coupling_term(S, S_tilde, w_bnd, gS, energy_rows, lam: float = 10.0) -> None:
     """Add the coupling term of Eq. 13 and its gradient in S.
 
@@ -175,13 +174,6 @@ def coupling_term(S, S_tilde, w_bnd, gS, energy_rows, lam: float = 10.0) -> None
     energy_rows : wp.array float64 (T*H,), accumulated.
     lam : lambda_cpl.
     """
-    check_array("S", S, (None, None, None), "(T, H, W)")
     t, h, w = S.shape
     dev = S.device
-    check_array("S_tilde", S_tilde, (t, h, w), "(T, H, W)", dev)
-    check_array("w_bnd", w_bnd, (None, h, w), "(T', H, W)", dev)
-    if w_bnd.shape[0] > t:
-        raise ValueError(f"w_bnd has {w_bnd.shape[0]} frames but S only {t}; expected T' <= T")
-    check_array("gS", gS, (t, h, w), "(T, H, W)", dev)
-    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dev, dtype=wp.float64)
     launch_rows(coupling_rows, w_bnd.shape[0] * h, [S, S_tilde, w_bnd, gS, energy_rows, float(lam)], device=dev)

@@ -32,10 +32,14 @@ from __future__ import annotations
 
 import warp as wp
 
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array, check_disjoint
+from ivkernels.kernels.reference.energy_temporal import FAMILY
+from ivkernels.kernels.warp._checks import FRONT
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners
-from ivkernels.kernels.workspace import check_workspace, scratch_buffer
+from ivkernels.kernels.workspace import scratch_buffer
+
+host = implements(FAMILY, FRONT)
 
 wp.set_module_options({"enable_backward": False})
 
@@ -196,6 +200,7 @@ def with_channel_axis(a):
     return view
 
 
+@host("temporal_term")
 def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0, *,
                   workspace=None) -> None:
     """Add the temporal term of Eq. 4 (albedo) or Eq. 8 (shading) and its gradient.
@@ -221,20 +226,11 @@ def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0,
 
     With T = 1, or no pixels, there is nothing to add.
     """
-    if isinstance(X, wp.array) and len(X.shape) == 3:
-        check_array("X", X, (None, None, None), "(T, H, W)")
-        check_array("gX", gX, tuple(X.shape), "(T, H, W) like X", X.device)
+    if len(X.shape) == 3:
         X = with_channel_axis(X)
         gX = with_channel_axis(gX)
-    check_array("X", X, (None, None, None, None), "(T, H, W, C) or (T, H, W)")
     t, h, w, c = X.shape
     dev = X.device
-    check_array("gX", gX, (t, h, w, c), "(T, H, W, C) like X", dev)
-    check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)", dev)
-    check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", dev)
-    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dev, dtype=wp.float64)
-    check_disjoint("gX", gX, "X", X, "the gradient is scattered into gX while X is read")
-    check_workspace(workspace)
     if t < 2 or h * w * c == 0:
         return
     shape = (t - 1, h, w, c)
@@ -245,6 +241,7 @@ def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0,
     launch_rows(temporal_splat_rows, (t - 1) * h, [flow, occ, weight, gX], device=dev, align=h)
 
 
+@host("temporal_terms")
 def temporal_terms(A, S, flow, occ, gA, gS, energy_rows, lam_albedo: float, lam_shading: float,
                    alpha: float = 5.0, *, workspace=None) -> None:
     """Add both temporal terms, Eq. 4 on the albedo and Eq. 8 on the shading, and their gradients.
@@ -266,20 +263,8 @@ def temporal_terms(A, S, flow, occ, gA, gS, energy_rows, lam_albedo: float, lam_
         keeps the (T-1, H, W, 4) float32 splat weights between calls.
     Neither gradient may overlap ``A`` or ``S`` (ValueError).
     """
-    check_array("A", A, (None, None, None, 3), "(T, H, W, 3)")
     t, h, w, _ = A.shape
     dev = A.device
-    check_array("S", S, (t, h, w), "(T, H, W) like A", dev)
-    check_array("gA", gA, (t, h, w, 3), "(T, H, W, 3) like A", dev)
-    check_array("gS", gS, (t, h, w), "(T, H, W) like S", dev)
-    check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)", dev)
-    check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", dev)
-    check_array("energy_rows", energy_rows, (t * h,), "(T*H,)", dev, dtype=wp.float64)
-    why = "the gradients are scattered while A and S are read"
-    for grad_name, grad in (("gA", gA), ("gS", gS)):
-        check_disjoint(grad_name, grad, "A", A, why)
-        check_disjoint(grad_name, grad, "S", S, why)
-    check_workspace(workspace)
     if t < 2 or h * w == 0:
         return
     shape = (t - 1, h, w, 4)

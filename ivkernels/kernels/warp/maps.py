@@ -19,10 +19,14 @@ from __future__ import annotations
 
 import warp as wp
 
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array, check_disjoint, check_int, check_non_negative, check_positive
+from ivkernels.kernels.reference.maps import FAMILY
+from ivkernels.kernels.warp._checks import FRONT
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners, inside_image
-from ivkernels.kernels.workspace import check_workspace, scratch_buffer
+from ivkernels.kernels.workspace import scratch_buffer
+
+host = implements(FAMILY, FRONT)
 
 wp.set_module_options({"enable_backward": False})
 
@@ -261,17 +265,7 @@ def boundary_dilate_y_rows(row_begin: int, hits: wp.array3d(dtype=float), out: w
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _check_occlusion_args(lab, flow, div_neg, out, sigma_e, sigma_d):
-    check_array("lab", lab, (None, None, None, 3), "(T+1, H, W, 3)")
-    if lab.shape[0] < 2:
-        raise ValueError(f"lab must hold at least two frames (T+1, H, W, 3), got {tuple(lab.shape)}")
-    t, h, w = lab.shape[0] - 1, lab.shape[1], lab.shape[2]
-    check_array("flow", flow, (t, h, w, 2), "(T, H, W, 2) with T = lab frames - 1", lab.device)
-    check_array("div_neg", div_neg, (t, h, w), "(T, H, W)", lab.device)
-    check_array("out", out, (t, h, w), "(T, H, W)", lab.device)
-    return check_positive("sigma_e", sigma_e), check_positive("sigma_d", sigma_d)
-
-
+@host("occlusion_soft")
 def occlusion_soft(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: float = 0.3) -> None:
     """Occlusion likelihood ``o(x)`` of Eq. 7, times the inside-the-image indicator.
 
@@ -289,11 +283,11 @@ def occlusion_soft(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: floa
     sigma_e : Lab distance scale (paper: 20).
     sigma_d : divergence scale, pixels per pixel (paper: 0.3).
     """
-    sigma_e, sigma_d = _check_occlusion_args(lab, flow, div_neg, out, sigma_e, sigma_d)
     launch_rows(occlusion_soft_rows, flow.shape[0] * flow.shape[1],
                 [lab, flow, div_neg, out, sigma_e, sigma_d], device=lab.device)
 
 
+@host("occlusion_binary")
 def occlusion_binary(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: float = 0.3,
                      threshold: float = 0.5) -> None:
     """Occlusion map ``w_occ`` of Eq. 6: 1 = visible in frame t+1, 0 = occluded or leaves the image.
@@ -303,24 +297,19 @@ def occlusion_binary(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: fl
     0 otherwise.  Same arguments as :func:`occlusion_soft`; ``threshold``: the
     paper's 0.5.
     """
-    sigma_e, sigma_d = _check_occlusion_args(lab, flow, div_neg, out, sigma_e, sigma_d)
     launch_rows(occlusion_binary_rows, flow.shape[0] * flow.shape[1],
                 [lab, flow, div_neg, out, sigma_e, sigma_d, float(threshold)], device=lab.device)
 
 
-def _clear_occlusion_where(kernel, log_image, flow, occ, name: str, threshold: float) -> None:
-    """Check the arguments of a test that clears ``occ`` (T-1, H, W) from ``log_image``
-    (T, H, W, 3) sampled along ``flow`` (T-1, H, W, 2), and launch ``kernel`` with the
-    positive ``threshold`` (called ``name`` in messages)."""
-    check_array("log_image", log_image, (None, None, None, 3), "(T, H, W, 3)")
+def _clear_occlusion_where(kernel, log_image, flow, occ, threshold: float) -> None:
+    """Launch ``kernel``, a test that clears ``occ`` (T-1, H, W) from ``log_image``
+    (T, H, W, 3) sampled along ``flow`` (T-1, H, W, 2), with the positive ``threshold``."""
     t, h, w, _ = log_image.shape
     dev = log_image.device
-    check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)", dev)
-    check_array("occ", occ, (max(t - 1, 0), h, w), "(T-1, H, W)", dev)
-    threshold = check_positive(name, threshold)
     launch_rows(kernel, (t - 1) * h, [log_image, flow, occ, threshold], device=dev)
 
 
+@host("warp_reliability")
 def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
     """Clear ``occ`` where the bilinear sample of the next frame at ``x + u`` straddles an edge.
 
@@ -342,9 +331,10 @@ def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
     occ : wp.array float32 (T-1, H, W), ``w_occ``, updated in place.
     max_spread : spread (log units) from which the warp is not trusted, > 0.
     """
-    _clear_occlusion_where(warp_reliability_rows, log_image, flow, occ, "max_spread", max_spread)
+    _clear_occlusion_where(warp_reliability_rows, log_image, flow, occ, max_spread)
 
 
+@host("chroma_consistency")
 def chroma_consistency(log_image, flow, occ, max_change: float) -> None:
     """Clear ``occ`` where the input's log chromaticity changes along the flow.
 
@@ -365,9 +355,10 @@ def chroma_consistency(log_image, flow, occ, max_change: float) -> None:
     occ : wp.array float32 (T-1, H, W), ``w_occ``, updated in place.
     max_change : change of log chromaticity from which the pixels differ, > 0.
     """
-    _clear_occlusion_where(chroma_consistency_rows, log_image, flow, occ, "max_change", max_change)
+    _clear_occlusion_where(chroma_consistency_rows, log_image, flow, occ, max_change)
 
 
+@host("shading_gate")
 def shading_gate(log_image, flow, gate, tau: float, tau_chroma: float = 0.0) -> None:
     """The per-pixel gate of the local shading smoothness (Eq. 9), from the input.
 
@@ -397,21 +388,15 @@ def shading_gate(log_image, flow, gate, tau: float, tau_chroma: float = 0.0) -> 
     tau : log-contrast change (log units) at which the gate falls to 1/e, > 0.
     tau_chroma : log-chromaticity change (log units) that divides the evidence by e; 0: not used.
     """
-    check_array("log_image", log_image, (None, None, None, 3), "(T, H, W, 3)")
     t, h, w, _ = log_image.shape
     dev = log_image.device
-    check_array("flow", flow, (max(t - 1, 0), h, w, 2), "(T-1, H, W, 2)", dev)
-    check_array("gate", gate, (t, h, w), "(T, H, W)", dev)
-    check_disjoint("gate", gate, "log_image", log_image, "the gate is written while log_image is read")
-    check_disjoint("gate", gate, "flow", flow, "the gate is written while flow is read")
-    tau = check_positive("tau", tau)
-    tau_chroma = check_non_negative("tau_chroma", tau_chroma)
     if t == 1:
         gate.fill_(1.0)
         return
     launch_rows(shading_gate_rows, t * h, [log_image, flow, gate, tau, tau_chroma], device=dev)
 
 
+@host("motion_boundary")
 def motion_boundary(sobel_mag, out, threshold: float, radius: int, *, workspace=None) -> None:
     """Motion-boundary map ``w_bnd`` (Sec. 3.3, Eq. 9): threshold, then a square dilation
     as a row pass (running count of edge pixels) and a column pass (max) through
@@ -432,12 +417,6 @@ def motion_boundary(sobel_mag, out, threshold: float, radius: int, *, workspace=
         keeps the scratch buffer between calls; without one it is allocated
         for this call.
     """
-    check_array("sobel_mag", sobel_mag, (None, None, None), "(T, H, W)")
-    check_array("out", out, tuple(sobel_mag.shape), "(T, H, W)", sobel_mag.device)
-    radius = check_int("radius", radius, 0)
-    if radius:
-        check_disjoint("out", out, "sobel_mag", sobel_mag, "the dilation reads neighbours of sobel_mag")
-    check_workspace(workspace)
     rows = sobel_mag.shape[0] * sobel_mag.shape[1]
     shape, dev = tuple(sobel_mag.shape), sobel_mag.device
     hits = scratch_buffer(workspace, f"{__name__}.boundary_hits", shape, wp.float32,

@@ -20,15 +20,18 @@ through the bounded table cache of :mod:`ivkernels.kernels.cache`.
 """
 from __future__ import annotations
 
-import numpy as np
 import warp as wp
 
 from ivkernels.kernels.cache import cached
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.host import (KMEANS_ITERATIONS, MIN_SEPARATION, flow_scratch_shape,  # noqa: F401
                                     median_network, shading_scratch_shape, spatial_weights)
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array, check_disjoint, check_int, check_positive
-from ivkernels.kernels.workspace import check_workspace, scratch_buffer
+from ivkernels.kernels.reference.median import FAMILY
+from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.workspace import scratch_buffer
+
+host = implements(FAMILY, FRONT)
 
 wp.set_module_options({"enable_backward": False})
 
@@ -429,6 +432,7 @@ def _scratch(workspace, name: str, shape: tuple, device):
                           lambda: wp.empty(shape, dtype=wp.float32, device=device), device)
 
 
+@host("median5x5")
 def median5x5(src, out) -> None:
     """5x5 median of every channel, replicate border (Classic+NL's median filter of the flow).
 
@@ -437,13 +441,11 @@ def median5x5(src, out) -> None:
     src : wp.array float32 (T, H, W, C), any units.
     out : wp.array float32 (T, H, W, C), written.  Must not overlap ``src``.
     """
-    check_array("src", src, (None, None, None, None), "(T, H, W, C)")
     t, h, w, c = src.shape
-    check_array("out", out, (t, h, w, c), "(T, H, W, C)", src.device)
-    check_disjoint("out", out, "src", src, "the median reads a window of src around each pixel")
     launch_rows(median5x5_rows, t * h, [src, out], device=src.device)
 
 
+@host("weighted_median_shading")
 def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float = 7.0,
                             lam: float = 0.001, *, workspace=None) -> None:
     """Update of the coupling variable S~ (Eq. 13), the non-local term of Eq. 9-10.
@@ -485,21 +487,7 @@ def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float
         keeps the float32 scratch of shape :func:`shading_scratch_shape`
         between calls; without one it is allocated for this call.
     """
-    check_array("S", S, (None, None, None), "(T, H, W)")
     t, h, w = S.shape
-    check_array("flow", flow, (None, h, w, 2), "(T', H, W, 2)", S.device)
-    tp = flow.shape[0]
-    if tp > t:
-        raise ValueError(f"flow has {tp} frames but S only {t}; expected T' <= T")
-    check_array("w_bnd", w_bnd, (tp, h, w), "(T', H, W)", S.device)
-    check_array("out", out, (t, h, w), "(T, H, W)", S.device)
-    check_disjoint("out", out, "S", S, "the median reads a window of S around each pixel")
-    radius = check_int("radius", radius, 0)
-    sigma_s = check_positive("sigma_s", sigma_s)
-    lam = float(lam)
-    if not lam >= 0.0:
-        raise ValueError(f"lam must be >= 0, got {lam!r}")
-    check_workspace(workspace)
     buf = _scratch(workspace, "shading_window", shading_scratch_shape(S.shape, radius), S.device)
     spatial = _cached_table(("spatial", radius, sigma_s), lambda: spatial_weights(radius, sigma_s),
                             wp.float32, S.device)
@@ -508,6 +496,7 @@ def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float
                 device=S.device, balance=True)
 
 
+@host("weighted_median_flow")
 def weighted_median_flow(flow, lab, occ, mask, out, radius: int = 7, sigma_x: float = 7.0,
                          sigma_i: float = 7.0, *, workspace=None) -> None:
     """Classic+NL's non-local flow median (each flow component independently).
@@ -529,17 +518,7 @@ def weighted_median_flow(flow, lab, occ, mask, out, radius: int = 7, sigma_x: fl
         keeps the float32 scratch of shape :func:`flow_scratch_shape` between
         calls; without one it is allocated for this call.
     """
-    check_array("flow", flow, (None, None, None, 2), "(T, H, W, 2)")
     t, h, w, _ = flow.shape
-    check_array("lab", lab, (t, h, w, 3), "(T, H, W, 3)", flow.device)
-    check_array("occ", occ, (t, h, w), "(T, H, W)", flow.device)
-    check_array("mask", mask, (t, h, w), "(T, H, W)", flow.device)
-    check_array("out", out, (t, h, w, 2), "(T, H, W, 2)", flow.device)
-    check_disjoint("out", out, "flow", flow, "the median reads a window of flow around each pixel")
-    radius = check_int("radius", radius, 0)
-    sigma_x = check_positive("sigma_x", sigma_x)
-    sigma_i = check_positive("sigma_i", sigma_i)
-    check_workspace(workspace)
     buf = _scratch(workspace, "flow_window", flow_scratch_shape(flow.shape, radius), flow.device)
     launch_rows(weighted_median_flow_rows, t * h,
                 [flow, lab, occ, mask, out, buf, radius, sigma_x, sigma_i], device=flow.device, balance=True)

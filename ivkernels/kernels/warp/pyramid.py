@@ -12,15 +12,17 @@ image (the helpers of :mod:`ivkernels.kernels.warp.sampling`).
 """
 from __future__ import annotations
 
-import math
 
-import numpy as np
 import warp as wp
 
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.host import gaussian_kernel
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array, check_disjoint
+from ivkernels.kernels.reference.pyramid import FAMILY
+from ivkernels.kernels.warp._checks import FRONT
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners
+
+host = implements(FAMILY, FRONT)
 
 wp.set_module_options({"enable_backward": False})
 
@@ -103,6 +105,7 @@ def resize_flow_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array
 # Host functions
 # ----------------------------------------------------------------------------
 
+@host("gaussian_blur")
 def gaussian_blur(src, out, scratch, sigma: float) -> None:
     """Separable Gaussian blur, truncated at 3 sigma, replicate border.
 
@@ -119,14 +122,6 @@ def gaussian_blur(src, out, scratch, sigma: float) -> None:
         image); must overlap neither ``src`` nor ``out``.
     sigma : standard deviation in pixels; ``sigma <= 0`` copies ``src``.
     """
-    check_array("src", src, (None, None, None, None), "(T, H, W, C)")
-    check_array("out", out, tuple(src.shape), "(T, H, W, C)", src.device)
-    check_array("scratch", scratch, tuple(src.shape), "(T, H, W, C)", src.device)
-    check_disjoint("scratch", scratch, "src", src, "it holds the x-blurred image")
-    check_disjoint("scratch", scratch, "out", out, "it holds the x-blurred image")
-    sigma = float(sigma)
-    if not math.isfinite(sigma):
-        raise ValueError(f"sigma must be finite, got {sigma}")
     rows = src.shape[0] * src.shape[1]
     if sigma <= 0.0:
         if out.ptr != src.ptr:
@@ -139,15 +134,12 @@ def gaussian_blur(src, out, scratch, sigma: float) -> None:
     launch_rows(blur_y_rows, rows, [scratch, out, weights, radius], device=src.device)
 
 
-def _check_resize(src, out, channels):
-    check_array("src", src, (None, None, None, channels), "(T, h, w, C)" if channels is None else "(T, h, w, 2)")
-    t, h, w, c = src.shape
-    check_array("out", out, (t, None, None, c), "(T, H, W, C)" if channels is None else "(T, H, W, 2)", src.device)
-    if min(h, w, out.shape[1], out.shape[2]) < 1:
-        raise ValueError(f"image sizes must be >= 1, got src {tuple(src.shape)}, out {tuple(out.shape)}")
+def _scales(src, out):
+    """Source pixels per target pixel along x and y."""
     return src.shape[2] / out.shape[2], src.shape[1] / out.shape[1]
 
 
+@host("resize_bilinear")
 def resize_bilinear(src, out) -> None:
     """Resize frames bilinearly to ``out``'s size (down or up), pixel-centre mapping.
 
@@ -159,10 +151,11 @@ def resize_bilinear(src, out) -> None:
     src : wp.array float32 (T, h, w, C).
     out : wp.array float32 (T, H, W, C), written (must not overlap src).
     """
-    scale_x, scale_y = _check_resize(src, out, None)
+    scale_x, scale_y = _scales(src, out)
     launch_rows(resize_bilinear_rows, out.shape[0] * out.shape[1], [src, out, scale_x, scale_y], device=src.device)
 
 
+@host("resize_flow")
 def resize_flow(src, out) -> None:
     """Resize a flow field to ``out``'s size and rescale its vectors.
 
@@ -175,7 +168,7 @@ def resize_flow(src, out) -> None:
     src : wp.array float32 (T, h, w, 2), pixels of the source size.
     out : wp.array float32 (T, H, W, 2), written, pixels of the target size.
     """
-    scale_x, scale_y = _check_resize(src, out, 2)
+    scale_x, scale_y = _scales(src, out)
     gain_x, gain_y = out.shape[2] / src.shape[2], out.shape[1] / src.shape[1]
     launch_rows(resize_flow_rows, out.shape[0] * out.shape[1], [src, out, scale_x, scale_y, gain_x, gain_y],
                 device=src.device)

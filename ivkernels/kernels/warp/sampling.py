@@ -20,8 +20,12 @@ from __future__ import annotations
 
 import warp as wp
 
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.warp._checks import check_array, check_disjoint
+from ivkernels.kernels.reference.sampling import FAMILY
+from ivkernels.kernels.warp._checks import FRONT
+
+host = implements(FAMILY, FRONT)
 
 wp.set_module_options({"enable_backward": False})
 
@@ -170,17 +174,7 @@ def bicubic_warp_rows(row_begin: int, src: wp.array4d(dtype=float), flow: wp.arr
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _check_warp_args(src, flow, out, inside) -> None:
-    check_array("src", src, (None, None, None, None), "(T, H, W, C)")
-    t, h, w, c = src.shape
-    if c < 1:
-        raise ValueError(f"src must have at least one channel, got shape {tuple(src.shape)}")
-    check_array("flow", flow, (t, h, w, 2), "(T, H, W, 2)", src.device)
-    check_array("out", out, (t, h, w, c), "(T, H, W, C)", src.device)
-    check_array("inside", inside, (t, h, w), "(T, H, W)", src.device)
-    check_disjoint("out", out, "src", src, "the warp reads neighbours of src while writing out")
-
-
+@host("warp_bilinear")
 def warp_bilinear(src, flow, out, inside) -> None:
     """Warp ``src`` by ``flow`` with bilinear interpolation: ``out = src[t](x + u)``.
 
@@ -198,11 +192,11 @@ def warp_bilinear(src, flow, out, inside) -> None:
     inside : wp.array float32 (T, H, W), written: 1.0 where the sample point
         lies within ``[0, W-1] x [0, H-1]``, else 0.0.
     """
-    _check_warp_args(src, flow, out, inside)
     t, h = src.shape[0], src.shape[1]
     launch_rows(bilinear_warp_rows, t * h, [src, flow, out, inside], device=src.device)
 
 
+@host("splat_bilinear")
 def splat_bilinear(values, flow, out) -> None:
     """Add the transpose of :func:`warp_bilinear` applied to ``values`` into ``out``.
 
@@ -221,14 +215,11 @@ def splat_bilinear(values, flow, out) -> None:
     Atomic adds; the rows are split between CPU threads only at frame
     boundaries (``align=H``) so the two halves never write the same frame.
     """
-    check_array("values", values, (None, None, None, None), "(T, H, W, C)")
     t, h, w, c = values.shape
-    check_array("flow", flow, (t, h, w, 2), "(T, H, W, 2)", values.device)
-    check_array("out", out, (t, h, w, c), "(T, H, W, C)", values.device)
-    check_disjoint("out", out, "values", values, "the splat scatters into out while reading values")
     launch_rows(bilinear_splat_rows, t * h, [values, flow, out], device=values.device, align=h)
 
 
+@host("warp_bicubic")
 def warp_bicubic(src, flow, out, inside) -> None:
     """Warp ``src`` by ``flow`` with bicubic interpolation (Keys, a = -0.5).
 
@@ -236,6 +227,5 @@ def warp_bicubic(src, flow, out, inside) -> None:
     ``inside`` map); the 4 x 4 taps around ``floor(p)`` are each clamped to the
     image.  Used by the optical flow's warping step (Classic+NL warps bicubically).
     """
-    _check_warp_args(src, flow, out, inside)
     t, h = src.shape[0], src.shape[1]
     launch_rows(bicubic_warp_rows, t * h, [src, flow, out, inside], device=src.device)

@@ -27,9 +27,12 @@ import numpy as np
 
 import warp as wp
 
+from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.checks import check_basis_rows
-from ivkernels.kernels.warp._checks import check_array, check_vector
+from ivkernels.kernels.reference.vecops import FAMILY
+from ivkernels.kernels.warp._checks import FRONT
+
+host = implements(FAMILY, FRONT)
 
 wp.set_module_options({"enable_backward": False})
 
@@ -261,61 +264,63 @@ def _cached_view(key: tuple, make):
     return view
 
 
+@host("dot")
 def dot(a, b) -> float:
     """``sum(a * b)`` as a Python float: float64 products and sums per chunk, chunks summed on the host.
 
     ``a``, ``b``: 1-D float32 wp.arrays of equal length n >= 1.
     """
-    n = check_vector("a", a)
-    check_vector("b", b, n, a.device)
+    n = a.shape[0]
     partial = wp.empty(_chunks(n), dtype=wp.float64, device=a.device)
     launch_rows(dot_chunks, _chunks(n), [a, b, *_vec4(a, b), partial, CHUNK], device=a.device)
     return float(partial.numpy().sum())
 
 
+@host("norm_inf")
 def norm_inf(x) -> float:
     """``max |x|`` as a Python float.  ``x``: 1-D float32 wp.array, n >= 1."""
-    n = check_vector("x", x)
+    n = x.shape[0]
     partial = wp.empty(_chunks(n), dtype=wp.float32, device=x.device)
     launch_rows(max_abs_chunks, _chunks(n), [x, *_vec4(x), partial, CHUNK], device=x.device)
     return float(partial.numpy().max())
 
 
+@host("axpy")
 def axpy(alpha: float, x, y) -> None:
     """``y += alpha * x`` (float32).  ``x``, ``y``: 1-D float32 wp.arrays of equal length."""
-    n = check_vector("x", x)
-    check_vector("y", y, n, x.device)
+    n = x.shape[0]
     launch_rows(axpy_chunks, _chunks(n), [float(alpha), x, y, *_vec4(x, y), CHUNK], device=x.device)
 
 
+@host("scale")
 def scale(alpha: float, x) -> None:
     """``x *= alpha`` (float32).  ``x``: 1-D float32 wp.array."""
-    n = check_vector("x", x)
+    n = x.shape[0]
     launch_rows(scale_chunks, _chunks(n), [float(alpha), x, *_vec4(x), CHUNK], device=x.device)
 
 
+@host("lincomb")
 def lincomb(out, a: float, x, b: float, y) -> None:
     """``out = a * x + b * y`` (float32); ``out`` may be ``x`` or ``y``.
 
     ``out``, ``x``, ``y``: 1-D float32 wp.arrays of equal length.
     """
-    n = check_vector("out", out)
-    check_vector("x", x, n, out.device)
-    check_vector("y", y, n, out.device)
+    n = out.shape[0]
     launch_rows(lincomb_chunks, _chunks(n), [out, float(a), x, float(b), y, *_vec4(out, x, y), CHUNK],
                 device=out.device)
 
 
+@host("copy")
 def copy(src, dst) -> None:
     """``dst[:] = src``.  1-D float32 wp.arrays of equal length."""
-    n = check_vector("src", src)
-    check_vector("dst", dst, n, src.device)
+    n = src.shape[0]
     launch_rows(copy_chunks, _chunks(n), [src, dst, *_vec4(src, dst), CHUNK], device=src.device)
 
 
+@host("fill")
 def fill(x, value: float) -> None:
     """``x[:] = value``.  ``x``: 1-D float32 wp.array."""
-    n = check_vector("x", x)
+    n = x.shape[0]
     launch_rows(fill_chunks, _chunks(n), [x, *_vec4(x), float(value), CHUNK], device=x.device)
 
 
@@ -330,20 +335,18 @@ def _basis_vec4(basis, n4: int):
 
 
 def _basis_rows(basis, rows, coeffs=None):
-    """Check a (k, n) float32 basis, row indices and coefficients.
-
-    Returns the basis (a contiguous copy if it is not contiguous: the kernels
-    read its rows as ``wp.vec4``), the rows as an int32 wp.array and, when
-    given, the coefficients as a float32 wp.array.
+    """A checked (k, n) float32 basis, its row indices (int32) and coefficients (float32, or ``None``)
+    as the kernels take them: the basis (a contiguous copy if it is not contiguous: the kernels
+    read its rows as ``wp.vec4``), the rows as an int32 wp.array and, when given, the
+    coefficients as a float32 wp.array.
     """
-    check_array("basis", basis, (None, None), "(k, n)")
-    rows, coeffs = check_basis_rows(basis.shape[0], rows, coeffs)
     out = [basis.contiguous(), wp.array(rows, dtype=wp.int32, device=basis.device)]
     if coeffs is not None:
         out.append(wp.array(coeffs, dtype=wp.float32, device=basis.device))
     return out
 
 
+@host("dots")
 def dots(basis, x, rows=None) -> np.ndarray:
     """Dot products of ``x`` with rows of ``basis`` in one pass over memory.
 
@@ -353,10 +356,8 @@ def dots(basis, x, rows=None) -> np.ndarray:
     Returns (len(rows),) float64 NumPy array, ``basis[rows] @ x``, each with
     float64 products and sums per chunk (as :func:`dot`).
     """
-    n = check_vector("x", x)
+    n = x.shape[0]
     basis, rows_wp = _basis_rows(basis, rows)
-    if basis.shape[1] != n or basis.device != x.device:
-        raise ValueError(f"basis must have shape (k, {n}) and be on {x.device}, got {tuple(basis.shape)} on {basis.device}")
     partial = wp.empty((rows_wp.shape[0], _chunks(n)), dtype=wp.float64, device=x.device)
     x4, = _vec4(x)
     launch_rows(basis_dots_chunks, _chunks(n), [basis, x, _basis_vec4(basis, x4.shape[0]), x4, rows_wp,
@@ -364,6 +365,7 @@ def dots(basis, x, rows=None) -> np.ndarray:
     return partial.numpy().sum(axis=1)
 
 
+@host("combine")
 def combine(out, basis, rows, coeffs) -> None:
     """``out = sum_r coeffs[r] * basis[rows[r]]`` (float32) in one pass over memory.
 
@@ -371,10 +373,8 @@ def combine(out, basis, rows, coeffs) -> None:
     basis : (k, n) float32 wp.array (copied first if not contiguous).
     rows, coeffs : row indices and their (finite) coefficients, equal lengths.
     """
-    n = check_vector("out", out)
+    n = out.shape[0]
     basis, rows_wp, coeffs_wp = _basis_rows(basis, rows, coeffs)
-    if basis.shape[1] != n or basis.device != out.device:
-        raise ValueError(f"basis must have shape (k, {n}) and be on {out.device}, got {tuple(basis.shape)} on {basis.device}")
     out4, = _vec4(out)
     launch_rows(basis_combine_chunks, _chunks(n), [out, basis, out4, _basis_vec4(basis, out4.shape[0]),
                                                    rows_wp, coeffs_wp, CHUNK], device=out.device)

@@ -1,0 +1,105 @@
+"""The ROF structure-texture decomposition the flow is computed on (Chambolle's dual projection).
+
+:func:`rof_dual_step` iterates the dual ``p`` of
+``min_S |grad S|_TV + |S - img|^2 / (2 theta)``; :func:`rof_texture` keeps the
+texture ``img - alpha (img + theta div p)``.  Part of
+:mod:`ivkernels.kernels.warp.flow_classic`.
+"""
+from __future__ import annotations
+
+import warp as wp
+
+from ivkernels.kernels.contract import implements
+from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.reference.flow_classic import FAMILY
+from ivkernels.kernels.warp._checks import FRONT
+
+host = implements(FAMILY, FRONT)
+
+__all__ = ["rof_dual_step", "rof_texture"]
+
+wp.set_module_options({"enable_backward": False})
+
+
+@wp.func
+def rof_divergence(p: wp.array4d(dtype=float), t: int, y: int, x: int):
+    """Backward-difference divergence of the dual field ``p`` at ``(y, x)``;
+    ``p`` is taken as zero outside the image (Chambolle 2004, Eq. 8)."""
+    d = p[t, y, x, 0] + p[t, y, x, 1]
+    if x > 0:
+        d -= p[t, y, x - 1, 0]
+    if y > 0:
+        d -= p[t, y - 1, x, 1]
+    return d
+
+
+@wp.kernel
+def rof_dual_step_rows(row_begin: int, img: wp.array3d(dtype=float), p_in: wp.array4d(dtype=float),
+                       p_out: wp.array4d(dtype=float), theta: float, delta: float):
+    r = row_begin + wp.tid()
+    height = img.shape[1]
+    width = img.shape[2]
+    t = r // height
+    y = r - t * height
+    # v = img + theta div(p) at (y, x); its value at x + 1 is carried to the next x
+    v = float(0.0)
+    if width > 0:
+        v = img[t, y, 0] + theta * rof_divergence(p_in, t, y, 0)
+    for x in range(width):
+        gx = 0.0
+        gy = 0.0
+        v_right = float(0.0)
+        if x < width - 1:
+            v_right = img[t, y, x + 1] + theta * rof_divergence(p_in, t, y, x + 1)
+            gx = v_right - v
+        if y < height - 1:
+            gy = img[t, y + 1, x] + theta * rof_divergence(p_in, t, y + 1, x) - v
+        px = p_in[t, y, x, 0] + delta * gx
+        py = p_in[t, y, x, 1] + delta * gy
+        norm = wp.max(1.0, wp.sqrt(px * px + py * py))
+        p_out[t, y, x, 0] = px / norm
+        p_out[t, y, x, 1] = py / norm
+        v = v_right
+
+
+@wp.kernel
+def rof_texture_rows(row_begin: int, img: wp.array3d(dtype=float), p: wp.array4d(dtype=float),
+                     out: wp.array3d(dtype=float), theta: float, alpha: float):
+    r = row_begin + wp.tid()
+    height = img.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(img.shape[2]):
+        structure = img[t, y, x] + theta * rof_divergence(p, t, y, x)
+        out[t, y, x] = img[t, y, x] - alpha * structure
+
+
+@host("rof_dual_step")
+def rof_dual_step(img, p_in, p_out, theta: float, delta: float) -> None:
+    """One step of Chambolle's projection for the ROF structure image.
+
+    With ``v = img + theta * div(p_in)`` (forward-difference gradient,
+    replicate border; backward-difference divergence, zero outside):
+    ``p_out = (p_in + delta * grad v) / max(1, |p_in + delta * grad v|)``.
+    Iterating from ``p = 0`` converges to the dual of
+    ``min_S |grad S|_TV + |S - img|^2 / (2 theta)`` for ``delta <= 1 / (4 theta)``.
+
+    img : (T, H, W) float32 (the public code scales it to [-1, 1]).
+    p_in, p_out : (T, H, W, 2) float32 dual field; must be different arrays.
+    """
+    t, h, w = img.shape
+    launch_rows(rof_dual_step_rows, t * h, [img, p_in, p_out, float(theta), float(delta)], img.device)
+
+
+@host("rof_texture")
+def rof_texture(img, p, out, theta: float, alpha: float) -> None:
+    """Texture part of the ROF decomposition: ``out = img - alpha * (img + theta * div p)``.
+
+    ``img + theta * div p`` is the structure image; ``alpha = 0.95`` keeps
+    5 % of it (Classic+NL's texture weight).
+
+    img : (T, H, W) float32; p : (T, H, W, 2) float32 from :func:`rof_dual_step`;
+    out : (T, H, W) float32 (may be ``img``).
+    """
+    t, h, w = img.shape
+    launch_rows(rof_texture_rows, t * h, [img, p, out, float(theta), float(alpha)], img.device)
