@@ -16,6 +16,7 @@ way in.
 from __future__ import annotations
 
 import re
+import subprocess
 from pathlib import Path
 
 import cv2
@@ -149,9 +150,23 @@ def _video_error(path: Path, err: BaseException) -> ValueError:
     return ValueError(f"could not read video file {path}: {detail}")
 
 
+def _passthrough_option() -> list[str]:
+    """The ffmpeg output option that passes every decoded frame through once,
+    with no frame duplicated or dropped to fit a constant rate (``-fps_mode``
+    since ffmpeg 5.1, ``-vsync`` before)."""
+    m = re.search(r"(\d+)\.(\d+)", imageio_ffmpeg.get_ffmpeg_version())
+    old = m is not None and (int(m.group(1)), int(m.group(2))) < (5, 1)
+    return ["-vsync" if old else "-fps_mode", "passthrough"]
+
+
 def _open_video(path: Path):
-    """``(meta, generator of (H, W, 3) uint8 frames)`` of a video, through imageio-ffmpeg."""
-    gen = imageio_ffmpeg.read_frames(str(path), pix_fmt="rgb24")
+    """``(meta, generator of (H, W, 3) uint8 frames)`` of a video, through imageio-ffmpeg.
+
+    The frames are those the decoder yields, each once, in order (the same
+    frames as OpenCV's ``VideoCapture``): without passthrough timing ffmpeg
+    duplicates frames to fill gaps in the timestamps at the header's rate.
+    """
+    gen = imageio_ffmpeg.read_frames(str(path), pix_fmt="rgb24", output_params=_passthrough_option())
     try:
         meta = next(gen)
     except (OSError, RuntimeError, ValueError, StopIteration) as err:
@@ -171,6 +186,22 @@ def _open_video(path: Path):
     return meta, frames()
 
 
+def _decode_error(path: Path) -> str | None:
+    """The first error ffmpeg reports decoding the video stream of ``path``
+    (a truncated or corrupt file), or ``None`` if it decodes cleanly."""
+    cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-nostdin", "-v", "error", "-i", str(path),
+           "-map", "0:v:0", "-f", "null", "-"]
+    try:
+        run = subprocess.run(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.PIPE, check=False)
+    except OSError as err:
+        return str(err)
+    lines = [ln.strip() for ln in run.stderr.decode(errors="replace").splitlines() if ln.strip()]
+    if lines:
+        return re.sub(r"^\[[^]]*\]\s*", "", lines[0])
+    return f"ffmpeg exited with status {run.returncode}" if run.returncode else None
+
+
 def _announced_frames(meta: dict) -> int | None:
     """Frame count a video's header announces (duration x frame rate), or None if unknown."""
     duration, fps = meta.get("duration"), meta.get("fps")
@@ -179,12 +210,6 @@ def _announced_frames(meta: dict) -> int | None:
     except (TypeError, ValueError):
         return None
     return int(round(n)) if np.isfinite(n) and n > 0 else None
-
-
-def _truncation_tolerance(announced: int) -> int:
-    """Frames a complete video may fall short of its header's count (rounding of the
-    duration, a variable frame rate)."""
-    return max(2, int(np.ceil(0.05 * announced)))
 
 
 def _scaled_size(h: int, w: int, scale: float) -> tuple[int, int]:
@@ -217,6 +242,7 @@ def probe_frames(path, start: int = 0, stop: int | None = None, step: int = 1,
         files = list_image_files(path)
         if not files:
             raise ValueError(f"folder {path} holds no images ({', '.join(IMAGE_EXTENSIONS)})")
+        _check_selection(f"folder {path}", len(files), start, stop)
         chosen = files[start:stop:step]
         if not chosen:
             raise ValueError(f"no frames selected from {path} with start={start}, stop={stop}, "
@@ -237,6 +263,37 @@ def probe_frames(path, start: int = 0, stop: int | None = None, step: int = 1,
 
 def _image_size(path: Path) -> tuple[int, int]:
     return read_image(path).shape[:2]
+
+
+def _check_end(path: Path, meta: dict, n_decoded: int, announced: int | None, start: int,
+               stop: int | None) -> None:
+    """After decoding a video to its end: refuse a damaged file, and a selection
+    past the end, naming the frame count the file holds.
+
+    A header's count (duration x frame rate) is only an estimate: a file that
+    announces 682 frames at 50 fps may hold 341 at 25, and is complete.  A
+    file is called damaged only when it ends short of its header and ffmpeg
+    reports a decoding error.
+    """
+    if announced is not None and n_decoded < announced:
+        problem = _decode_error(path)
+        if problem is not None:
+            raise ValueError(
+                f"video file {path} ends after {n_decoded} frames but its header announces about "
+                f"{announced} ({meta.get('duration')} s at {meta.get('fps')} fps), and ffmpeg reports "
+                f"'{problem}'; the file looks truncated or damaged (pass --stop / stop= to read only "
+                "the frames before the damage)")
+    _check_selection(f"video file {path}", n_decoded, start, stop)
+
+
+def _check_selection(what: str, count: int, start: int, stop: int | None) -> None:
+    """Refuse a ``start`` or ``stop`` past the end of ``count`` frames, naming the count."""
+    held = f"{count} frames (0 to {count - 1})" if count else "no frames"
+    if stop is not None and stop > count:
+        raise ValueError(f"stop {stop} (--stop) is past the end of {what}, which holds {held}; "
+                         f"give a stop of at most {count} or leave it out")
+    if start >= count:
+        raise ValueError(f"start {start} (--start) is past the end of {what}, which holds {held}")
 
 
 def read_frames(path, start: int = 0, stop: int | None = None, step: int = 1,
@@ -262,9 +319,12 @@ def read_frames(path, start: int = 0, stop: int | None = None, step: int = 1,
     Raises
     ------
     FileNotFoundError if ``path`` does not exist; ValueError if no frame is
-    selected, a folder holds no images, images differ in size, a video ends
-    well before the frame count its header announces (a truncated or damaged
-    file), or the frames would not fit in the memory available (checked from
+    selected, ``start`` or ``stop`` lies past the last frame (the message
+    gives the count), a folder holds no images, images differ in size, a
+    video ends short of the frame count its header announces and ffmpeg
+    reports a decoding error (a truncated or damaged file; a header that
+    merely over-counts is no error: the frames are those that decode), or
+    the frames would not fit in the memory available (checked from
     the file list or the video header before decoding; the message gives the
     size).
     """
@@ -280,6 +340,7 @@ def read_frames(path, start: int = 0, stop: int | None = None, step: int = 1,
             files = list_image_files(path)
             if not files:
                 raise ValueError(f"folder {path} holds no images ({', '.join(IMAGE_EXTENSIONS)})")
+            _check_selection(f"folder {path}", len(files), start, stop)
             chosen = files[start:stop:step]
         else:
             chosen = [path] if start == 0 else []
@@ -317,20 +378,16 @@ def read_frames(path, start: int = 0, stop: int | None = None, step: int = 1,
     ended = True
     try:
         for i, rgb in enumerate(decoded):
-            n_decoded = i + 1
             if stop is not None and i >= stop:
                 ended = False
                 break
+            n_decoded = i + 1
             if i >= start and (i - start) % step == 0:
                 frames.append(_resize(srgb_int_to_linear(rgb), scale))
     finally:
         decoded.close()
-    if ended and announced is not None and n_decoded < announced - _truncation_tolerance(announced) \
-            and (stop is None or n_decoded < stop):
-        raise ValueError(
-            f"video file {path} ends after {n_decoded} frames but its header announces about "
-            f"{announced} ({meta.get('duration')} s at {meta.get('fps')} fps); the file looks "
-            "truncated or damaged (pass --stop / stop= to read only the frames before the damage)")
+    if ended:
+        _check_end(path, meta, n_decoded, announced, start, stop)
     if not frames:
         raise ValueError(f"no frames selected from {path} with start={start}, stop={stop}, step={step}")
     return np.ascontiguousarray(np.stack(frames).astype(np.float32, copy=False))
