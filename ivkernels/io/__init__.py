@@ -6,7 +6,9 @@ stacked as ``(T, H, W, 3)``.  This package is the border, one concern a module:
 * :mod:`.reading`: :func:`read_frames`, :func:`read_image`,
   :func:`probe_frames`, :func:`to_linear_float` (sRGB decoded on the way in);
 * :mod:`.writing`: :func:`write_png_sequence` (8-bit sRGB or 16-bit linear),
-  :func:`write_npz`, :func:`write_video`, each through :func:`atomic_output`;
+  :func:`write_npz`, :func:`write_video` and :class:`VideoWriter` (checked after
+  writing), :class:`NpzWriter` (streamed, no memory map), each through
+  :func:`atomic_output`;
 * :mod:`.output_folder`: :class:`OutputFolder`, the command line's output,
   claimed before work and renamed into place when complete.
 
@@ -19,8 +21,8 @@ from ivkernels.colour import linear_to_srgb, srgb_decode_table, srgb_to_linear
 from ivkernels.io.output_folder import OUTPUT_MARKER, Interrupted, OutputFolder, glob_escape
 from ivkernels.io.reading import (IMAGE_EXTENSIONS, list_image_files, probe_frames, read_frames,
                                   read_image, to_linear_float)
-from ivkernels.io.writing import (VIDEO_EXTENSIONS_WRITE, atomic_output, current_umask, write_npz,
-                                  write_png_sequence, write_video)
+from ivkernels.io.writing import (VIDEO_EXTENSIONS_WRITE, NpzWriter, VideoWriter, atomic_output, current_umask,
+                                  write_npz, write_png_sequence, write_video)
 
 __all__ = [
     "IMAGE_EXTENSIONS",
@@ -36,6 +38,8 @@ __all__ = [
     "write_png_sequence",
     "write_npz",
     "write_video",
+    "VideoWriter",
+    "NpzWriter",
     "atomic_output",
     "current_umask",
     "OutputFolder",

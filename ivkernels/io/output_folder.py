@@ -70,6 +70,14 @@ class OutputFolder:
       SIGHUP (raised as :class:`Interrupted`); one left by a process that no
       longer runs (killed with SIGKILL, power lost) is removed by the next
       :meth:`check` and named in :attr:`notes`;
+    * :meth:`check` claims the output before any work, atomically: it creates
+      the lock file ``.<out>.ivkernels-lock`` (``O_CREAT | O_EXCL``, holding
+      the pid and host), so of two runs into one output started together
+      the second is refused with one line; the claim is released when the
+      folder is committed or removed, by :meth:`release`, and one left by a
+      process that no longer runs is taken over;
+    * :meth:`commit` replaces an output that appeared while writing only
+      with ``force`` (and then only one ivkernels wrote);
     * folders and files get the modes the umask gives (0755 / 0644 under the
       usual 0022), not the 0700 / 0600 of temporary files.
     """
@@ -84,11 +92,14 @@ class OutputFolder:
         self.partial: Path | None = None
         self._old_handlers: dict = {}
         self._committed = False
+        self._lock: Path | None = None
 
     # -- checks ----------------------------------------------------------------
     def check(self) -> None:
-        """Refuse an output that must not be written (ValueError), and remove
-        stale partial folders of this output left by processes that are gone."""
+        """Claim the output, refuse one that must not be written (ValueError),
+        and remove stale partial folders of this output left by processes that
+        are gone.  The claim holds until :meth:`commit`, the end of the
+        ``with`` block or :meth:`release`."""
         out = self.out
         if str(out) in ("", "."):
             raise ValueError("output folder must be named (not '.')")
@@ -104,6 +115,14 @@ class OutputFolder:
             raise ValueError(f"output {out} is a symbolic link; give the folder itself")
         if not target.parent.is_dir():
             raise ValueError(f"the folder that would hold output {out}, {out.parent}, does not exist")
+        self._claim()           # before the existence test: of two runs, one gets here
+        try:
+            self._check_existing(out)
+        except BaseException:
+            self.release()
+            raise
+
+    def _check_existing(self, out: Path) -> None:
         if out.exists():
             if not out.is_dir():
                 raise ValueError(f"output {out} exists and is not a folder; choose another name")
@@ -112,6 +131,47 @@ class OutputFolder:
                                  "(which replaces only a folder written by ivkernels)")
             self._check_replaceable(out)
         self._clean_stale()
+
+    def _claim(self) -> None:
+        """Create the lock file, or refuse (ValueError) if a live run holds it."""
+        if self._lock is not None:
+            return
+        lock = self.out.resolve().parent / f".{self.out.name}.ivkernels-lock"
+        info = json.dumps({"written_by": "ivkernels", "pid": os.getpid(), "host": socket.gethostname()})
+        for _ in range(3):
+            try:
+                fd = os.open(lock, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+            except FileExistsError:
+                try:
+                    held = json.loads(lock.read_text())
+                    pid, host = int(held["pid"]), str(held["host"])
+                except (OSError, ValueError, KeyError, TypeError):
+                    raise ValueError(f"output {self.out} is locked by {lock}, which ivkernels cannot "
+                                     "read; remove it if no run is writing there") from None
+                if host != socket.gethostname():
+                    raise ValueError(f"another ivkernels run (pid {pid} on host {host}) is writing "
+                                     f"{self.out}; wait for it, or remove {lock} if none is") from None
+                if _pid_alive(pid) and pid != os.getpid():
+                    raise ValueError(f"another ivkernels run (pid {pid}) is writing {self.out}; wait "
+                                     "for it or stop it first") from None
+                # left by a run that is gone (or by this process): take it over
+                with contextlib.suppress(FileNotFoundError):
+                    os.unlink(lock)
+                continue
+            try:
+                os.write(fd, (info + "\n").encode())
+            finally:
+                os.close(fd)
+            self._lock = lock
+            return
+        raise ValueError(f"could not claim output {self.out} (lock file {lock} keeps reappearing)")
+
+    def release(self) -> None:
+        """Give up the claim on the output (idempotent)."""
+        if self._lock is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(self._lock)
+            self._lock = None
 
     def _check_replaceable(self, folder: Path) -> None:
         names = sorted(p.name for p in folder.iterdir())
@@ -176,6 +236,9 @@ class OutputFolder:
             # checked again: the folder may have changed since check()
             if out.is_symlink() or not out.is_dir():
                 raise ValueError(f"output {out} changed while writing and is no longer a folder")
+            if not self.force:
+                raise ValueError(f"output {out} appeared while this run was writing (another run?); "
+                                 "it is not replaced without --force")
             self._check_replaceable(out)
             old = out.resolve().parent / f"{out.name}.{os.getpid()}.old.partial"
             os.replace(out, old)
@@ -189,6 +252,7 @@ class OutputFolder:
         self.partial = None
         if old is not None:
             shutil.rmtree(old, ignore_errors=True)
+        self.release()
         return out
 
     def __exit__(self, exc_type, exc, tb) -> bool:
@@ -204,6 +268,7 @@ class OutputFolder:
             if self.partial is not None:
                 shutil.rmtree(self.partial, ignore_errors=True)
                 self.partial = None
+            self.release()
         finally:
             self._restore_handlers()
 
