@@ -284,7 +284,7 @@ class _PanelQueue:
         return [(name, np.stack(images)) for name, images in self.sheet.items() if images]
 
 
-def _write_outputs(tmp: Path, frames: np.ndarray, windows, args, with_flow: bool, bar) -> None:
+def _write_outputs(tmp: Path, frames: np.ndarray, windows, args, with_flow: bool, bar, n_windows: int) -> None:
     """Write every output of a run into the partial folder ``tmp``, window by window."""
     T, H, W, _ = frames.shape
     npz = None
@@ -329,7 +329,7 @@ def _write_outputs(tmp: Path, frames: np.ndarray, windows, args, with_flow: bool
             queue.flush()
             if bar is not None:
                 bar.update(res.stop - first)
-                bar.set_postfix_str(f"window {index + 1}")
+                bar.set_postfix_str(f"window {index + 1}/{n_windows}")
         if queue.pending:
             raise RuntimeError(f"frames {queue.pending[0][0]}.. have no flow panel")
         video.close()
@@ -383,9 +383,8 @@ def run_decompose(args) -> Path:
             print(_summary(args, src, T, H, W, params, label, threads), file=sys.stderr)
         with target as tmp:
             n_windows = len(window_ranges(T, int(params.window), int(params.overlap)))
-            with tqdm(total=T, unit="frame", desc=f"decompose ({n_windows} window"
-                      f"{'s' if n_windows != 1 else ''})", disable=args.quiet, file=sys.stderr) as bar:
-                _write_outputs(tmp, frames, windows, args, with_flow, bar)
+            with tqdm(total=T, unit="frame", desc="decompose", disable=args.quiet, file=sys.stderr) as bar:
+                _write_outputs(tmp, frames, windows, args, with_flow, bar, n_windows)
             return target.commit()
     finally:
         target.release()
