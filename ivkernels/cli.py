@@ -52,11 +52,13 @@ from ivkernels.params import Params
 from ivkernels.validation import check_memory, decompose_nbytes
 from ivkernels.viz import albedo_to_srgb8, contact_sheet, flow_to_color, gray_to_rgb8, shading_to_srgb8
 
-#: Seconds per pixel and frame of a default run (two flow passes, the flow
-#: estimated, all windows), per backend, with every core of a 2-core machine;
-#: measured as written in perf/RESULTS.md, "Command line: the time estimate".
-#: The summary's estimate scales it by 2 / threads.
-SECONDS_PER_PIXEL_FRAME = {"warp": 2.2e-5, "taichi": 2.2e-5, "numpy": 2.0e-3}
+#: Seconds per pixel and frame of a default run (the flow estimated, two
+#: passes, every window), per backend, with both cores of a 2-core machine,
+#: and the seconds of a run's start (imports, cached kernels); measured as
+#: written in perf/RESULTS.md, "Command line: the time estimate".  The
+#: summary's estimate scales the first by 2 / threads.
+SECONDS_PER_PIXEL_FRAME = {"warp": 4.8e-4, "taichi": 1.3e-3, "numpy": 8.6e-3}
+START_SECONDS = 10.0
 
 #: ``--npz`` choices: the dtype of ``intrinsics.npz``, or no file.
 NPZ_CHOICES = ("float16", "float32", "none")
@@ -208,7 +210,7 @@ def _estimate_seconds(backend: str, n_frames: int, height: int, width: int, thre
     per = SECONDS_PER_PIXEL_FRAME.get(backend)
     if per is None:
         return None
-    return per * n_frames * height * width * 2.0 / max(1, threads)
+    return START_SECONDS + per * n_frames * height * width * 2.0 / max(1, threads)
 
 
 def _duration(seconds: float) -> str:
