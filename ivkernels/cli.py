@@ -2,44 +2,66 @@
 
 Writes into ``OUT``::
 
-    albedo/NNNNN.png      albedo, sRGB 8-bit
-    shading/NNNNN.png     shading, sRGB 8-bit grey
-    flow/NNNNN.png        forward flow, Baker et al. colour wheel
-    occlusion/NNNNN.png   w_occ (white = visible in the next frame)
-    boundary/NNNNN.png    w_bnd (white = near a motion boundary)
-    intrinsics.npz        linear float32 arrays albedo, shading, flow, occlusion, boundary
-    preview.mp4           input | albedo | shading | flow, side by side
-    contact_sheet.png     a few frames of each, labelled
+    albedo/NNNNN.png          albedo, sRGB 8-bit (for viewing)
+    shading/NNNNN.png         shading, sRGB 8-bit grey (for viewing)
+    albedo_linear/NNNNN.png   albedo, *linear* 16-bit RGB (for compositing; clipped to [0, 1])
+    shading_linear/NNNNN.png  shading, *linear* 16-bit grey (for compositing; clipped to [0, 1])
+    flow/NNNNN.png            forward flow t -> t+1, Baker et al. colour wheel
+    occlusion/NNNNN.png       w_occ (white = visible in the next frame)
+    boundary/NNNNN.png        w_bnd (white = near a motion boundary)
+    intrinsics.npz            linear arrays albedo, shading, flow, occlusion, boundary
+                              (float16 by default; --npz float32, or none)
+    preview.mp4               input | albedo | shading | flow, side by side
+    contact_sheet.png         a few frames of each, labelled
 
-Everything is written into ``OUT.<pid>.partial`` and renamed to ``OUT`` only
-when complete, so a failed run never leaves output that looks finished; the
-partial folder is removed on failure, SIGINT, SIGTERM and SIGHUP, and one left
-by a killed run is removed by the next.  OUT must not be, or hold, the input,
-a flow folder or the current folder; an existing OUT is replaced only with
-``--force``, and only if ivkernels wrote it (see :class:`ivkernels.io.OutputFolder`).
-Every foreseeable failure prints one line and exits with status 2.
+Before any work it prints a summary of the job (frames, size, windows, an
+estimate of the time) and, while it runs, a progress bar in frames and
+windows.  Everything is written into ``OUT.<pid>.partial`` and renamed to
+``OUT`` only when complete, so a failed run never leaves output that looks
+finished; the partial folder is removed on failure (a full disk included),
+SIGINT, SIGTERM and SIGHUP, and one left by a killed run is removed by the
+next.  OUT is claimed before any work, so a second run into the same OUT is
+refused while the first runs.  OUT must not be, or hold, the input, a flow
+folder or the current folder; an existing OUT is replaced only with
+``--force``, and only if ivkernels wrote it (see
+:class:`ivkernels.io.OutputFolder`).  Every foreseeable failure prints one
+line and exits with status 2.
 """
 from __future__ import annotations
 
 import argparse
+import errno
 import math
+import os
 import sys
-import zipfile
+import tempfile
 from pathlib import Path
 
 import imageio.v2 as imageio
 import numpy as np
-from numpy.lib.format import open_memmap
+from tqdm.auto import tqdm
 
 from ivkernels.backends import backend_names, check_device
-from ivkernels.decompose import DEFAULT_FLOW_PASSES, iter_decompose
+from ivkernels.decompose import DEFAULT_FLOW_METHOD, DEFAULT_FLOW_PASSES, iter_decompose, window_ranges
 from ivkernels.flow import FLOW_METHODS
 from ivkernels.flowio import read_flo
-from ivkernels.io import Interrupted, OutputFolder, probe_frames, read_frames, write_png_sequence
+from ivkernels.io import (Interrupted, NpzWriter, OutputFolder, VideoWriter, probe_frames, read_frames,
+                          write_png_sequence)
 from ivkernels.kernels.thread_count import check_threads, default_threads
 from ivkernels.params import Params
 from ivkernels.validation import check_memory, decompose_nbytes
 from ivkernels.viz import albedo_to_srgb8, contact_sheet, flow_to_color, gray_to_rgb8, shading_to_srgb8
+
+#: Seconds per pixel and frame of a default run (the flow estimated, two
+#: passes, every window), per backend, with both cores of a 2-core machine,
+#: and the seconds of a run's start (imports, cached kernels); measured as
+#: written in perf/RESULTS.md, "Command line: the time estimate".  The
+#: summary's estimate scales the first by 2 / threads.
+SECONDS_PER_PIXEL_FRAME = {"warp": 4.8e-4, "taichi": 1.3e-3, "numpy": 8.6e-3}
+START_SECONDS = 10.0
+
+#: ``--npz`` choices: the dtype of ``intrinsics.npz``, or no file.
+NPZ_CHOICES = ("float16", "float32", "none")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -49,12 +71,24 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {' '.join(message.split())} (see {self.prog} --help)\n")
 
 
+class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """``--help`` shows each option's default; options whose default is
+    worked out at run time (``None``) say it in their own words, switches
+    (``False``) need none."""
+
+    def _get_help_string(self, action):
+        if action.default is None or action.default is False:
+            return action.help
+        return super()._get_help_string(action)
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="ivkernels", description="Intrinsic video: albedo, shading, flow, occlusion and "
         "motion boundaries of a video (Kong, Gehler & Black, ECCV 2014).")
     sub = parser.add_subparsers(dest="command", required=True)
-    d = sub.add_parser("decompose", help="decompose a video file or a folder of images")
+    d = sub.add_parser("decompose", help="decompose a video file or a folder of images",
+                       formatter_class=_HelpFormatter)
     d.add_argument("input", help="video file (mp4, avi, ...) or folder of images (png, jpg, tif)")
     d.add_argument("-o", "--out", required=True,
                    help="output folder (must not exist; --force replaces one ivkernels wrote)")
@@ -65,23 +99,28 @@ def _parser() -> argparse.ArgumentParser:
                    help="CPU threads the kernels run on (default: IVKERNELS_THREADS if set, else "
                         "every core this process may use)")
     d.add_argument("--flow", default=None,
-                   help="flow method (classic_nl_fast, classic_nl, dis, farneback) or a folder of "
-                        ".flo files, one per consecutive pair")
-    d.add_argument("--flow-passes", type=int, default=None,
+                   help=f"flow method ({', '.join(FLOW_METHODS)}) or a folder of .flo files, one per "
+                        f"consecutive pair (default: {DEFAULT_FLOW_METHOD}; none with --no-temporal)")
+    d.add_argument("--flow-passes", type=int, default=DEFAULT_FLOW_PASSES,
                    help="passes of flow and intrinsic video estimated together when the flow is "
-                        "estimated (default 2; 1: flow on the input only)")
+                        "estimated (1: flow on the input only)")
     d.add_argument("--no-temporal", action="store_true",
                    help="drop the temporal terms and motion weights (the 'IV w/o flow' ablation)")
     d.add_argument("--start", type=int, default=0, help="first frame index")
-    d.add_argument("--stop", type=int, default=None, help="stop before this frame index")
+    d.add_argument("--stop", type=int, default=None,
+                   help="stop before this frame index (default: the end)")
     d.add_argument("--step", type=int, default=1, help="take every STEP-th frame")
     d.add_argument("--scale", type=float, default=1.0, help="resize frames by this factor first")
-    d.add_argument("--window", type=int, default=None, help="frames per solved window")
+    d.add_argument("--window", type=int, default=None,
+                   help=f"frames per solved window (default: {Params().window}, sharing "
+                        f"{Params().overlap} with the previous one)")
     d.add_argument("--fps", type=float, default=10.0, help="frame rate of preview.mp4")
     d.add_argument("--force", action="store_true",
                    help="replace OUT if it exists and ivkernels wrote it (never the input or the "
                         "current folder, nor a folder holding other files)")
-    d.add_argument("--quiet", action="store_true", help="no progress bars")
+    d.add_argument("--npz", default="float16", choices=NPZ_CHOICES,
+                   help="intrinsics.npz: its float type, or none to write no npz")
+    d.add_argument("--quiet", action="store_true", help="no job summary and no progress bar")
     return parser
 
 
@@ -94,28 +133,9 @@ def _read_flo_folder(folder: Path, n_pairs: int, start: int, step: int) -> np.nd
     return np.stack([read_flo(f) for f in files])
 
 
-class _NpzWriter:
-    """Builds ``intrinsics.npz`` window by window through memory-mapped .npy files."""
-
-    def __init__(self, folder: Path, shapes: dict):
-        self.folder = folder
-        self.arrays = {name: open_memmap(folder / f"{name}.npy", mode="w+", dtype=np.float32,
-                                         shape=shape) for name, shape in shapes.items()}
-
-    def close(self, path: Path) -> None:
-        for array in self.arrays.values():
-            array.flush()
-        with zipfile.ZipFile(path, "w", zipfile.ZIP_STORED, allowZip64=True) as z:
-            for name in self.arrays:
-                z.write(self.folder / f"{name}.npy", arcname=f"{name}.npy")
-        self.arrays.clear()
-        for npy in self.folder.glob("*.npy"):
-            npy.unlink()
-
-
 #: Everything :func:`run_decompose` writes into OUT (besides the marker file).
-OUTPUT_CONTENTS = ("albedo", "shading", "flow", "occlusion", "boundary", "intrinsics.npz",
-                   "preview.mp4", "contact_sheet.png")
+OUTPUT_CONTENTS = ("albedo", "shading", "albedo_linear", "shading_linear", "flow", "occlusion", "boundary",
+                   "intrinsics.npz", "preview.mp4", "contact_sheet.png")
 
 
 def _check_arguments(args):
@@ -157,98 +177,241 @@ def _check_arguments(args):
     return params, flow_folder
 
 
-def run_decompose(args) -> Path:
-    """``ivkernels decompose``: check everything, then write OUT through an
-    :class:`ivkernels.io.OutputFolder`."""
-    params, flow_folder = _check_arguments(args)
-    src = Path(args.input)
-    target = OutputFolder(args.out, force=args.force, protect={"input": src, "flow folder": flow_folder},
-                          contents=OUTPUT_CONTENTS)
-    target.check()
-    for note in target.notes:          # e.g. a stale partial folder removed
-        print(f"ivkernels: {note}", file=sys.stderr)
-    T, H, W = probe_frames(src, start=args.start, stop=args.stop, step=args.step, scale=args.scale)
-    check_memory(T * H * W * 3 * 4 + decompose_nbytes(T, H, W, params.window, keep_outputs=False),
-                 f"decomposing {T} frames of {W}x{H}",
-                 hint="select fewer frames (--start/--stop/--step), shrink them (--scale) or "
-                      "solve shorter windows (--window)")
-    frames = read_frames(src, start=args.start, stop=args.stop, step=args.step, scale=args.scale)
-    T, H, W, _ = frames.shape
-    flow = args.flow
-    if flow_folder is not None:
-        flow = _read_flo_folder(flow_folder, T - 1, args.start, args.step)
-    # validates frames, flow, params, backend and device now, before the output is opened
-    windows = iter_decompose(frames, flow=flow, temporal=not args.no_temporal, backend=args.backend,
-                             device=args.device, params=params, progress=not args.quiet,
-                             threads=args.threads,
-                             flow_passes=DEFAULT_FLOW_PASSES if args.flow_passes is None else args.flow_passes)
+def _start_warp(device: str) -> None:
+    """Start Warp now, without the warning its native library prints on a
+    machine with no CUDA driver, unless CUDA is asked for.
 
-    with target as tmp:
+    Warp 1.19 prints "Warp CUDA warning: Could not find or load the NVIDIA
+    CUDA driver" from C at ``wp.init()``, whatever ``wp.config`` says; its
+    standard error is caught while it starts, and every other line passed on.
+    """
+    import warp as wp
+
+    wp.config.log_level = wp.LOG_WARNING
+    if device != "cpu":
+        wp.init()
+        return
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as caught:
+        os.dup2(caught.fileno(), 2)
+        try:
+            wp.init()
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+        caught.seek(0)
+        for line in caught.read().decode(errors="replace").splitlines():
+            if "Could not find or load the NVIDIA CUDA driver" not in line:
+                print(line, file=sys.stderr)
+
+
+def _estimate_seconds(backend: str, n_frames: int, height: int, width: int, threads: int) -> float | None:
+    per = SECONDS_PER_PIXEL_FRAME.get(backend)
+    if per is None:
+        return None
+    return START_SECONDS + per * n_frames * height * width * 2.0 / max(1, threads)
+
+
+def _duration(seconds: float) -> str:
+    if seconds < 90:
+        return f"{max(1, round(seconds))} s"
+    if seconds < 5400:
+        return f"{round(seconds / 60)} min"
+    return f"{seconds / 3600:.1f} h"
+
+
+def _summary(args, src: Path, T: int, H: int, W: int, params: Params, flow_label: str | None,
+             threads: int) -> str:
+    """The job, in a few lines, before any work."""
+    ranges = window_ranges(T, int(params.window), int(params.overlap))
+    estimate = _estimate_seconds(args.backend, T, H, W, threads)
+    lines = [
+        f"ivkernels: {T} frame{'s' if T != 1 else ''} of {W}x{H} from {src} (frames {args.start} to "
+        f"{args.start + (T - 1) * args.step}{f', every {args.step}' if args.step > 1 else ''})",
+        f"  {len(ranges)} window{'s' if len(ranges) != 1 else ''} of up to {params.window} frames"
+        f"{f', {params.overlap} shared' if len(ranges) > 1 else ''}; flow: {flow_label or 'none'}; "
+        f"backend {args.backend} on {args.device}, {threads} thread{'s' if threads != 1 else ''}",
+    ]
+    if estimate is not None:
+        per = SECONDS_PER_PIXEL_FRAME[args.backend]
+        lines.append(f"  estimated time: about {_duration(estimate)} ({per * 1e6:.0f} us per pixel and "
+                     f"frame, measured with 2 threads on a 2-core machine; scaled by 2/{threads})")
+    return "\n".join(lines)
+
+
+class _PanelQueue:
+    """Frames of preview.mp4 and the contact sheet, each with its flow panel.
+
+    Frame ``t``'s flow panel is pair ``t -> t+1``; the last new frame of a
+    window has its pair in the next window, so it waits for it.  The last
+    frame of the video has no pair of its own and shows pair ``T-2``.
+    """
+
+    def __init__(self, n_frames: int, video: VideoWriter, sheet_frames: set, with_flow: bool):
+        self.n_frames = n_frames
+        self.video = video
+        self.sheet_frames = sheet_frames
+        self.with_flow = with_flow
+        self.pending: list = []               # (t, [input, albedo, shading]) in frame order
+        self.flow: dict[int, np.ndarray] = {}  # pair index -> flow image
+        self.sheet = {"input": [], "albedo": [], "shading": [], "flow": []}
+
+    def add_frames(self, first: int, input8, albedo8, shading8) -> None:
+        for i in range(albedo8.shape[0]):
+            self.pending.append((first + i, [input8[i], albedo8[i], shading8[i]]))
+
+    def add_flow(self, first_pair: int, flow8) -> None:
+        for i in range(flow8.shape[0]):
+            self.flow[first_pair + i] = flow8[i]
+
+    def flush(self) -> None:
+        """Write every pending frame whose flow panel is known, in order."""
+        while self.pending:
+            t, panels = self.pending[0]
+            if self.with_flow:
+                pair = t if t < self.n_frames - 1 else t - 1
+                if pair not in self.flow:
+                    return
+                panels = panels + [self.flow[pair]]
+            self.pending.pop(0)
+            self.video.append(np.concatenate(panels, axis=1))
+            if t in self.sheet_frames:
+                for name, image in zip(self.sheet, panels):
+                    self.sheet[name].append(image)
+            for old in [k for k in self.flow if k < t - 1]:
+                del self.flow[old]
+
+    def sheet_rows(self) -> list:
+        return [(name, np.stack(images)) for name, images in self.sheet.items() if images]
+
+
+def _write_outputs(tmp: Path, frames: np.ndarray, windows, args, with_flow: bool, bar, n_windows: int) -> None:
+    """Write every output of a run into the partial folder ``tmp``, window by window."""
+    T, H, W, _ = frames.shape
+    npz = None
+    if args.npz != "none":
         shapes = {"albedo": (T, H, W, 3), "shading": (T, H, W)}
-        if T > 1 and not (args.no_temporal and flow is None):
+        if with_flow:
             shapes.update(flow=(T - 1, H, W, 2), occlusion=(T - 1, H, W), boundary=(T - 1, H, W))
-        npz = _NpzWriter(tmp, shapes)
-        preview = imageio.get_writer(tmp / "preview.mp4", fps=args.fps, macro_block_size=1,
-                                     ffmpeg_log_level="error")
-        sheet_rows = {"input": [], "albedo": [], "shading": [], "flow": []}
-        sheet_frames = set(np.linspace(0, T - 1, min(T, 4)).round().astype(int).tolist())
+        npz = NpzWriter(tmp, shapes, dtype=np.dtype(args.npz))
+    sheet_frames = set(np.linspace(0, T - 1, min(T, 4)).round().astype(int).tolist())
+    video = VideoWriter(tmp / "preview.mp4", fps=args.fps)
+    try:
+        queue = _PanelQueue(T, video, sheet_frames, with_flow)
         flow_max = None
-        for res in windows:
+        for index, res in enumerate(windows):
             new = slice(res.n_carried, res.stop - res.start)       # frames not written yet
             first = res.start + res.n_carried
             albedo8 = albedo_to_srgb8(res.albedo[new])
             shading8 = shading_to_srgb8(res.shading[new])
             write_png_sequence(tmp / "albedo", albedo8, start_index=first)
             write_png_sequence(tmp / "shading", shading8, start_index=first)
-            npz.arrays["albedo"][res.start + res.n_carried:res.stop] = res.albedo[new]
-            npz.arrays["shading"][res.start + res.n_carried:res.stop] = res.shading[new]
-            flow8 = None
-            if res.flow is not None and "flow" in npz.arrays:
+            write_png_sequence(tmp / "albedo_linear", res.albedo[new], bits=16, srgb=False, start_index=first)
+            write_png_sequence(tmp / "shading_linear", res.shading[new], bits=16, srgb=False,
+                               start_index=first)
+            if npz is not None:
+                npz.append("albedo", res.albedo[new])
+                npz.append("shading", res.shading[new])
+            if with_flow and res.flow is not None:
                 pairs = slice(max(res.n_carried - 1, 0), res.stop - res.start - 1)
                 first_pair = res.start + pairs.start
                 if flow_max is None:
                     flow_max = float(np.linalg.norm(res.flow, axis=-1).max()) or 1.0
                 flow8 = flow_to_color(res.flow[pairs], max_magnitude=flow_max)
                 write_png_sequence(tmp / "flow", flow8, start_index=first_pair)
-                write_png_sequence(tmp / "occlusion", gray_to_rgb8(res.occlusion[pairs]),
-                                   start_index=first_pair)
-                write_png_sequence(tmp / "boundary", gray_to_rgb8(res.boundary[pairs]),
-                                   start_index=first_pair)
-                stop_pair = first_pair + flow8.shape[0]
-                npz.arrays["flow"][first_pair:stop_pair] = res.flow[pairs]
-                npz.arrays["occlusion"][first_pair:stop_pair] = res.occlusion[pairs]
-                npz.arrays["boundary"][first_pair:stop_pair] = res.boundary[pairs]
-            input8 = albedo_to_srgb8(frames[first:res.stop])
-            for i in range(albedo8.shape[0]):
-                t = first + i
-                panels = [input8[i], albedo8[i], shading8[i]]
-                if flow8 is not None:
-                    j = t - (res.start + max(res.n_carried - 1, 0))
-                    panels.append(flow8[j] if 0 <= j < flow8.shape[0] else np.zeros_like(input8[i]))
-                preview.append_data(np.concatenate(panels, axis=1))
-                if t in sheet_frames:
-                    sheet_rows["input"].append(input8[i])
-                    sheet_rows["albedo"].append(albedo8[i])
-                    sheet_rows["shading"].append(shading8[i])
-                    if flow8 is not None:
-                        sheet_rows["flow"].append(panels[3])
-        preview.close()
-        npz.close(tmp / "intrinsics.npz")
-        rows = [(name, np.stack(images)) for name, images in sheet_rows.items() if images]
-        imageio.imwrite(tmp / "contact_sheet.png", contact_sheet(rows))
-        return target.commit()
+                write_png_sequence(tmp / "occlusion", gray_to_rgb8(res.occlusion[pairs]), start_index=first_pair)
+                write_png_sequence(tmp / "boundary", gray_to_rgb8(res.boundary[pairs]), start_index=first_pair)
+                if npz is not None:
+                    npz.append("flow", res.flow[pairs])
+                    npz.append("occlusion", res.occlusion[pairs])
+                    npz.append("boundary", res.boundary[pairs])
+                queue.add_flow(first_pair, flow8)
+            queue.add_frames(first, albedo_to_srgb8(frames[first:res.stop]), albedo8, shading8)
+            queue.flush()
+            if bar is not None:
+                bar.update(res.stop - first)
+                bar.set_postfix_str(f"window {index + 1}/{n_windows}")
+        if queue.pending:
+            raise RuntimeError(f"frames {queue.pending[0][0]}.. have no flow panel")
+        video.close()
+        if npz is not None:
+            npz.close(tmp / "intrinsics.npz")
+            npz = None
+        imageio.imwrite(tmp / "contact_sheet.png", contact_sheet(queue.sheet_rows()))
+    except BaseException:
+        video.abort()
+        if npz is not None:
+            npz.discard()
+        raise
+
+
+def run_decompose(args) -> Path:
+    """``ivkernels decompose``: check everything, claim OUT, then write it
+    through an :class:`ivkernels.io.OutputFolder`."""
+    params, flow_folder = _check_arguments(args)
+    src = Path(args.input)
+    target = OutputFolder(args.out, force=args.force, protect={"input": src, "flow folder": flow_folder},
+                          contents=OUTPUT_CONTENTS)
+    target.check()                     # claims OUT: a second run into it is refused from here on
+    try:
+        for note in target.notes:      # e.g. a stale partial folder removed
+            print(f"ivkernels: {note}", file=sys.stderr)
+        T, H, W = probe_frames(src, start=args.start, stop=args.stop, step=args.step, scale=args.scale)
+        check_memory(T * H * W * 3 * 4 + decompose_nbytes(T, H, W, params.window, keep_outputs=False),
+                     f"decomposing {T} frames of {W}x{H}",
+                     hint="select fewer frames (--start/--stop/--step), shrink them (--scale) or "
+                          "solve shorter windows (--window)")
+        frames = read_frames(src, start=args.start, stop=args.stop, step=args.step, scale=args.scale)
+        T, H, W, _ = frames.shape
+        flow = args.flow
+        if flow_folder is not None:
+            flow = _read_flo_folder(flow_folder, T - 1, args.start, args.step)
+        if args.backend == "warp":
+            _start_warp(args.device)
+        # validates frames, flow, params, backend and device now, before the output is opened
+        windows = iter_decompose(frames, flow=flow, temporal=not args.no_temporal, backend=args.backend,
+                                 device=args.device, params=params, progress=False, threads=args.threads,
+                                 flow_passes=DEFAULT_FLOW_PASSES if args.flow_passes is None
+                                 else args.flow_passes)
+        with_flow = T > 1 and not (args.no_temporal and flow is None)
+        threads = args.threads if args.threads is not None else default_threads()
+        if not args.quiet:
+            label = None
+            if with_flow:
+                label = (f"from {flow_folder}" if flow_folder is not None
+                         else f"{flow or DEFAULT_FLOW_METHOD}, {args.flow_passes} pass"
+                              f"{'es' if args.flow_passes != 1 else ''}")
+            print(_summary(args, src, T, H, W, params, label, threads), file=sys.stderr)
+        with target as tmp:
+            n_windows = len(window_ranges(T, int(params.window), int(params.overlap)))
+            with tqdm(total=T, unit="frame", desc="decompose", disable=args.quiet, file=sys.stderr) as bar:
+                _write_outputs(tmp, frames, windows, args, with_flow, bar, n_windows)
+            return target.commit()
+    finally:
+        target.release()
 
 
 def _one_line(err: BaseException) -> str:
     return " ".join(str(err).split()) or type(err).__name__
 
 
+def _write_error(err: OSError) -> str:
+    """An operating-system error in one line, a full disk said plainly."""
+    if err.errno in (errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)):
+        where = f" writing {err.filename}" if err.filename else ""
+        return (f"no space left on the device{where} ({os.strerror(err.errno)}); the partial output "
+                "was removed: free some space or choose another -o")
+    return _one_line(err)
+
+
 def main(argv=None) -> int:
     """Run the command line; returns the exit status.
 
     0 on success; 2 with a one-line message for every foreseeable failure (bad
-    arguments or input, an output that must not be replaced, no CUDA device,
-    not enough memory, a file that cannot be read or written); 130 on SIGINT
+    arguments or input, an output that must not be replaced or that another
+    run is writing, no CUDA device, not enough memory, a file that cannot be
+    read or written, a full disk: the partial output is removed); 130 on SIGINT
     and 128 + N on signal N (SIGTERM, SIGHUP), with the partial output removed.
     """
     args = _parser().parse_args(argv)
@@ -262,7 +425,10 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("ivkernels: interrupted; partial output removed", file=sys.stderr)
         return 130
-    except (ValueError, TypeError, OSError, MemoryError) as err:
+    except OSError as err:
+        print(f"ivkernels: error: {_write_error(err)}", file=sys.stderr)
+        return 2
+    except (ValueError, TypeError, MemoryError) as err:
         print(f"ivkernels: error: {_one_line(err)}", file=sys.stderr)
         return 2
     return 0

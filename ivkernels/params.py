@@ -11,6 +11,10 @@ from dataclasses import dataclass
 from ivkernels.validation import MIN_FRAME_SIZE, Range, check_fields
 
 
+#: Eq. 3's lambda_D, the paper's value; see :attr:`Params.lam_data`.
+LAMBDA_DATA = 10.0
+
+
 @dataclass(frozen=True)
 class Params:
     """Weights and settings of :func:`ivkernels.decompose`.
@@ -23,9 +27,13 @@ class Params:
 
     Energy (log domain, Eq. 2 = data + temporal + shading prior + albedo prior)
     ---------------------------------------------------------------------------
-    lam_data, eps_data, lum_eps
-        Eq. 3: ``lam_data * sum rho_charb(w_lum * (I - A - S))`` with
+    eps_data, lum_eps
+        Eq. 3: ``lambda_D * sum rho_charb(w_lum * (I - A - S))`` with
         ``rho_charb(z) = sqrt(z^2 + eps_data^2)`` and ``w_lum = lum(i) + lum_eps``.
+        The solver keeps the data term as a hard constraint, ``A = I - S``
+        (:class:`ivkernels.solver.energy.ConstrainedEnergy`), so these two
+        only set the data term's energy reported in the diagnostics, and
+        ``lambda_D`` is no setting: :attr:`lam_data` reads the paper's 10.
     lam_temporal_albedo, lam_temporal_shading, tukey_alpha
         Eq. 4, 5, 8: ``lam * sum w_occ * rho_tukey(X_{t+1}(x+u) - X_t(x))``,
         continuous Tukey saturating at 1/3.  Chosen 500 and 1: the paper's
@@ -146,7 +154,6 @@ class Params:
     """
 
     # Eq. 3
-    lam_data: float = 10.0
     eps_data: float = 0.001
     lum_eps: float = 0.001
     # Eq. 4, 5, 8
@@ -207,6 +214,13 @@ class Params:
         if not self.overlap < self.window:
             raise ValueError(
                 f"Params.overlap must satisfy 0 <= overlap < window ({self.window}), got {self.overlap}")
+
+    @property
+    def lam_data(self) -> float:
+        """Eq. 3's weight lambda_D = 10 (the paper's), read by the reported data
+        term's energy only: the data term is a hard constraint, so no weight
+        of it changes a result, and none is offered as a setting."""
+        return LAMBDA_DATA
 
     def replace(self, **changes) -> "Params":
         """A copy with some fields changed (``dataclasses.replace``), validated."""

@@ -63,3 +63,127 @@ def test_flow_passes_one_estimates_the_flow_on_the_input_only(image_folder, tmp_
     rc = cli.main(["decompose", str(image_folder), "-o", str(out), "--flow", "dis", "--flow-passes", "1",
                    "--quiet"])
     assert rc == 0 and np.load(out / "intrinsics.npz")["flow"].shape == (2, 36, 52, 2)
+
+
+# ----------------------------------------------------------------------------- what the user meets
+@pytest.fixture(scope="module")
+def odd_folder(tmp_path_factory):
+    """Five frames of an odd height (35) and an odd width (51)."""
+    seq = synthetic.render_sequence("objects_camera", n_frames=5, size=(35, 51), seed=2)
+    folder = tmp_path_factory.mktemp("odd")
+    write_png_sequence(folder, seq.frames_srgb8())
+    return folder
+
+
+@pytest.fixture(scope="module")
+def odd_run(odd_folder, tmp_path_factory):
+    out = tmp_path_factory.mktemp("odd_out") / "result"
+    assert cli.main(["decompose", str(odd_folder), "-o", str(out), "--flow", "dis", "--window", "3",
+                     "--flow-passes", "1", "--quiet"]) == 0
+    return out
+
+
+def _read_video(path):
+    """uint8 RGB frames as OpenCV decodes them."""
+    import cv2
+
+    cap = cv2.VideoCapture(str(path))
+    frames = []
+    while True:
+        ok, frame = cap.read()
+        if not ok:
+            break
+        frames.append(frame[:, :, ::-1])
+    cap.release()
+    return np.stack(frames)
+
+
+@pytest.mark.slow
+def test_preview_of_odd_sized_frames_is_padded_not_empty(odd_run):
+    video = _read_video(odd_run / "preview.mp4")
+    # five frames; four panels of 51 columns (204, even), 35 rows padded to 36
+    assert video.shape == (5, 36, 4 * 51, 3)
+    # the padding repeats the last row: it is no black line
+    assert np.abs(video[:, 35].astype(int) - video[:, 34].astype(int)).mean() < 8
+
+
+@pytest.mark.slow
+def test_flow_panel_shows_the_pair_of_each_frame(odd_run):
+    """Windows (0, 3), (2, 5): frame 2, the last new frame of the first window, has its pair
+    2 -> 3 in the second window; it must be that pair, not a black panel."""
+    import imageio.v2 as imageio
+
+    video = _read_video(odd_run / "preview.mp4")[:, :35, 3 * 51:].astype(float)
+    flows = [imageio.imread(odd_run / "flow" / f"frame_{t:05d}.png").astype(float) for t in range(4)]
+    for t in range(5):
+        pair = min(t, 3)                    # the last frame shows the last pair
+        diffs = [np.abs(video[t] - f).mean() for f in flows]
+        assert int(np.argmin(diffs)) == pair and diffs[pair] < 6, (t, diffs)
+    sheet = imageio.imread(odd_run / "contact_sheet.png")
+    assert sheet.ndim == 3
+
+
+@pytest.mark.slow
+def test_linear_outputs_for_compositing(odd_run):
+    import cv2
+
+    data = np.load(odd_run / "intrinsics.npz")
+    assert {k: data[k].dtype for k in data.files} == dict.fromkeys(
+        ["albedo", "shading", "flow", "occlusion", "boundary"], np.float16)
+    assert data["albedo"].shape == (5, 35, 51, 3)
+    for t in (0, 4):
+        albedo = cv2.imread(str(odd_run / "albedo_linear" / f"frame_{t:05d}.png"), cv2.IMREAD_UNCHANGED)
+        shading = cv2.imread(str(odd_run / "shading_linear" / f"frame_{t:05d}.png"), cv2.IMREAD_UNCHANGED)
+        assert albedo.dtype == np.uint16 and albedo.shape == (35, 51, 3)
+        assert shading.dtype == np.uint16 and shading.shape == (35, 51)
+        # linear values (not sRGB-encoded): the npz's, clipped to [0, 1], in 16 bits
+        want_a = np.clip(data["albedo"][t].astype(np.float32), 0, 1)
+        want_s = np.clip(data["shading"][t].astype(np.float32), 0, 1)
+        np.testing.assert_allclose(albedo[:, :, ::-1] / 65535.0, want_a, atol=2e-3)
+        np.testing.assert_allclose(shading / 65535.0, want_s, atol=2e-3)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("choice", ["float32", "none"])
+def test_npz_choice(image_folder, tmp_path, choice):
+    out = tmp_path / "r"
+    assert cli.main(["decompose", str(image_folder), "-o", str(out), "--no-temporal", "--quiet",
+                     "--npz", choice]) == 0
+    if choice == "none":
+        assert not (out / "intrinsics.npz").exists()
+    else:
+        data = np.load(out / "intrinsics.npz")
+        assert data["albedo"].dtype == np.float32 and data["albedo"].shape == (3, 36, 52, 3)
+    assert len(list((out / "albedo_linear").glob("*.png"))) == 3
+
+
+def test_help_shows_the_defaults(capsys):
+    with pytest.raises(SystemExit):
+        cli.main(["decompose", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    for default in ["(default: warp)", "(default: cpu)", "(default: 2)", "(default: 0)", "(default: 1)",
+                    "(default: 1.0)", "(default: 10.0)", "(default: float16)", "(default: classic_nl_fast",
+                    "(default: 8, sharing 2"]:
+        assert default in text, default
+
+
+@pytest.mark.slow
+def test_summary_before_work_and_no_cuda_warning(image_folder, tmp_path):
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(Path(__file__).parents[1]) + os.pathsep + env.get("PYTHONPATH", "")
+    run = subprocess.run([sys.executable, "-m", "ivkernels.cli", "decompose", str(image_folder), "-o",
+                          str(tmp_path / "r"), "--no-temporal", "--window", "2", "--threads", "1"],
+                         env=env, capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr
+    err = run.stderr
+    assert "Warp CUDA" not in err and "CUDA driver" not in err, err
+    assert "3 frames of 52x36" in err and "2 windows of up to 2 frames, 1 shared" in err, err
+    assert "estimated time: about" in err and "per pixel and frame" in err, err
+    # the progress bar counts frames, over the windows
+    assert "3/3 [" in err and "frame" in err and "window 2/2" in err, err
+    assert err.index("estimated time") < err.index("3/3 [")

@@ -69,9 +69,9 @@ def test_params_switches_must_be_true_or_false(name, value):
 
 
 def test_params_numpy_numbers_are_stored_as_python_numbers():
-    p = Params(window=np.int64(5), lam_data=np.float32(2.5), overlap=np.uint8(1))
+    p = Params(window=np.int64(5), lam_coupling=np.float32(2.5), overlap=np.uint8(1))
     assert type(p.window) is int and p.window == 5 and type(p.overlap) is int
-    assert type(p.lam_data) is float and p.lam_data == 2.5
+    assert type(p.lam_coupling) is float and p.lam_coupling == 2.5
 
 
 @pytest.mark.parametrize("changes, match", [
@@ -101,8 +101,8 @@ def test_params_refuse_values_out_of_range(changes, match):
 
 
 def test_params_refuse_booleans_and_strings_as_numbers():
-    with pytest.raises(TypeError, match="Params.lam_data must be a number"):
-        Params(lam_data="10")
+    with pytest.raises(TypeError, match="Params.lam_coupling must be a number"):
+        Params(lam_coupling="10")
     with pytest.raises(TypeError, match="Params.window must be an integer"):
         Params(window=True)
 

@@ -1,6 +1,7 @@
 """The output contract: the command line never replaces what it did not write, leaves
 no partial output behind (failure, SIGINT, SIGTERM, a killed earlier run), and
 writes files and folders with the modes the umask gives."""
+import errno
 import os
 import signal
 import stat
@@ -283,3 +284,113 @@ def test_cli_writes_readable_output_and_replaces_only_its_own(image_folder, tmp_
     assert cli.main(args) == 2 and "already exists" in capsys.readouterr().err
     assert cli.main([*args, "--force"]) == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["frames", "result"]
+
+
+# ----------------------------------------------------------------------------- one run per output
+_HOLD = """
+import sys, time
+from ivkernels.io import OutputFolder
+target = OutputFolder(sys.argv[1])
+target.check()
+print("claimed", flush=True)
+time.sleep(600)
+"""
+
+
+def test_a_second_run_into_one_output_is_refused_while_the_first_works(tmp_path, capsys, image_folder):
+    """The first run claims OUT when it checks it, before reading or solving."""
+    out = tmp_path / "out"
+    first = subprocess.Popen([sys.executable, "-c", _HOLD, str(out)], env=_cli_env(),
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        assert first.stdout.readline().strip() == b"claimed", first.stderr.read()
+        with pytest.raises(ValueError, match=rf"another ivkernels run \(pid {first.pid}\) is writing"):
+            OutputFolder(out).check()
+        rc = cli.main(["decompose", str(image_folder), "-o", str(out), "--quiet", "--no-temporal"])
+        assert f"another ivkernels run (pid {first.pid}) is writing" in _error_line(rc, capsys.readouterr().err)
+    finally:
+        first.kill()
+        first.wait()
+    assert not out.exists() and not list(tmp_path.glob("out.*"))
+    # the claim of a run that is gone is taken over
+    target = OutputFolder(out)
+    target.check()
+    with target as tmp:
+        (tmp / "x").write_text("x")
+        target.commit()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["frames", "out"]
+
+
+def test_commit_does_not_replace_an_output_that_appeared_without_force(tmp_path):
+    out = tmp_path / "out"
+    first = OutputFolder(out, contents=("x",))
+    first.check()
+    with first as tmp:
+        (tmp / "x").write_text("first")
+        other = _fake_output(out)                # written meanwhile by someone else
+        before = _snapshot(other)
+        with pytest.raises(ValueError, match="appeared while this run was writing"):
+            first.commit()
+    assert _snapshot(out) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+# ----------------------------------------------------------------------------- write errors
+def _enospc(*args, **kwargs):
+    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), "somewhere/frame_00001.png")
+
+
+@pytest.mark.parametrize("where", ["png", "npz", "video"])
+def test_a_full_disk_is_one_line_exit_2_and_leaves_nothing(image_folder, tmp_path, capsys, monkeypatch, where):
+    from ivkernels.io import writing
+
+    calls = {"n": 0}
+    real_png = cli.write_png_sequence
+
+    def png_then_full(*args, **kwargs):
+        calls["n"] += 1
+        if calls["n"] > 2:
+            _enospc()
+        return real_png(*args, **kwargs)
+
+    if where == "png":
+        monkeypatch.setattr(cli, "write_png_sequence", png_then_full)
+    elif where == "npz":
+        monkeypatch.setattr(writing.NpzWriter, "append", _enospc)
+    else:
+        monkeypatch.setattr(writing.VideoWriter, "_check_written", _enospc)
+    out = tmp_path / "out"
+    rc = cli.main(["decompose", str(image_folder), "-o", str(out), "--quiet", "--no-temporal"])
+    line = _error_line(rc, capsys.readouterr().err)
+    assert "no space left on the device" in line and "partial output was removed" in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["frames"]
+
+
+@pytest.fixture
+def tiny_disk(tmp_path):
+    """A 400 KiB tmpfs (skipped where mounting is not permitted)."""
+    mount = tmp_path / "disk"
+    mount.mkdir()
+    try:
+        done = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=400k", "tmpfs", str(mount)],
+                              capture_output=True, check=False)
+    except OSError:
+        pytest.skip("no mount command")
+    if done.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {done.stderr.decode().strip()}")
+    yield mount
+    subprocess.run(["umount", str(mount)], check=False)
+
+
+@pytest.mark.slow
+def test_a_real_full_disk_is_one_line_and_leaves_nothing(tmp_path, tiny_disk):
+    frames = np.random.default_rng(3).integers(0, 256, (4, 96, 128, 3), dtype=np.uint8)
+    src = tmp_path / "frames"
+    write_png_sequence(src, frames)
+    run = subprocess.run([sys.executable, "-m", "ivkernels.cli", "decompose", str(src), "-o",
+                          str(tiny_disk / "out"), "--quiet", "--no-temporal"],
+                         env=_cli_env(), capture_output=True, check=False)
+    err = run.stderr.decode()
+    assert run.returncode == 2, err             # not a bus error (-7)
+    assert len(err.strip().splitlines()) == 1 and "no space left on the device" in err, err
+    assert list(tiny_disk.iterdir()) == []

@@ -239,7 +239,7 @@ def test_seed_spread_keeps_the_evaluation_seed_out_of_the_summary():
     (["--ratio", "IV", "GT"], "not a method to compare"),
     (["--ratio", "IV", "IV"], "must differ"),
     (["--seeds", "1", "1"], "distinct seeds"),
-    (["--ratio", "CRET", "Weiss", "--iv-param", "lam_data=3"], "IV methods only"),
+    (["--ratio", "CRET", "Weiss", "--iv-param", "lam_coupling=3"], "IV methods only"),
 ])
 def test_seed_spread_refuses_bad_arguments(argv, message):
     proc = subprocess.run([sys.executable, str(PERF / "seed_spread.py"), *argv],

@@ -101,11 +101,11 @@ def test_level_shapes():
 def test_params_validation():
     with pytest.raises(ValueError, match="overlap"):
         Params(window=4, overlap=4)
-    with pytest.raises(ValueError, match="lam_data"):
-        Params(lam_data=-1.0)
+    with pytest.raises(ValueError, match="eps_data"):
+        Params(eps_data=-1.0)
     with pytest.raises(TypeError, match="unknown"):
         Params().replace(not_a_weight=1.0)
-    assert Params().replace(lam_data=3.0).lam_data == 3.0
+    assert Params().replace(eps_data=3.0).eps_data == 3.0
 
 
 def test_lbfgs_minimises_an_ill_conditioned_quadratic(backend, rng):

@@ -18,6 +18,17 @@ from typing import Callable
 
 import numpy as np
 
+#: Default ``rel_tol`` of :meth:`LBFGS.minimize`: a quasi-Newton step that
+#: changes the energy by less than this, relatively, ends the run as
+#: converged.  It is a loose test: the energy of Eq. 2 has long, flat valleys
+#: where steps of 1e-6 still move the albedo by percents (on 2-3 frames of
+#: 16x24 to 20x28 with the true flow, runs stopped by it end 2-3% apart between
+#: backends, their energies 2.5e-4 apart; at 1e-10 the energies agree to 1e-6
+#: and the albedos to 0.2%; perf/RESULTS.md, "Backends agree once converged").
+#: Every solve's default; a study that needs solves run to convergence lowers
+#: it (with enough iterations: ``Params.lbfgs_iterations``, ``..._coarse``).
+REL_TOL = 1e-6
+
 
 class LBFGS:
     """Minimiser of a smooth function of a flat float32 backend vector.
@@ -94,7 +105,7 @@ class LBFGS:
         else:                                       # curvature condition fails: skip
             self._free.append(slot)
 
-    def minimize(self, fun: Callable, x, g, iterations: int, *, rel_tol: float = 1e-6,
+    def minimize(self, fun: Callable, x, g, iterations: int, *, rel_tol: float | None = None,
                  on_iteration: Callable | None = None) -> float:
         """Run up to ``iterations`` L-BFGS steps from ``x`` in place.
 
@@ -103,8 +114,8 @@ class LBFGS:
         ``g`` its gradient; the energy there is returned.
         ``on_iteration(k, energy)`` is called after every accepted step.
         Afterwards :attr:`stop_reason` says why it stopped: ``"tolerance"``
-        (relative energy change of a quasi-Newton step below ``rel_tol``:
-        converged; a steepest-descent step, the first of a run or after a
+        (relative energy change of a quasi-Newton step below ``rel_tol``,
+        default :data:`REL_TOL`: converged; a steepest-descent step, the first of a run or after a
         restart, is scaled to ``first_step`` and says nothing about
         convergence, so it never stops the run), ``"stationary"``
         (zero gradient), ``"line search"`` (no decrease along steepest descent
@@ -112,6 +123,7 @@ class LBFGS:
         used up).
         """
         v, m, B, G = self.be.vecops, self.memory, self._basis, self._gram
+        rel_tol = REL_TOL if rel_tol is None else float(rel_tol)
         f = fun(x, g)
         pending = None                              # slot whose y is formed next iteration
         self.stop_reason = "budget"
