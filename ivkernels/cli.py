@@ -34,14 +34,13 @@ import errno
 import math
 import os
 import sys
-import tempfile
 from pathlib import Path
 
 import imageio.v2 as imageio
 import numpy as np
 from tqdm.auto import tqdm
 
-from ivkernels.backends import backend_names, check_device
+from ivkernels.backends import backend_names, check_device, start_warp
 from ivkernels.decompose import DEFAULT_FLOW_METHOD, DEFAULT_FLOW_PASSES, iter_decompose, window_ranges
 from ivkernels.flow import FLOW_METHODS
 from ivkernels.flowio import read_flo
@@ -175,35 +174,6 @@ def _check_arguments(args):
         if args.step != 1:
             raise ValueError("--flow with a folder of .flo files needs --step 1")
     return params, flow_folder
-
-
-def _start_warp(device: str) -> None:
-    """Start Warp now, without the warning its native library prints on a
-    machine with no CUDA driver, unless CUDA is asked for.
-
-    Warp 1.19 prints "Warp CUDA warning: Could not find or load the NVIDIA
-    CUDA driver" from C at ``wp.init()``, whatever ``wp.config`` says; its
-    standard error is caught while it starts, and every other line passed on.
-    """
-    import warp as wp
-
-    wp.config.log_level = wp.LOG_WARNING
-    if device != "cpu":
-        wp.init()
-        return
-    sys.stderr.flush()
-    saved = os.dup(2)
-    with tempfile.TemporaryFile() as caught:
-        os.dup2(caught.fileno(), 2)
-        try:
-            wp.init()
-        finally:
-            os.dup2(saved, 2)
-            os.close(saved)
-        caught.seek(0)
-        for line in caught.read().decode(errors="replace").splitlines():
-            if "Could not find or load the NVIDIA CUDA driver" not in line:
-                print(line, file=sys.stderr)
 
 
 def _estimate_seconds(backend: str, n_frames: int, height: int, width: int, threads: int) -> float | None:
@@ -368,7 +338,7 @@ def run_decompose(args) -> Path:
         if flow_folder is not None:
             flow = _read_flo_folder(flow_folder, T - 1, args.start, args.step)
         if args.backend == "warp":
-            _start_warp(args.device)
+            start_warp()
         # validates frames, flow, params, backend and device now, before the output is opened
         windows = iter_decompose(frames, flow=flow, temporal=not args.no_temporal, backend=args.backend,
                                  device=args.device, params=params, progress=False, threads=args.threads,

@@ -31,12 +31,12 @@ from ivkernels.backends.protocols import FAMILIES, FAMILY_PROTOCOLS, BackendProt
 from ivkernels.backends.registry import (BackendSpec, available_backends, backend_names, backend_spec,
                                          check_device, get_backend, register_backend)
 from ivkernels.backends.taichi_backend import TaichiBackend
-from ivkernels.backends.warp_backend import WarpBackend, cuda_device_count, cuda_devices
+from ivkernels.backends.warp_backend import WarpBackend, cuda_device_count, cuda_devices, start_warp
 
 __all__ = [
     "Backend", "BackendProtocol", "BackendSpec", "FAMILIES", "FAMILY_PROTOCOLS", "NumpyBackend",
     "TaichiBackend", "WarpBackend", "available_backends", "backend_names", "backend_spec", "check_device",
-    "cuda_device_count", "get_backend", "register_backend",
+    "cuda_device_count", "get_backend", "register_backend", "start_warp",
 ]
 
 register_backend("warp", WarpBackend, devices=("cpu", "cuda"), present=cuda_devices,
