@@ -9,6 +9,7 @@ by one; :func:`decompose` collects them).
 from __future__ import annotations
 
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Iterator
 
@@ -39,6 +40,10 @@ DEFAULT_FLOW_METHOD = "classic_nl_fast"
 DEFAULT_FLOW_PASSES = 2
 #: Frame pairs given to the flow method per call (bounds its working memory).
 FLOW_PAIRS_PER_CALL = 7
+#: Estimate the next window's first-pass flow on a second thread while this
+#: window is solved, with the Warp backend on the CPU (its launches release the
+#: GIL); the results are the same.
+FLOW_AHEAD = True
 
 
 @dataclass
@@ -194,7 +199,7 @@ class _Decomposer:
             self.flow_method = DEFAULT_FLOW_METHOD if self.temporal else None
         self.scale = None
 
-    def _flow_for(self, start: int, stop: int, cached: dict) -> np.ndarray | None:
+    def _flow_for(self, start: int, stop: int, cached: dict, stage: str = "flow") -> np.ndarray | None:
         if self.flow is not None:
             return self.flow[start:stop - 1]
         if self.flow_method is None or stop - start < 2:
@@ -216,10 +221,16 @@ class _Decomposer:
                     for t in batch:
                         cached[t] = flows[t - first]
                     bar.update(len(batch))
-            self.log.add_time("flow", time.perf_counter() - t0)
+            self.log.add_time(stage, time.perf_counter() - t0)
         for t in [t for t in cached if t < start]:
             del cached[t]
         return np.stack([cached[t] for t in range(start, stop - 1)])
+
+    def _flow_ahead(self, start: int, stop: int, cached: dict) -> None:
+        """:meth:`_flow_for` of a later window, on another thread, with this job's launch
+        threads; its seconds are logged as ``"flow ahead"`` (they overlap the solve's)."""
+        with launch_threads(self.threads):
+            self._flow_for(start, stop, cached, stage="flow ahead")
 
     def _first_pass_flow(self, frames: np.ndarray) -> np.ndarray:
         """The flow of the first pass on ``frames`` (T, H, W, 3), at full size.
@@ -276,10 +287,18 @@ class _Decomposer:
             bar = tqdm(total=len(ranges) * n_levels, desc="solve (window x level)", unit="level")
         cached_flow: dict = {}
         carried = None
+        ahead = pool = None
+        if FLOW_AHEAD and len(ranges) > 1 and self.flow is None and self.flow_method is not None \
+                and be.name == "warp" and be.device == "cpu":
+            pool = ThreadPoolExecutor(1, thread_name_prefix="ivkernels-flow-ahead")
         try:
             for index, (start, stop, n_carried) in enumerate(ranges):
                 frames_np = self.frames[start:stop]
+                if ahead is not None:
+                    ahead.result()          # the cache holds this window's first-pass flow now
                 flow_np = self._flow_for(start, stop, cached_flow)
+                if pool is not None and index + 1 < len(ranges):
+                    ahead = pool.submit(self._flow_ahead, *ranges[index + 1][:2], cached_flow)
                 occ_np = bnd_np = None
                 frames_be = be.asarray(frames_np)
                 guide_shading = None
@@ -316,6 +335,8 @@ class _Decomposer:
                 yield WindowResult(start, stop, n_carried, albedo.astype(np.float32),
                                    shading.astype(np.float32), flow_np, occ_np, bnd_np)
         finally:
+            if pool is not None:
+                pool.shutdown(wait=True, cancel_futures=True)
             if bar is not None:
                 bar.close()
 

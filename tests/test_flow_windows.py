@@ -1,0 +1,50 @@
+"""The flow across windows in decompose(): the next window's first-pass flow estimated on a second
+thread changes nothing."""
+import numpy as np
+import pytest
+
+import ivkernels as iv
+from ivkernels.evaluation import synthetic
+
+decompose_module = __import__("ivkernels.decompose", fromlist=["FLOW_AHEAD"])
+
+FAST = dict(lbfgs_iterations=2, guide_lbfgs_iterations=2, window=4, overlap=2)
+
+
+@pytest.fixture(scope="module")
+def seq():
+    return synthetic.render_sequence("objects_camera", n_frames=6, size=(40, 48), seed=3)
+
+
+def test_window_ranges_share_frames():
+    # 6 frames, windows of 4 sharing 2: frames 0-3, then 2-5; pair 2 (frames 2-3) lies in both
+    assert decompose_module.window_ranges(6, 4, 2) == [(0, 4, 0), (2, 6, 2)]
+
+
+def test_flow_ahead_on_a_second_thread_gives_the_same_video(seq, monkeypatch):
+    params = iv.Params(**FAST)
+    frames = synthetic.render_sequence("objects_camera", n_frames=8, size=(40, 48), seed=3).frames
+    monkeypatch.setattr(decompose_module, "FLOW_AHEAD", False)
+    serial = iv.decompose(frames, params=params, threads=2)
+    monkeypatch.setattr(decompose_module, "FLOW_AHEAD", True)
+    ahead = iv.decompose(frames, params=params, threads=2)
+    assert len(ahead.diagnostics["windows"]) == 3
+    assert "flow ahead" in ahead.diagnostics["seconds"] and "flow ahead" not in serial.diagnostics["seconds"]
+    for name in ("albedo", "shading", "flow", "occlusion", "boundary"):
+        np.testing.assert_array_equal(getattr(ahead, name), getattr(serial, name), err_msg=name)
+
+
+def test_an_error_on_the_flow_thread_reaches_the_caller(seq, monkeypatch):
+    real = decompose_module._Decomposer._first_pass_flow
+    seen = []
+
+    def failing(self, frames):
+        seen.append(len(frames))
+        if len(seen) > 1:
+            raise RuntimeError("flow failed on the second window")
+        return real(self, frames)
+
+    monkeypatch.setattr(decompose_module._Decomposer, "_first_pass_flow", failing)
+    monkeypatch.setattr(decompose_module, "FLOW_AHEAD", True)
+    with pytest.raises(RuntimeError, match="second window"):
+        iv.decompose(seq.frames, params=iv.Params(**FAST), threads=2)
