@@ -124,6 +124,35 @@ def test_refining_an_initial_flow_skips_the_quadratic_stage(rng, monkeypatch):
         settings_for("classic_nl_fast", gnc_start=2)
 
 
+def test_weighted_median_after_the_last_warp_only(rng, monkeypatch):
+    from ivkernels.flow.classic_nl import ClassicNL
+
+    def motion(x, y):
+        return np.stack([1.2 * np.sin(2 * np.pi * y / H) + 0.5, 0.8 * np.cos(2 * np.pi * x / W) - 0.3], -1)
+
+    frames, u = pair(rng, motion)
+    # one warp per level: the only warp is the last, nothing changes
+    np.testing.assert_array_equal(estimate_flow(frames, warps=1, wm_last_warp=True), estimate_flow(frames, warps=1))
+    steps, warp_step = [], ClassicNL._warp_step
+
+    def counted(self, lv, flow, quad_frac, weighted_median, *args, **kwargs):
+        steps.append((lv.shape, quad_frac, weighted_median))
+        return warp_step(self, lv, flow, quad_frac, weighted_median, *args, **kwargs)
+
+    monkeypatch.setattr(ClassicNL, "_warp_step", counted)
+    every = estimate_flow(frames)
+    every_steps = list(steps)
+    steps.clear()
+    last = estimate_flow(frames, wm_last_warp=True)
+    warps = PRESETS["classic_nl_fast"].warps
+    assert [s[:2] for s in steps] == [s[:2] for s in every_steps]           # the same warping steps
+    for k in range(0, len(steps), warps):                                    # per level: only the last
+        level_every, level_last = every_steps[k:k + warps], steps[k:k + warps]
+        assert [w for *_, w in level_last] == [False] * (warps - 1) + [level_every[-1][2]]
+    assert sum(w for *_, w in steps) < sum(w for *_, w in every_steps)
+    assert interior_epe(last[0], u) < 0.2 and interior_epe(every[0], u) < 0.2
+
+
 def test_one_thread_equals_two_threads(rng):
     frames, _ = pair(rng, lambda x, y: np.broadcast_to([0.9, 0.4], x.shape + (2,)))
     with threads(1):

@@ -124,7 +124,9 @@ class ClassicNLSettings:
         the image and this one level costs a third of the run; the later
         GNC stages redo the weighted median at full resolution, so the fast
         setting skips it: EPE 0.2424 -> 0.2428 on Middlebury, see
-        ``perf/eval_flow.py``);
+        ``perf/eval_flow.py``); ``wm_last_warp``: take the weighted median
+        after the last warping step of each level only (the 5x5 median after
+        every step);
         ``lab_of_encoded``: compute the Lab image from the sRGB-encoded
         values taken as linear, as the public code's ``RGB2Lab`` does on
         the 8-bit image (it improves the weighted median slightly);
@@ -176,6 +178,7 @@ class ClassicNLSettings:
     limit_update: float = 1.0
     median: bool = True
     quadratic_wm_finest: bool = True
+    wm_last_warp: bool = False
     wm_radius: int = 7
     lab_of_encoded: bool = True
     sigma_x: float = 7.0
@@ -546,8 +549,10 @@ class ClassicNL:
                 lv = levels[depth]
                 weighted_median = (quad_frac < 1.0 or s.quadratic_wm_finest
                                    or lv.shape != (height, width))
-                for _ in range(s.warps):
-                    self._warp_step(lv, flow, quad_frac, weighted_median, depth, workspace)
+                for k in range(s.warps):
+                    last = k == s.warps - 1
+                    self._warp_step(lv, flow, quad_frac, weighted_median and (last or not s.wm_last_warp),
+                                    depth, workspace)
                 return flow
 
             def init(level, shape, carried=flow):
