@@ -255,14 +255,16 @@ class _Decomposer:
         """Whether the flow is re-estimated on the albedo (estimated flow, temporal terms on)."""
         return self.flow is None and self.flow_method is not None and self.flow_passes > 1
 
-    def _joint_flow(self, frames_be, flow_np: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _joint_flow(self, frames_be, flow_np: np.ndarray, shared: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """Passes 2..N of flow and intrinsic video together, for one window.
 
         Each pass re-estimates the window's flow on the albedo of a guide
         solve (:func:`ivkernels.solver.guide.guide_solve`), which obeys
         brightness constancy where the input does not (paper Sec. 5.1, 6);
         Classic+NL starts from the previous pass's flow, with
-        ``Params.flow_refine_warps`` warping steps per level.  Returns the last
+        ``Params.flow_refine_warps`` warping steps per level.  The first
+        ``shared`` pairs are the previous window's last flow (the pairs of the
+        frames both windows hold): kept, not re-estimated.  Returns the last
         flow and the last guide's log shading (at the guide's size).
         """
         classic = self.flow_method.startswith("classic_nl")
@@ -271,9 +273,10 @@ class _Decomposer:
             albedo, guide_shading = guide_solve(self.be, frames_be, flow_np, self.params, self.prior,
                                                 log=self.log)
             t0 = time.perf_counter()
-            extra = {"init": flow_np, "warps": int(self.params.flow_refine_warps)} if classic else {}
-            flow_np = estimate_flow(albedo, method=self.flow_method, backend=self.be.name,
-                                    device=self.be.device, **extra)
+            extra = {"init": flow_np[shared:], "warps": int(self.params.flow_refine_warps)} if classic else {}
+            new = estimate_flow(albedo[shared:], method=self.flow_method, backend=self.be.name,
+                                device=self.be.device, **extra)
+            flow_np = np.concatenate([flow_np[:shared], new]) if shared else new
             self.log.add_time("flow", time.perf_counter() - t0)
         return flow_np, guide_shading
 
@@ -286,6 +289,7 @@ class _Decomposer:
         if self.progress:
             bar = tqdm(total=len(ranges) * n_levels, desc="solve (window x level)", unit="level")
         cached_flow: dict = {}
+        last_flow: dict = {}        # pair -> the previous window's last-pass flow
         carried = None
         ahead = pool = None
         if FLOW_AHEAD and len(ranges) > 1 and self.flow is None and self.flow_method is not None \
@@ -303,7 +307,12 @@ class _Decomposer:
                 frames_be = be.asarray(frames_np)
                 guide_shading = None
                 if flow_np is not None and self.joint:
-                    flow_np, guide_shading = self._joint_flow(frames_be, flow_np)
+                    shared = 0
+                    while shared < len(flow_np) - 1 and start + shared in last_flow:
+                        flow_np[shared] = last_flow[start + shared]
+                        shared += 1
+                    flow_np, guide_shading = self._joint_flow(frames_be, flow_np, shared)
+                    last_flow = {start + k: f for k, f in enumerate(flow_np)}
                 elif self.flow is not None and self.temporal and p.start_from_guide \
                         and flow_np is not None and len(flow_np):
                     # A given flow is final: one guide solve with it, the last solve's start.

@@ -1,5 +1,5 @@
-"""The flow across windows in decompose(): the next window's first-pass flow estimated on a second
-thread changes nothing."""
+"""The flow across windows in decompose(): the last pass's flow of the shared frames is kept by the
+next window, and the next window's first-pass flow estimated on a second thread changes nothing."""
 import numpy as np
 import pytest
 
@@ -19,6 +19,26 @@ def seq():
 def test_window_ranges_share_frames():
     # 6 frames, windows of 4 sharing 2: frames 0-3, then 2-5; pair 2 (frames 2-3) lies in both
     assert decompose_module.window_ranges(6, 4, 2) == [(0, 4, 0), (2, 6, 2)]
+
+
+def test_the_next_window_keeps_the_last_pass_flow_of_the_shared_pairs(seq, monkeypatch):
+    calls = []
+    real = decompose_module.estimate_flow
+
+    def spy(frames, *args, **options):
+        calls.append((len(frames), options.get("init") is not None))
+        return real(frames, *args, **options)
+
+    monkeypatch.setattr(decompose_module, "estimate_flow", spy)
+    monkeypatch.setattr(decompose_module, "FLOW_AHEAD", False)
+    windows = list(iv.iter_decompose(seq.frames, params=iv.Params(**FAST), threads=2))
+    assert [(w.start, w.stop) for w in windows] == [(0, 4), (2, 6)]
+    # pair 2 (frames 2-3) is in both windows: the second keeps the first's last-pass flow, bit for bit
+    np.testing.assert_array_equal(windows[1].flow[0], windows[0].flow[2])
+    # warm-started calls: the first window's 3 pairs (4 frames), then only the second's 2 new pairs
+    assert [n for n, warm in calls if warm] == [4, 3]
+    # the second window's new pairs are still estimated (not copies of anything)
+    assert not np.array_equal(windows[1].flow[1], windows[0].flow[2])
 
 
 def test_flow_ahead_on_a_second_thread_gives_the_same_video(seq, monkeypatch):
