@@ -67,8 +67,9 @@ from ivkernels.kernels.launch import launch_rows, set_threads
 #: (a ``pow`` is tens of cycles: these are lower bounds of the work).
 #: The element count is taken from the argument named in the second field.
 FLOPS_PER_ELEMENT = {
-    # red-black SOR: per pixel of one colour, a 2x2 solve with 4 neighbours' weights
-    ("flow_classic", "sor_sweep"): (0.5 * 30, "du/1"),
+    # red-black SOR, per pixel of one colour (half the pixels per call): 8 neighbour
+    # products and sums (24), the 2x2 determinant and solve (13), the relaxation (8)
+    ("flow_classic", "sor_sweep"): (0.5 * 45, "du/1"),
     ("flow_classic", "assemble_system"): (40, "flow/1"),
     ("flow_classic", "smoothness_weights"): (4 * 8, "flow/1"),
     ("flow_classic", "data_coefficients_channels"): (2 * 3 * 22, "du/1"),
@@ -176,7 +177,8 @@ def _nbytes(a) -> int:
 
 
 def _elements(args, kwargs, names, spec: str) -> int:
-    """Element count of ``spec`` = ``"<argument>/<trailing dims to drop>"``."""
+    """Element count of ``spec`` = ``"<argument>/<trailing dims to drop>"`` (``"du/1"``:
+    the pixels of a (T, H, W, 2) ``du``)."""
     name, _, drop = spec.partition("/")
     value = kwargs.get(name)
     if value is None and name in names:
