@@ -43,3 +43,12 @@ def test_fused_sor_prototype_matches_the_two_half_sweeps_bit_for_bit():
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
     lines = [line for line in proc.stdout.splitlines() if "thread(s)" in line]
     assert len(lines) == 2 and all(line.endswith("bitwise equal after 3 x 3 sweeps: True") for line in lines)
+
+
+@pytest.mark.slow
+def test_eval_flow_windows_prints_its_line():
+    proc = subprocess.run([sys.executable, str(PERF / "eval_flow_windows.py"), "--mode", "noahead", "--frames", "10",
+                           "--size", "32", "40"], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    line = proc.stdout.strip().splitlines()[-1]
+    assert line.startswith("noahead  10x40x32 windows 2 ") and "flow EPE" in line and "flow ahead" not in line
