@@ -68,3 +68,11 @@ def test_an_error_on_the_flow_thread_reaches_the_caller(seq, monkeypatch):
     monkeypatch.setattr(decompose_module, "FLOW_AHEAD", True)
     with pytest.raises(RuntimeError, match="second window"):
         iv.decompose(seq.frames, params=iv.Params(**FAST), threads=2)
+
+
+def test_no_flow_ahead_thread_outside_warp_on_the_cpu(monkeypatch):
+    frames = synthetic.render_sequence("static_moving_light", n_frames=6, size=(40, 48), seed=3).frames
+    monkeypatch.setattr(decompose_module, "FLOW_AHEAD", True)
+    video = iv.decompose(frames, backend="numpy", params=iv.Params(**FAST), threads=2)
+    assert len(video.diagnostics["windows"]) == 2
+    assert "flow ahead" not in video.diagnostics["seconds"]
