@@ -239,7 +239,10 @@ def _wrap_family(rec: Recorder, family: str, module):
 
     proxy = Proxy()
     for name, fn in vars(module).items():
-        if name.startswith("_") or not inspect.isfunction(fn) or fn.__module__ != module.__name__:
+        home = getattr(fn, "__module__", None) or ""
+        # the family's own functions, also when the family is a package of modules
+        if name.startswith("_") or not inspect.isfunction(fn) or \
+                not (home == module.__name__ or home.startswith(module.__name__ + ".")):
             continue
         try:
             names = list(inspect.signature(fn).parameters)
