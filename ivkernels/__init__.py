@@ -14,6 +14,7 @@ from ivkernels._version import __version__
 from ivkernels.decompose import DEFAULT_FLOW_METHOD, IntrinsicVideo, decompose, iter_decompose
 from ivkernels.flow import estimate_flow
 from ivkernels.params import Params
+from ivkernels.parallel import VideoError, decompose_many, iter_decompose_many
 
 
 #: The research harness (renderer, metrics, baselines, datasets) lives in
@@ -28,5 +29,6 @@ def __getattr__(name):
     raise AttributeError(f"module 'ivkernels' has no attribute {name!r}")
 
 
-__all__ = ["decompose", "iter_decompose", "IntrinsicVideo", "Params", "estimate_flow",
+__all__ = ["decompose", "iter_decompose", "decompose_many", "iter_decompose_many", "VideoError",
+           "IntrinsicVideo", "Params", "estimate_flow",
            "DEFAULT_FLOW_METHOD", "__version__"]

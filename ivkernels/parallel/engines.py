@@ -1,0 +1,163 @@
+"""Where the tasks of :func:`ivkernels.decompose_many` run: this process, or a Ray cluster.
+
+Both engines take tasks with :meth:`submit` and hand back finished ones,
+one at a time, with :meth:`next_done` as ``(key, result)`` where ``result``
+is an :class:`ivkernels.IntrinsicVideo` or the exception the task raised.
+
+* :class:`LocalEngine` runs each task in this process when it is asked for
+  the next finished one, in submission order.
+* :class:`RayEngine` runs each task as a Ray task holding one CPU, with the
+  kernels on one thread to match.  Frames go into Ray's object store once
+  (``ray.put``; a worker on the same node reads them without a copy, NumPy
+  arrays being stored out of band) and results come back through it.  A
+  task whose worker dies (killed, out of memory, node lost) is run again,
+  up to ``max_retries`` times; an exception raised by the task itself is
+  not retried (it would fail again).  Before the first task, each node runs
+  :func:`ivkernels.parallel.tasks.warm_up` once.
+
+Ray is an optional dependency (``pip install ivkernels[ray]``), imported
+only here and only when a :class:`RayEngine` is made.
+"""
+from __future__ import annotations
+
+import logging
+from collections import deque
+
+import numpy as np
+
+from ivkernels.decompose import IntrinsicVideo
+from ivkernels.parallel import tasks
+
+
+def _own_copy(video: IntrinsicVideo) -> IntrinsicVideo:
+    """``video`` with writable arrays of its own (a Ray result's arrays are read-only views
+    into the object store, which they would keep pinned while referenced)."""
+    def copy(x):
+        return None if x is None else np.array(x, copy=True)
+
+    return IntrinsicVideo(copy(video.albedo), copy(video.shading), copy(video.flow),
+                          copy(video.occlusion), copy(video.boundary), dict(video.diagnostics))
+
+
+class LocalEngine:
+    """Runs the tasks in this process, one after another, with the caller's options."""
+
+    name = "local"
+
+    def __init__(self, options: dict):
+        self.options = options
+        self._queue: deque = deque()
+
+    def capacity(self) -> int:
+        """Tasks worth having submitted at once (one: each runs when asked for)."""
+        return 1
+
+    def in_flight(self) -> int:
+        return len(self._queue)
+
+    def submit(self, key, frames, flow) -> None:
+        self._queue.append((key, frames, flow))
+
+    def next_done(self):
+        key, frames, flow = self._queue.popleft()
+        try:
+            return key, tasks.solve(frames, flow, self.options)
+        except Exception as err:            # reported per video by the caller
+            return key, err
+
+    def cancel(self) -> None:
+        self._queue.clear()
+
+    def close(self) -> None:
+        self._queue.clear()
+
+
+def _import_ray():
+    try:
+        import ray
+    except ImportError as err:
+        raise ImportError("engine='ray' needs Ray: pip install 'ivkernels[ray]' "
+                          "(or use engine='local')") from err
+    return ray
+
+
+class RayEngine:
+    """Runs the tasks on a Ray cluster (see the module docstring).
+
+    Parameters
+    ----------
+    options : keyword arguments of :func:`ivkernels.decompose` for every
+        task; ``threads`` is set to 1 (one CPU per task).
+    address : a running cluster to join (``"auto"``, ``"ray://host:port"``
+        or ``"host:port"``).  ``None``: the Ray connection this process
+        already has, else the cluster named by the ``RAY_ADDRESS``
+        environment variable, else a local cluster on this machine started
+        for the call and shut down by :meth:`close`.
+    max_retries : times a task whose worker died is run again.
+    warm_up_flow : the flow argument of the tasks, for the per-node warm-up.
+    """
+
+    name = "ray"
+
+    def __init__(self, options: dict, address: str | None = None, max_retries: int = 3,
+                 warm_up_flow=None):
+        ray = self.ray = _import_ray()
+        self.options = dict(options, threads=1)
+        self._started = False
+        if not ray.is_initialized():
+            ray.init(address=address, logging_level=logging.WARNING, include_dashboard=False,
+                     configure_logging=True)
+            self._started = True
+        self._solve = ray.remote(num_cpus=1, max_retries=max_retries, retry_exceptions=False)(tasks.solve_in_worker)
+        self._refs: dict = {}
+        self._options_ref = ray.put(self.options)
+        self.warmed = self._warm_up(warm_up_flow)
+
+    def _warm_up(self, flow) -> list[str]:
+        """Run :func:`tasks.warm_up` once on each alive node with a CPU; returns their host names."""
+        ray = self.ray
+        from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
+
+        warm = ray.remote(num_cpus=1, max_retries=1)(tasks.warm_up)
+        refs = [warm.options(scheduling_strategy=NodeAffinitySchedulingStrategy(node["NodeID"], soft=False))
+                .remote(self._options_ref, flow)
+                for node in ray.nodes() if node.get("Alive") and node.get("Resources", {}).get("CPU", 0) >= 1]
+        return ray.get(refs)
+
+    def capacity(self) -> int:
+        """Tasks kept submitted at once: twice the cluster's CPUs, so every CPU has its next
+        task waiting while the object store holds the frames of a bounded number of tasks."""
+        return max(2, 2 * int(self.ray.cluster_resources().get("CPU", 1)))
+
+    def in_flight(self) -> int:
+        return len(self._refs)
+
+    def submit(self, key, frames, flow) -> None:
+        ray = self.ray
+        frames_ref = ray.put(frames)
+        flow_ref = ray.put(flow) if flow is not None and not isinstance(flow, str) else flow
+        self._refs[self._solve.remote(frames_ref, flow_ref, self._options_ref)] = key
+
+    def next_done(self):
+        ray = self.ray
+        ready, _ = ray.wait(list(self._refs), num_returns=1)
+        ref = ready[0]
+        key = self._refs.pop(ref)
+        try:
+            return key, _own_copy(ray.get(ref))
+        except ray.exceptions.RayTaskError as err:
+            cause = err.cause if isinstance(getattr(err, "cause", None), BaseException) else err
+            return key, cause
+        except ray.exceptions.RayError as err:   # worker died more than max_retries times, ...
+            return key, err
+
+    def cancel(self) -> None:
+        for ref in list(self._refs):
+            self.ray.cancel(ref, force=True)
+        self._refs.clear()
+
+    def close(self) -> None:
+        self.cancel()
+        if self._started:
+            self.ray.shutdown()
+            self._started = False

@@ -1,0 +1,203 @@
+"""decompose_many without Ray: the chunk plan, the stitching (against known gains), the
+checks up front, per-video errors, and the local engine against decompose()."""
+import numpy as np
+import pytest
+
+import ivkernels as iv
+from ivkernels import Params
+from ivkernels.io import write_png_sequence
+from ivkernels.parallel import VideoError, chunk_ranges, iter_decompose_many, stitch
+from ivkernels.parallel.chunks import fit_offsets
+
+SMALL = Params().replace(window=4, overlap=1)
+
+
+def _truth(T=11, H=9, W=13, seed=3):
+    rng = np.random.default_rng(seed)
+    albedo = rng.uniform(0.05, 1.0, (T, H, W, 3)).astype(np.float32)
+    shading = rng.uniform(0.1, 1.0, (T, H, W)).astype(np.float32)
+    flow = rng.normal(0, 1, (T - 1, H, W, 2)).astype(np.float32)
+    return albedo, shading, flow
+
+
+def _chunks_of(albedo, shading, flow, ranges, seed=5):
+    """The truth cut into chunks, each with its own per-channel albedo gain and shading gain."""
+    rng = np.random.default_rng(seed)
+    chunks = []
+    for c, (a, b) in enumerate(ranges):
+        gain = np.ones(3) if c == 0 else rng.uniform(0.5, 2.0, 3)
+        sgain = 1.0 if c == 0 else rng.uniform(0.5, 2.0)
+        chunks.append(iv.IntrinsicVideo((albedo[a:b] * gain).astype(np.float32),
+                                        (shading[a:b] * sgain).astype(np.float32),
+                                        flow[a:b - 1] + 100 * c, np.full((b - a - 1, *flow.shape[1:3]), c, np.float32),
+                                        np.zeros((b - a - 1, *flow.shape[1:3]), np.float32), {"chunk": c}))
+    return chunks
+
+
+@pytest.mark.parametrize("T, n, overlap", [(36, 12, 2), (37, 12, 2), (10, 3, 1), (5, 12, 2), (12, 4, 3)])
+def test_chunk_ranges_cover_the_video_sharing_overlap_frames(T, n, overlap):
+    ranges = chunk_ranges(T, n, overlap)
+    assert len(ranges) == max(1, round(T / n))
+    assert ranges[0][0] == 0 and ranges[-1][1] == T
+    owned = [b - (a + (overlap if i else 0)) for i, (a, b) in enumerate(ranges)]
+    assert sum(owned) == T and max(owned) - min(owned) <= 1
+    for (a0, b0), (a1, b1) in zip(ranges, ranges[1:]):
+        assert b0 - a1 == overlap and a1 > a0 and b1 > b0
+
+
+def test_chunk_ranges_without_chunks_is_the_whole_video():
+    assert chunk_ranges(7, None, 2) == [(0, 7)]
+    assert chunk_ranges(36, 12, 2) == [(0, 12), (10, 24), (22, 36)]
+
+
+def test_fit_offsets_recovers_known_gains_despite_outliers():
+    albedo, shading, _ = _truth(T=3)
+    gain, sgain = np.array([0.5, 1.7, 1.2]), 0.8
+    other_a, other_s = albedo * gain, shading * sgain
+    other_a[:, :2] = 9.0                  # a fifth of the pixels disagree entirely
+    a, s = fit_offsets(albedo, shading, other_a, other_s)
+    np.testing.assert_allclose(np.exp(a), 1 / gain, rtol=1e-5)
+    assert np.exp(s) == pytest.approx(1 / sgain, rel=1e-5)
+
+
+@pytest.mark.parametrize("overlap", [1, 2, 3])
+def test_stitch_puts_every_chunk_on_the_first_chunks_scale(overlap):
+    albedo, shading, flow = _truth()
+    ranges = chunk_ranges(albedo.shape[0], 4, overlap)
+    assert len(ranges) >= 3
+    out = stitch(_chunks_of(albedo, shading, flow, ranges), ranges)
+    np.testing.assert_allclose(out.albedo, albedo, rtol=1e-5)
+    np.testing.assert_allclose(out.shading, shading, rtol=1e-5)
+    assert len(out.diagnostics["seams"]) == len(ranges) - 1
+    assert [d["chunk"] for d in out.diagnostics["chunk_diagnostics"]] == list(range(len(ranges)))
+    # each frame pair's flow and maps come from one chunk: the later one from the middle of the overlap
+    for c, (start, stop) in enumerate(ranges):
+        first = start + (overlap // 2 if c else 0)
+        last = ranges[c + 1][0] + overlap // 2 if c + 1 < len(ranges) else stop - 1
+        np.testing.assert_array_equal(out.flow[first:last], flow[first:last] + 100 * c)
+        assert (out.occlusion[first:last] == c).all()
+
+
+def test_stitch_blends_the_shared_frames_linearly_in_log():
+    H, W = 4, 5
+    ones = np.ones((3, H, W, 3), np.float32)
+    # two chunks of 3 frames sharing 2 that disagree: 1 against e (same median scale after
+    # the fit only on half the pixels, so the blend is what is left)
+    first = iv.IntrinsicVideo(ones.copy(), np.ones((3, H, W), np.float32), None, None, None, {})
+    second_a = ones.copy()
+    second_a[:2, :, :3] = np.e                 # 15 of 20 pixels per frame: the median moves too
+    second = iv.IntrinsicVideo(second_a, np.ones((3, H, W), np.float32), None, None, None, {})
+    out = stitch([first, second], [(0, 3), (1, 4)])
+    a_off = np.array(out.diagnostics["seams"][0]["albedo_log_offset"])
+    np.testing.assert_allclose(a_off, -1.0, atol=1e-6)
+    la = np.log(out.albedo)
+    for j, t in enumerate((1, 2)):             # weights 1/3 and 2/3 for the second chunk
+        w = (j + 1) / 3
+        np.testing.assert_allclose(la[t, :, :3], w * (1 + a_off[0]), atol=1e-5)
+        np.testing.assert_allclose(la[t, :, 3:], w * a_off[0], atol=1e-5)
+    np.testing.assert_allclose(la[3], a_off[0], atol=1e-5)
+    assert out.flow is None
+
+
+def test_stitch_returns_a_single_chunk_unchanged():
+    albedo, shading, flow = _truth(T=4)
+    video = _chunks_of(albedo, shading, flow, [(0, 4)])[0]
+    assert stitch([video], [(0, 4)]) is video
+
+
+def _clip(seed, T=4, size=(24, 32), kind="objects_camera"):
+    return iv.synthetic.render_sequence(kind, T, size=size, seed=seed)
+
+
+def test_local_engine_gives_decompose_results_and_a_chunked_solve_near_the_sequential_one():
+    seqs = [_clip(1), _clip(2, T=3, kind="static_moving_light")]
+    serial = [iv.decompose(s.frames, flow=s.flow, params=SMALL) for s in seqs]
+    many = iv.decompose_many([s.frames for s in seqs], engine="local", flow=[s.flow for s in seqs],
+                             params=SMALL)
+    for a, b in zip(serial, many):
+        np.testing.assert_array_equal(a.albedo, b.albedo)
+        np.testing.assert_array_equal(a.shading, b.shading)
+        np.testing.assert_array_equal(a.flow, b.flow)
+
+
+def test_local_chunked_solve_stays_near_the_sequential_one():
+    seq = _clip(4, T=9, kind="static_moving_light")
+    whole = iv.decompose(seq.frames, flow=seq.flow, params=SMALL)
+    chunked = iv.decompose_many([seq.frames], engine="local", flow=[seq.flow], params=SMALL,
+                                chunk_frames=3)[0]
+    assert chunked.diagnostics["chunks"] == [(0, 3), (2, 6), (5, 9)]
+    assert chunked.albedo.shape == whole.albedo.shape and chunked.flow.shape == whole.flow.shape
+    # the reconstruction holds through the seams, and the albedo is as good as the sequential one
+    np.testing.assert_allclose(chunked.reconstruct(), seq.frames, atol=2e-3)
+    l_whole = iv.metrics.lmse(whole.albedo, seq.albedo)
+    l_chunk = iv.metrics.lmse(chunked.albedo, seq.albedo)
+    assert l_chunk <= 1.25 * l_whole + 0.005, (l_chunk, l_whole)
+
+
+def test_paths_are_read_and_give_the_same_result(tmp_path):
+    frames8 = (np.clip(_clip(6, T=3).frames, 0, 1) ** (1 / 2.2) * 255).round().astype(np.uint8)
+    folder = tmp_path / "clip"
+    write_png_sequence(folder, frames8)
+    via_path = iv.decompose_many([folder], engine="local", flow="dis", params=SMALL)[0]
+    direct = iv.decompose(iv.io.read_frames(folder), flow="dis", params=SMALL)
+    np.testing.assert_array_equal(via_path.albedo, direct.albedo)
+
+
+def test_a_bad_video_raises_before_any_work_naming_it(tmp_path):
+    good = _clip(7, T=2).frames
+    calls = []
+
+    def reader(path):
+        calls.append(path)
+        return iv.io.read_frames(path)
+
+    with pytest.raises(VideoError, match=r"videos\[2\].*at least 8x8"):
+        iter_decompose_many([good, tmp_path, good[:, :5, :5]], engine="local", reader=reader,
+                            probe=lambda p: (2, 24, 32))
+    assert calls == []                      # nothing read, nothing solved
+    with pytest.raises(VideoError, match=r"videos\[1\].*does not exist"):
+        iv.decompose_many([good, tmp_path / "missing.mp4"], engine="local")
+    with pytest.raises(VideoError, match=r"videos\[0\].*\[0, 1\]"):
+        iv.decompose_many([good * 3], engine="local")
+
+
+def test_errors_return_reports_each_failed_video_and_finishes_the_rest(tmp_path):
+    seq = _clip(8, T=3)
+
+    def reader(path):
+        raise OSError(f"cannot decode {path.name}")
+
+    out = iv.decompose_many([seq.frames, np.zeros((2, 4, 4, 3), np.uint8), tmp_path, seq.frames[:2]],
+                            engine="local", errors="return", reader=reader,
+                            probe=lambda p: (3, 24, 32), flow=[seq.flow, None, None, seq.flow[:1]],
+                            params=SMALL)
+    assert isinstance(out[1], VideoError) and "videos[1]" in str(out[1]) and out[1].index == 1
+    assert isinstance(out[2], VideoError) and "cannot decode" in str(out[2])
+    assert isinstance(out[2].cause, OSError)
+    assert isinstance(out[0], iv.IntrinsicVideo) and out[0].albedo.shape == seq.frames.shape
+    assert isinstance(out[3], iv.IntrinsicVideo) and out[3].albedo.shape[0] == 2
+
+
+@pytest.mark.parametrize("kwargs, error, match", [
+    (dict(engine="spark"), ValueError, "engine"),
+    (dict(errors="ignore"), ValueError, "errors"),
+    (dict(chunk_frames=1), ValueError, "chunk_frames"),
+    (dict(chunk_frames=4, chunk_overlap=4), ValueError, "chunk_overlap"),
+    (dict(chunk_overlap=0), ValueError, "chunk_overlap"),
+    (dict(max_retries=-1), ValueError, "max_retries"),
+    (dict(window=3), TypeError, "window"),
+    (dict(backend="opencl"), ValueError, "opencl"),
+    (dict(params={"window": 3}), TypeError, "Params"),
+    (dict(flow=np.zeros((1, 24, 32, 2))), TypeError, "one entry"),
+    (dict(flow=[None, None]), ValueError, "one per video"),
+    (dict(flow="lucas_kanade"), ValueError, "lucas_kanade"),
+])
+def test_bad_arguments_are_refused_in_one_line(kwargs, error, match):
+    with pytest.raises(error, match=match) as info:
+        iv.decompose_many([np.zeros((2, 24, 32, 3), np.uint8)], **dict(dict(engine="local"), **kwargs))
+    assert "\n" not in str(info.value)
+
+
+def test_one_array_instead_of_a_list_is_refused():
+    with pytest.raises(TypeError, match=r"\[video\]"):
+        iv.decompose_many(np.zeros((2, 24, 32, 3), np.uint8), engine="local")
