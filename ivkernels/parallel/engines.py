@@ -21,6 +21,7 @@ only here and only when a :class:`RayEngine` is made.
 from __future__ import annotations
 
 import logging
+import os
 from collections import deque
 
 import numpy as np
@@ -37,6 +38,15 @@ def _own_copy(video: IntrinsicVideo) -> IntrinsicVideo:
 
     return IntrinsicVideo(copy(video.albedo), copy(video.shading), copy(video.flow),
                           copy(video.occlusion), copy(video.boundary), dict(video.diagnostics))
+
+
+#: ``ray.init`` arguments of the local cluster started when none is given: a new one
+#: (``address="local"``; a plain ``ray.init()`` would join a cluster that ``ray start`` left
+#: on this machine), every core of this machine, no dashboard, and the workers at the
+#: priority of the process that starts them (Ray's default lowers them to nice 15, which on a
+#: machine shared with other programs hands those programs the workers' cores).
+LOCAL_CLUSTER = dict(address="local", include_dashboard=False, logging_level=logging.WARNING,
+                     _system_config={"worker_niceness": 0})
 
 
 class LocalEngine:
@@ -72,7 +82,7 @@ class LocalEngine:
         self._queue.clear()
 
 
-def _import_ray():
+def import_ray():
     try:
         import ray
     except ImportError as err:
@@ -101,12 +111,14 @@ class RayEngine:
 
     def __init__(self, options: dict, address: str | None = None, max_retries: int = 3,
                  warm_up_flow=None):
-        ray = self.ray = _import_ray()
+        ray = self.ray = import_ray()
         self.options = dict(options, threads=1)
         self._started = False
         if not ray.is_initialized():
-            ray.init(address=address, logging_level=logging.WARNING, include_dashboard=False,
-                     configure_logging=True)
+            if address is None and not os.environ.get("RAY_ADDRESS"):
+                ray.init(**LOCAL_CLUSTER)
+            else:
+                ray.init(address=address, logging_level=logging.WARNING)
             self._started = True
         self._solve = ray.remote(num_cpus=1, max_retries=max_retries, retry_exceptions=False)(tasks.solve_in_worker)
         self._refs: dict = {}
@@ -114,7 +126,7 @@ class RayEngine:
         self.warmed = self._warm_up(warm_up_flow)
 
     def _warm_up(self, flow) -> list[str]:
-        """Run :func:`tasks.warm_up` once on each alive node with a CPU; returns their host names."""
+        """Run :func:`tasks.warm_up` once on each alive node with a CPU; returns their node ids."""
         ray = self.ray
         from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
 

@@ -24,7 +24,7 @@ from ivkernels import validation as v
 from ivkernels.decompose import IntrinsicVideo, decompose
 from ivkernels.params import Params
 from ivkernels.parallel.chunks import chunk_ranges, stitch
-from ivkernels.parallel.engines import LocalEngine, RayEngine
+from ivkernels.parallel.engines import LocalEngine, RayEngine, import_ray
 
 #: Engines :func:`decompose_many` runs on.
 ENGINES = ("ray", "local")
@@ -77,6 +77,8 @@ def _check_options(kwargs: dict, engine: str, errors: str, chunk_frames, chunk_o
                         f"it passes on {', '.join(DECOMPOSE_OPTIONS)} (and flow)")
     if engine not in ENGINES:
         raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
+    if engine == "ray":
+        import_ray()                   # ImportError with the install line, before any work
     if errors not in ERROR_MODES:
         raise ValueError(f"errors must be one of {ERROR_MODES}, got {errors!r}")
     params = kwargs.get("params") or Params()

@@ -62,7 +62,7 @@ def solve(frames: np.ndarray, flow, options: dict) -> IntrinsicVideo:
     Returns
     -------
     IntrinsicVideo; ``diagnostics["task"]`` adds the process id and the
-    seconds the task took in it.
+    seconds the task took in it (and, on Ray, the node id).
     """
     t0 = time.perf_counter()
     video = decompose(frames, flow=flow, **options)
@@ -73,15 +73,19 @@ def solve(frames: np.ndarray, flow, options: dict) -> IntrinsicVideo:
 def solve_in_worker(frames: np.ndarray, flow, options: dict) -> IntrinsicVideo:
     """:func:`solve` in a worker process of its own, prepared once by :func:`prepare_process`
     (never in the caller's process: it sets the process's thread count)."""
+    import ray
+
     prepare_process(options.get("backend", "warp"), options["threads"])
-    return solve(frames, flow, options)
+    video = solve(frames, flow, options)
+    video.diagnostics["task"]["node"] = ray.get_runtime_context().get_node_id()
+    return video
 
 
 def warm_up(options: dict, flow) -> str:
     """Decompose a tiny clip with ``options`` (and the flow method, or a zero
     flow when arrays are given), so every kernel is compiled on this node;
-    returns the host name."""
-    import socket
+    returns the Ray node id."""
+    import ray
 
     T, H, W = WARM_UP_SHAPE
     y, x = np.mgrid[0:H, 0:W] / max(H, W)
@@ -90,4 +94,4 @@ def warm_up(options: dict, flow) -> str:
     if flow is not None and not isinstance(flow, str):
         flow = np.zeros((T - 1, H, W, 2), np.float32)
     solve_in_worker(frames, flow, options)
-    return socket.gethostname()
+    return ray.get_runtime_context().get_node_id()
