@@ -88,7 +88,8 @@ def _parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     d = sub.add_parser("decompose", help="decompose a video file or a folder of images",
                        formatter_class=_HelpFormatter)
-    d.add_argument("input", help="video file (mp4, avi, ...) or folder of images (png, jpg, tif)")
+    d.add_argument("input", nargs="+", help="video file (mp4, avi, ...) or folder of images (png, jpg, "
+                   "tif); with several inputs, or --engine, each is written to OUT/<input name>/")
     d.add_argument("-o", "--out", required=True,
                    help="output folder (must not exist; --force replaces one ivkernels wrote)")
     d.add_argument("--backend", default="warp", choices=backend_names(),
@@ -120,6 +121,14 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--npz", default="float16", choices=NPZ_CHOICES,
                    help="intrinsics.npz: its float type, or none to write no npz")
     d.add_argument("--quiet", action="store_true", help="no job summary and no progress bar")
+    d.add_argument("--engine", choices=("ray", "local"), default=None,
+                   help="run the inputs (and chunks) as parallel tasks on a Ray cluster, or one after "
+                        "another in this process (default for several inputs: local)")
+    d.add_argument("--address", default=None,
+                   help="Ray cluster to join (with --engine ray; default: RAY_ADDRESS, else a local "
+                        "cluster for this run)")
+    d.add_argument("--chunk-frames", type=int, default=None,
+                   help="solve each input in parallel chunks of about N frames, stitched")
     return parser
 
 
@@ -316,9 +325,11 @@ def _write_outputs(tmp: Path, frames: np.ndarray, windows, args, with_flow: bool
         raise
 
 
-def run_decompose(args) -> Path:
+def run_decompose(args, windows=None) -> Path:
     """``ivkernels decompose``: check everything, claim OUT, then write it
-    through an :class:`ivkernels.io.OutputFolder`."""
+    through an :class:`ivkernels.io.OutputFolder`.  ``windows``: the input's
+    solved windows when they were solved elsewhere (:func:`run_decompose_many`);
+    ``None`` solves them here."""
     params, flow_folder = _check_arguments(args)
     src = Path(args.input)
     target = OutputFolder(args.out, force=args.force, protect={"input": src, "flow folder": flow_folder},
@@ -340,10 +351,11 @@ def run_decompose(args) -> Path:
         if args.backend == "warp":
             start_warp()
         # validates frames, flow, params, backend and device now, before the output is opened
-        windows = iter_decompose(frames, flow=flow, temporal=not args.no_temporal, backend=args.backend,
-                                 device=args.device, params=params, progress=False, threads=args.threads,
-                                 flow_passes=DEFAULT_FLOW_PASSES if args.flow_passes is None
-                                 else args.flow_passes)
+        if windows is None:
+            windows = iter_decompose(frames, flow=flow, temporal=not args.no_temporal, backend=args.backend,
+                                     device=args.device, params=params, progress=False, threads=args.threads,
+                                     flow_passes=DEFAULT_FLOW_PASSES if args.flow_passes is None
+                                     else args.flow_passes)
         with_flow = T > 1 and not (args.no_temporal and flow is None)
         threads = args.threads if args.threads is not None else default_threads()
         if not args.quiet:
@@ -360,6 +372,90 @@ def run_decompose(args) -> Path:
             return target.commit()
     finally:
         target.release()
+
+
+def run_decompose_many(args) -> int:
+    """``ivkernels decompose A B ... -o OUT [--engine ray|local] [--chunk-frames N]``.
+
+    Every input is checked first; the inputs (and their chunks) are then
+    solved as tasks of :func:`ivkernels.iter_decompose_many` and each is
+    written to ``OUT/<input name>/`` (the file name without its suffix, or
+    the folder's name) through its own :class:`ivkernels.io.OutputFolder` as
+    soon as it is done.  An input that fails is reported on one line and the
+    others finish.  Returns 0 when every input was written, 1 when some
+    failed; arguments that concern every input raise as in :func:`run_decompose`.
+    """
+    from ivkernels import iter_decompose_many
+    from ivkernels.decompose import DEFAULT_FLOW_PASSES, WindowResult
+    from ivkernels.io import OutputFolder, probe_frames, read_frames
+
+    sources = [Path(name) for name in args.input]
+    names = [src.stem if src.is_file() else src.resolve().name for src in sources]
+    seen: dict = {}
+    for src, name in zip(sources, names):
+        if name in seen:
+            raise ValueError(f"inputs {seen[name]} and {src} would both be written to "
+                             f"{Path(args.out) / name}; rename one")
+        seen[name] = src
+    failed: dict = {}
+    for src in sources:
+        if not src.exists():
+            failed[src] = f"{src} does not exist; expected a video file or a folder of images"
+    present = [src for src in sources if src not in failed]
+    if present:            # the arguments shared by every input, checked once
+        params, flow_folder = _check_arguments(argparse.Namespace(**dict(vars(args), input=str(present[0]))))
+        if flow_folder is not None:
+            raise ValueError("--flow with a folder of .flo files takes a single input")
+        if args.chunk_frames is not None and args.chunk_frames < 2:
+            raise ValueError(f"--chunk-frames must be at least 2 frames, got {args.chunk_frames}")
+        Path(args.out).mkdir(exist_ok=True)
+    targets, sub_args = {}, {}
+    for src, name in zip(sources, names):
+        if src in failed:
+            continue
+        sub_args[src] = argparse.Namespace(**dict(vars(args), input=str(src), out=str(Path(args.out) / name)))
+        target = OutputFolder(sub_args[src].out, force=args.force, contents=OUTPUT_CONTENTS,
+                              protect={f"input {other}": other for other in sources})
+        try:
+            target.check()             # refused early; claimed again when written
+        except ValueError as err:
+            failed[src] = _one_line(err)
+        finally:
+            target.release()
+    for src, why in failed.items():
+        print(f"ivkernels: error: {src}: {why}", file=sys.stderr)
+    todo = [src for src in sources if src not in failed]
+    if not todo:
+        return 1
+
+    selection = dict(start=args.start, stop=args.stop, step=args.step, scale=args.scale)
+    try:
+        results = iter_decompose_many(
+            todo, engine=args.engine or "local", address=args.address, chunk_frames=args.chunk_frames,
+            errors="return", progress=not args.quiet, reader=lambda p: read_frames(p, **selection),
+            probe=lambda p: probe_frames(p, **selection), flow=args.flow,
+            temporal=not args.no_temporal, backend=args.backend, device=args.device, params=params,
+            threads=args.threads,
+            flow_passes=DEFAULT_FLOW_PASSES if args.flow_passes is None else args.flow_passes)
+    except ImportError as err:
+        raise ValueError(_one_line(err)) from err
+    for index, video in results:
+        src = todo[index]
+        if isinstance(video, BaseException):
+            failed[src] = _one_line(video.cause)
+        else:
+            solved = [WindowResult(0, video.albedo.shape[0], 0, video.albedo, video.shading, video.flow,
+                                   video.occlusion, video.boundary)]
+            try:
+                print(f"wrote {run_decompose(sub_args[src], windows=solved)}")
+            except (ValueError, TypeError, OSError, MemoryError) as err:
+                failed[src] = _one_line(err)
+        if src in failed:
+            print(f"ivkernels: error: {src}: {failed[src]}", file=sys.stderr)
+    if failed:
+        print(f"ivkernels: {len(failed)} of {len(sources)} inputs failed; the others were written",
+              file=sys.stderr)
+    return 1 if failed else 0
 
 
 def _one_line(err: BaseException) -> str:
@@ -381,12 +477,17 @@ def main(argv=None) -> int:
     0 on success; 2 with a one-line message for every foreseeable failure (bad
     arguments or input, an output that must not be replaced or that another
     run is writing, no CUDA device, not enough memory, a file that cannot be
-    read or written, a full disk: the partial output is removed); 130 on SIGINT
+    read or written, a full disk: the partial output is removed); with several
+    inputs (or ``--engine``), 1 when some inputs failed (each reported on its
+    own line) and the others were written; 130 on SIGINT
     and 128 + N on signal N (SIGTERM, SIGHUP), with the partial output removed.
     """
     args = _parser().parse_args(argv)
     try:
         if args.command == "decompose":
+            if len(args.input) > 1 or args.engine or args.address or args.chunk_frames:
+                return run_decompose_many(args)
+            args.input = args.input[0]
             out = run_decompose(args)
             print(f"wrote {out}")
     except Interrupted as err:

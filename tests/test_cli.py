@@ -187,3 +187,61 @@ def test_summary_before_work_and_no_cuda_warning(image_folder, tmp_path):
     # the progress bar counts frames, over the windows
     assert "3/3 [" in err and "frame" in err and "window 2/2" in err, err
     assert err.index("estimated time") < err.index("3/3 [")
+
+
+# -- several inputs: decompose_many, OUT/<input name>/ each ---------------------------------
+
+@pytest.fixture(scope="module")
+def second_folder(tmp_path_factory):
+    seq = synthetic.render_sequence("static_moving_light", n_frames=4, size=(36, 52), seed=2)
+    folder = tmp_path_factory.mktemp("second") / "clip_b"
+    write_png_sequence(folder, seq.frames_srgb8())
+    return folder
+
+
+def test_several_inputs_are_written_each_and_a_missing_one_fails_alone(image_folder, second_folder,
+                                                                        tmp_path, capsys):
+    out = tmp_path / "out"
+    missing = tmp_path / "missing.mp4"
+    rc = cli.main(["decompose", str(image_folder), str(missing), str(second_folder), "-o", str(out),
+                   "--flow", "dis", "--flow-passes", "1", "--window", "3", "--quiet"])
+    err = capsys.readouterr().err
+    assert rc == 1
+    assert f"{missing}: " in err and "does not exist" in err and "1 of 3 inputs failed" in err
+    for folder, n in ((out / image_folder.name, 3), (out / "clip_b", 4)):
+        assert len(list((folder / "albedo").glob("*.png"))) == n
+        assert np.load(folder / "intrinsics.npz")["albedo"].shape == (n, 36, 52, 3)
+    assert not (out / "missing").exists() and not list(out.glob("*.partial"))
+
+
+def test_an_existing_output_fails_its_input_only(image_folder, second_folder, tmp_path, capsys):
+    out = tmp_path / "out"
+    (out / "clip_b").mkdir(parents=True)
+    (out / "clip_b" / "mine.txt").write_text("keep")
+    rc = cli.main(["decompose", str(image_folder), str(second_folder), "-o", str(out), "--engine", "local",
+                   "--flow", "dis", "--flow-passes", "1", "--quiet"])
+    assert rc == 1 and "clip_b" in capsys.readouterr().err
+    assert (out / "clip_b" / "mine.txt").read_text() == "keep"
+    assert (out / image_folder.name / "intrinsics.npz").exists()
+
+
+def test_inputs_with_one_output_name_are_refused_before_any_work(image_folder, tmp_path, capsys):
+    other = tmp_path / "x" / image_folder.name
+    other.mkdir(parents=True)
+    rc = cli.main(["decompose", str(image_folder), str(other), "-o", str(tmp_path / "out")])
+    assert rc == 2 and "rename one" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.slow
+def test_chunks_on_ray_match_chunks_in_this_process(second_folder, tmp_path):
+    runs = {}
+    for engine in ("local", "ray"):
+        out = tmp_path / engine
+        rc = cli.main(["decompose", str(second_folder), "-o", str(out), "--engine", engine,
+                       "--chunk-frames", "2", "--window", "2", "--flow", "dis", "--flow-passes", "1",
+                       "--quiet"])
+        assert rc == 0
+        runs[engine] = np.load(out / "clip_b" / "intrinsics.npz")
+    assert runs["ray"]["albedo"].shape == (4, 36, 52, 3)
+    assert np.abs(runs["ray"]["albedo"] - runs["local"]["albedo"]).max() <= 1e-4
