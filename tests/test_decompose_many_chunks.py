@@ -176,6 +176,9 @@ def test_errors_return_reports_each_failed_video_and_finishes_the_rest(tmp_path)
     assert isinstance(out[2].cause, OSError)
     assert isinstance(out[0], iv.IntrinsicVideo) and out[0].albedo.shape == seq.frames.shape
     assert isinstance(out[3], iv.IntrinsicVideo) and out[3].albedo.shape[0] == 2
+    with pytest.raises(VideoError, match=r"videos\[0\].*cannot decode") as info:    # errors="raise"
+        iv.decompose_many([tmp_path], engine="local", reader=reader, probe=lambda p: (3, 24, 32))
+    assert isinstance(info.value.__cause__, OSError)
 
 
 @pytest.mark.parametrize("kwargs, error, match", [
@@ -201,3 +204,9 @@ def test_bad_arguments_are_refused_in_one_line(kwargs, error, match):
 def test_one_array_instead_of_a_list_is_refused():
     with pytest.raises(TypeError, match=r"\[video\]"):
         iv.decompose_many(np.zeros((2, 24, 32, 3), np.uint8), engine="local")
+
+
+def test_the_ray_engine_without_ray_says_how_to_install_it(monkeypatch):
+    monkeypatch.setitem(__import__("sys").modules, "ray", None)      # import ray fails
+    with pytest.raises(ImportError, match=r"ivkernels\[ray\]"):
+        iv.decompose_many([np.zeros((2, 24, 32, 3), np.uint8)], engine="ray")

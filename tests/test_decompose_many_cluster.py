@@ -9,6 +9,7 @@ from ray.cluster_utils import Cluster
 
 import ivkernels as iv
 from ivkernels import Params
+from ivkernels.parallel import engines
 
 SMALL = Params().replace(window=4, overlap=1)
 
@@ -38,6 +39,7 @@ def test_three_nodes_give_the_serial_results(three_nodes):
                                      chunk_frames=3)[0]
 
     assert not ray.is_initialized()
+    engines._warmed.clear()
     videos = iv.decompose_many([s.frames for s in seqs] + [long.frames], engine="ray",
                                address=three_nodes.address, flow=[s.flow for s in seqs] + [long.flow],
                                params=SMALL)
@@ -46,11 +48,10 @@ def test_three_nodes_give_the_serial_results(three_nodes):
         assert np.abs(a.albedo - b.albedo).max() <= 1e-4
         assert np.abs(a.shading - b.shading).max() <= 1e-4 * max(1.0, float(a.shading.max()))
 
+    warmed = {node for node, _ in engines._warmed}
     ray.init(address=three_nodes.address)
-    from ivkernels.parallel.engines import RayEngine
-
-    engine = RayEngine({"params": SMALL}, warm_up_flow=long.flow)
-    assert len(set(engine.warmed)) == 3     # one warm-up per node
+    assert warmed == {n["NodeID"] for n in ray.nodes() if n["Alive"]}      # every node warmed...
+    assert engines.RayEngine({"params": SMALL}, warm_up_flow=long.flow).warmed == []   # ...once
     chunked = iv.decompose_many([long.frames], engine="ray", flow=[long.flow], params=SMALL,
                                 chunk_frames=3)[0]
     assert np.abs(chunked.albedo - chunked_here.albedo).max() <= 1e-4

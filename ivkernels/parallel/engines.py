@@ -13,7 +13,7 @@ is an :class:`ivkernels.IntrinsicVideo` or the exception the task raised.
   task whose worker dies (killed, out of memory, node lost) is run again,
   up to ``max_retries`` times; an exception raised by the task itself is
   not retried (it would fail again).  Before the first task, each node runs
-  :func:`ivkernels.parallel.tasks.warm_up` once.
+  :func:`ivkernels.parallel.tasks.warm_up` once (once per process and cluster).
 
 Ray is an optional dependency (``pip install ivkernels[ray]``), imported
 only here and only when a :class:`RayEngine` is made.
@@ -47,6 +47,11 @@ def _own_copy(video: IntrinsicVideo) -> IntrinsicVideo:
 #: machine shared with other programs hands those programs the workers' cores).
 LOCAL_CLUSTER = dict(address="local", include_dashboard=False, logging_level=logging.WARNING,
                      _system_config={"worker_niceness": 0})
+
+
+#: ``(node id, kernels)`` pairs warmed by this process: a later call on the same cluster skips
+#: them (the kernels are in the node's on-disk caches; node ids are unique per cluster).
+_warmed: set = set()
 
 
 class LocalEngine:
@@ -120,21 +125,34 @@ class RayEngine:
             else:
                 ray.init(address=address, logging_level=logging.WARNING)
             self._started = True
-        self._solve = ray.remote(num_cpus=1, max_retries=max_retries, retry_exceptions=False)(tasks.solve_in_worker)
         self._refs: dict = {}
-        self._options_ref = ray.put(self.options)
-        self.warmed = self._warm_up(warm_up_flow)
+        try:
+            self._solve = ray.remote(num_cpus=1, max_retries=max_retries,
+                                     retry_exceptions=False)(tasks.solve_in_worker)
+            self._options_ref = ray.put(self.options)
+            self.warmed = self._warm_up(warm_up_flow)
+        except BaseException:
+            self.close()
+            raise
 
     def _warm_up(self, flow) -> list[str]:
-        """Run :func:`tasks.warm_up` once on each alive node with a CPU; returns their node ids."""
+        """Run :func:`tasks.warm_up` once on each alive node with a CPU that this process has
+        not warmed for these kernels yet (:data:`_warmed`); returns the node ids warmed now."""
         ray = self.ray
         from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
 
+        o = self.options
+        kernels = (o.get("backend", "warp"), o.get("device", "cpu"), o.get("temporal", True),
+                   flow if isinstance(flow, str) or flow is None else "given")
+        nodes = [node["NodeID"] for node in ray.nodes()
+                 if node.get("Alive") and node.get("Resources", {}).get("CPU", 0) >= 1
+                 and (node["NodeID"], kernels) not in _warmed]
         warm = ray.remote(num_cpus=1, max_retries=1)(tasks.warm_up)
-        refs = [warm.options(scheduling_strategy=NodeAffinitySchedulingStrategy(node["NodeID"], soft=False))
-                .remote(self._options_ref, flow)
-                for node in ray.nodes() if node.get("Alive") and node.get("Resources", {}).get("CPU", 0) >= 1]
-        return ray.get(refs)
+        refs = [warm.options(scheduling_strategy=NodeAffinitySchedulingStrategy(node, soft=False))
+                .remote(self._options_ref, flow) for node in nodes]
+        done = ray.get(refs)
+        _warmed.update((node, kernels) for node in done)
+        return done
 
     def capacity(self) -> int:
         """Tasks kept submitted at once: twice the cluster's CPUs, so every CPU has its next
