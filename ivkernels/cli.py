@@ -41,12 +41,14 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from ivkernels.backends import backend_names, check_device, start_warp
-from ivkernels.decompose import DEFAULT_FLOW_METHOD, DEFAULT_FLOW_PASSES, iter_decompose, window_ranges
+from ivkernels.decompose import (DEFAULT_FLOW_METHOD, DEFAULT_FLOW_PASSES, WindowResult, iter_decompose,
+                                 window_ranges)
 from ivkernels.flow import FLOW_METHODS
 from ivkernels.flowio import read_flo
 from ivkernels.io import (Interrupted, NpzWriter, OutputFolder, VideoWriter, probe_frames, read_frames,
                           write_png_sequence)
 from ivkernels.kernels.thread_count import check_threads, default_threads
+from ivkernels.parallel import iter_decompose_many
 from ivkernels.params import Params
 from ivkernels.validation import check_memory, decompose_nbytes
 from ivkernels.viz import albedo_to_srgb8, contact_sheet, flow_to_color, gray_to_rgb8, shading_to_srgb8
@@ -385,10 +387,6 @@ def run_decompose_many(args) -> int:
     others finish.  Returns 0 when every input was written, 1 when some
     failed; arguments that concern every input raise as in :func:`run_decompose`.
     """
-    from ivkernels import iter_decompose_many
-    from ivkernels.decompose import DEFAULT_FLOW_PASSES, WindowResult
-    from ivkernels.io import OutputFolder, probe_frames, read_frames
-
     sources = [Path(name) for name in args.input]
     names = [src.stem if src.is_file() else src.resolve().name for src in sources]
     seen: dict = {}

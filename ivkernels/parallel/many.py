@@ -19,9 +19,14 @@ from pathlib import Path
 from typing import Callable, Iterator, Sequence
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from ivkernels import validation as v
+from ivkernels.backends import check_device
 from ivkernels.decompose import IntrinsicVideo, decompose
+from ivkernels.flow import FLOW_METHODS
+from ivkernels.io import probe_frames, read_frames
+from ivkernels.kernels.thread_count import check_threads
 from ivkernels.params import Params
 from ivkernels.parallel.chunks import chunk_ranges, stitch
 from ivkernels.parallel.engines import LocalEngine, RayEngine, import_ray
@@ -87,9 +92,9 @@ def _check_options(kwargs: dict, engine: str, errors: str, chunk_frames, chunk_o
     temporal = kwargs.get("temporal", True)
     if not isinstance(temporal, (bool, np.bool_)):
         raise TypeError(f"temporal must be True or False, got {temporal!r}")
-    v.check_backend_device(kwargs.get("backend", "warp"), kwargs.get("device", "cpu"))
+    check_device(kwargs.get("backend", "warp"), kwargs.get("device", "cpu"))
     if kwargs.get("threads") is not None:
-        v.check_threads(kwargs["threads"])
+        check_threads(kwargs["threads"])
     passes = kwargs.get("flow_passes", 1)
     if isinstance(passes, (bool, np.bool_)) or not isinstance(passes, (int, np.integer)) or passes < 1:
         raise ValueError(f"flow_passes must be an int >= 1, got {passes!r}")
@@ -113,8 +118,6 @@ def _per_video_flows(flow, n_videos: int) -> list:
     """``flow`` as one entry per video: ``None`` or a method name for all, or a list of them."""
     if flow is None or isinstance(flow, str):
         if isinstance(flow, str):
-            from ivkernels.flow import FLOW_METHODS
-
             if flow not in FLOW_METHODS:
                 raise ValueError(f"unknown flow method {flow!r}; expected one of {FLOW_METHODS}")
         return [flow] * n_videos
@@ -177,23 +180,9 @@ def _prepare(index: int, video, flow, params: Params, probe: Callable) -> _Video
         else:
             flow = v.check_flow(flow, T, H, W, name=f"flow[{index}]")
     elif isinstance(flow, str):
-        from ivkernels.flow import FLOW_METHODS
-
         if flow not in FLOW_METHODS:
             raise ValueError(f"unknown flow method {flow!r}; expected one of {FLOW_METHODS}")
     return _Video(index, source, flow, T)
-
-
-def _default_reader(path: Path) -> np.ndarray:
-    from ivkernels.io import read_frames
-
-    return read_frames(path)
-
-
-def _default_probe(path: Path) -> tuple[int, int, int]:
-    from ivkernels.io import probe_frames
-
-    return probe_frames(path)
 
 
 def _load(video: _Video, reader: Callable) -> tuple[np.ndarray, object]:
@@ -239,8 +228,8 @@ def iter_decompose_many(videos: Sequence, *, engine: str = "ray", address: str |
                         "pass [video]")
     videos = list(videos)
     flows = _per_video_flows(flow, len(videos))
-    reader = reader or _default_reader
-    probe = probe or _default_probe
+    reader = reader or read_frames
+    probe = probe or probe_frames
 
     # every input checked before any work: a bad one fails early and alone
     ready: deque = deque()
@@ -261,8 +250,6 @@ def iter_decompose_many(videos: Sequence, *, engine: str = "ray", address: str |
 def _run(failed: list, ready: deque, options: dict, overlap: int, engine_name: str, address,
          chunk_frames, errors: str, max_retries: int, progress: bool, reader: Callable, flows: list):
     """Submit, collect and stitch (see :func:`iter_decompose_many`)."""
-    from tqdm.auto import tqdm
-
     yield from failed
     if not ready:
         return
