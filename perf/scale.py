@@ -1,0 +1,241 @@
+"""Many videos and long videos on Ray: overheads, throughput, and a projection past one machine.
+
+Three parts, each printing its table (``--parts``):
+
+``overheads``
+    On a local Ray cluster of 1 and of 2 CPUs: starting the cluster, the
+    per-node warm-up, the scheduler's per-task cost (a no-op task, one at a
+    time and many at once), the object store's cost per task (``ray.put``
+    of one clip's frames, ``ray.get`` of one result), and the throughput of
+    :func:`ivkernels.decompose_many` on ``--videos`` clips.
+``many``
+    The done criterion of the Ray issue: ``--videos`` clips of ``--frames``
+    frames through ``decompose_many(engine="ray")`` (a local cluster started
+    by the call, all cores) against ``decompose()`` one by one (all cores):
+    time ratio and the largest albedo difference.
+``chunks``
+    A ``--long-frames`` video in ``--chunk-frames`` chunks on Ray against the
+    sequential solve: time ratio, albedo LMSE, albedo drift first to last
+    (``|exp(g_T - g_1) - 1|``, ``g_t`` the median over pixels and channels of
+    ``log(estimate / truth)`` of frame t: how far the global albedo scale
+    wanders), and albedo flicker (:func:`ivkernels.metrics.albedo_flicker`
+    along the true flow) on the frame pairs at the seams and elsewhere.
+
+The projection (printed after ``overheads``) takes the measured per-task
+figures and assumes the rest; see perf/RESULTS.md, "Many videos and long
+videos on Ray".  Clips come from the project's renderer, training seeds
+only (seed 0 is refused).
+
+    python perf/scale.py                                   # all parts, ~8 minutes on 2 cores
+    python perf/scale.py --parts chunks --kinds objects_camera --overlaps 2 4
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import numpy as np
+
+import ivkernels as iv
+from ivkernels.evaluation import metrics, synthetic
+from ivkernels.parallel.chunks import chunk_ranges
+from ivkernels.parallel.engines import LOCAL_CLUSTER, RayEngine
+
+NODES = (1, 10, 100, 1000)
+#: Assumed network bandwidth of one node (and of the driver), bytes/s: 10 Gbit/s Ethernet.
+NODE_BANDWIDTH = 1.25e9
+
+
+def _clips(n: int, frames: int, size: tuple, first_seed: int):
+    kinds = synthetic.KINDS
+    return [synthetic.render_sequence(kinds[i % len(kinds)], frames, size=size, seed=first_seed + i)
+            for i in range(n)]
+
+
+def _nbytes(video: iv.IntrinsicVideo) -> int:
+    return sum(x.nbytes for x in (video.albedo, video.shading, video.flow, video.occlusion,
+                                  video.boundary) if x is not None)
+
+
+def _noop(x):
+    return x.shape
+
+
+def measure_overheads(args) -> dict:
+    import ray
+
+    clips = _clips(args.videos, args.frames, tuple(args.size), args.seed)
+    frames = [c.frames for c in clips]
+    t0, c0 = time.perf_counter(), time.process_time()
+    serial = [iv.decompose(f, threads=1) for f in frames]
+    serial_1 = (time.perf_counter() - t0) / len(clips)
+    cpu_1 = (time.process_time() - c0) / len(clips)
+    out = {"task_seconds": serial_1, "task_cpu": cpu_1, "bytes_in": frames[0].nbytes,
+           "bytes_out": _nbytes(serial[0])}
+    print(f"\none {args.frames}-frame {args.size[1]}x{args.size[0]} clip, decompose(threads=1) in this "
+          f"process: {serial_1:.2f} s, {cpu_1:.2f} CPU-s; in {out['bytes_in'] / 1e6:.2f} MB (linear "
+          f"float32 frames), out {out['bytes_out'] / 1e6:.2f} MB (float32 albedo, shading, flow, maps)")
+    print("\n| CPUs | start s | warm-up s | no-op task, one at a time ms | no-op tasks/s, 200 at once "
+          "| put frames ms | get result ms | videos/s | speed-up | task CPU-s |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    rows = {}
+    for cpus in (1, 2):
+        t0 = time.perf_counter()
+        ray.init(num_cpus=cpus, **LOCAL_CLUSTER)
+        start = time.perf_counter() - t0
+        noop = ray.remote(num_cpus=1)(_noop)
+        small = np.zeros(4)
+        ray.get(noop.remote(small))
+        t0 = time.perf_counter()
+        for _ in range(50):
+            ray.get(noop.remote(small))
+        one = (time.perf_counter() - t0) / 50
+        t0 = time.perf_counter()
+        ray.get([noop.remote(small) for _ in range(200)])
+        many = 200 / (time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        refs = [ray.put(f) for f in frames]
+        put = (time.perf_counter() - t0) / len(frames)
+        ref = ray.put(serial[0])
+        t0 = time.perf_counter()
+        for _ in range(10):
+            got = ray.get(ref)
+            _ = [np.array(x, copy=True) for x in (got.albedo, got.shading, got.flow)]
+        get = (time.perf_counter() - t0) / 10
+        del refs, ref, got
+        t0 = time.perf_counter()
+        RayEngine({}, max_retries=0)
+        warm = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        results = iv.decompose_many(frames, engine="ray")
+        rate = len(frames) / (time.perf_counter() - t0)
+        diff = max(float(np.abs(a.albedo - b.albedo).max()) for a, b in zip(results, serial))
+        ray.shutdown()
+        task_cpu = float(np.mean([r.diagnostics["task"]["cpu_seconds"] for r in results]))
+        rows[cpus] = dict(start=start, warm=warm, one=one, many=many, put=put, get=get, rate=rate,
+                          diff=diff, task_cpu=task_cpu)
+        print(f"| {cpus} | {start:.2f} | {warm:.2f} | {one * 1e3:.2f} | {many:.0f} | {put * 1e3:.2f} | "
+              f"{get * 1e3:.2f} | {rate:.3f} | {rate / rows[1]['rate']:.2f} | {task_cpu:.2f} |")
+    print(f"largest albedo difference from decompose(): {max(r['diff'] for r in rows.values()):.2e}")
+    out.update(rows=rows)
+    project(out)
+    return out
+
+
+def project(m: dict) -> None:
+    """Throughput for 10-1000 nodes from the measured per-task figures (assumptions in RESULTS.md)."""
+    r2 = m["rows"][2]
+    # CPU seconds, not wall seconds: on a shared machine the wall time stretches with the
+    # load, the CPU a task needs much less; a node of the projection runs nothing else
+    task = r2["task_cpu"]                          # one task on a Ray worker, one thread
+    per_task_cpu = task - m["task_cpu"]            # beyond the same solve in this process
+    driver = r2["put"] + r2["get"]                 # driver seconds per task: put frames, get result
+    traffic = m["bytes_in"] + m["bytes_out"]
+    print(f"\nprojection: {task:.2f} CPU-s/task on a worker ({m['task_cpu']:.2f} in this process, "
+          f"{per_task_cpu:+.2f}), driver {driver * 1e3:.1f} ms/task, object-store traffic "
+          f"{traffic / 1e6:.2f} MB/task, scheduler {r2['many']:.0f} tasks/s (one driver), "
+          f"{NODE_BANDWIDTH / 1e9:.2f} GB/s per link (assumed)")
+    print("\n| nodes x cores | compute-bound videos/s | driver-bound videos/s | network-bound videos/s "
+          "| scheduler-bound videos/s | projected videos/s | limited by |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+    for cores in (2, 32):
+        for nodes in NODES:
+            compute = nodes * cores / task
+            bounds = {"compute": compute, "driver": 1 / driver, "network": NODE_BANDWIDTH / traffic,
+                      "scheduler": r2["many"]}
+            limit = min(bounds, key=bounds.get)
+            print(f"| {nodes} x {cores} | {compute:.1f} | {bounds['driver']:.0f} | {bounds['network']:.0f} | "
+                  f"{bounds['scheduler']:.0f} | {bounds[limit]:.1f} | {limit} |")
+
+
+def measure_many(args) -> None:
+    clips = _clips(args.videos, args.frames, tuple(args.size), args.seed)
+    frames = [c.frames for c in clips]
+    t0 = time.perf_counter()
+    serial = [iv.decompose(f) for f in frames]
+    t_serial = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    results = iv.decompose_many(frames, engine="ray")
+    t_ray = time.perf_counter() - t0
+    diff = max(float(np.abs(a.albedo - b.albedo).max()) for a, b in zip(results, serial))
+    print(f"\n{len(frames)} videos of {args.frames} frames {args.size[1]}x{args.size[0]} (seeds "
+          f"{args.seed}..{args.seed + len(frames) - 1}): decompose() one by one {t_serial:.1f} s, "
+          f"decompose_many(engine='ray') {t_ray:.1f} s (cluster start and shutdown included), "
+          f"ratio {t_ray / t_serial:.2f}; largest albedo difference {diff:.2e}")
+
+
+def _drift(albedo, truth) -> float:
+    g = [np.median(np.log(np.maximum(albedo[t], 1e-6)) - np.log(np.maximum(truth[t], 1e-6)))
+         for t in (0, len(albedo) - 1)]
+    return abs(float(np.exp(g[1] - g[0])) - 1)
+
+
+def _pair_flicker(albedo, seq, pairs) -> float:
+    # the albedo of the whole video scaled once (as albedo_flicker does), then pair by pair
+    a = albedo / np.percentile(albedo, 99)
+    return float(np.mean([metrics.albedo_flicker(a[t:t + 2], seq.flow[t:t + 1], seq.visibility[t:t + 1])
+                          for t in pairs]))
+
+
+def measure_chunks(args) -> None:
+    import ray
+
+    print("\n| kind | seed | overlap | sequential s | chunked s | ratio | LMSE seq | LMSE chunked | "
+          "LMSE ratio | drift seq | drift chunked | flicker at seams seq / chunked | flicker elsewhere "
+          "seq / chunked |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for kind in args.kinds:
+        seq = synthetic.render_sequence(kind, args.long_frames, size=tuple(args.size), seed=args.seed)
+        frames = seq.frames
+        t0 = time.perf_counter()
+        ref = iv.decompose(frames)
+        t_seq = time.perf_counter() - t0
+        ray.init(**LOCAL_CLUSTER)
+        iv.decompose_many([frames[:3]], engine="ray")        # cluster up and workers warm, not timed
+        for overlap in args.overlaps:
+            t0 = time.perf_counter()
+            out = iv.decompose_many([frames], engine="ray", chunk_frames=args.chunk_frames,
+                                    chunk_overlap=overlap)[0]
+            t_ch = time.perf_counter() - t0
+            ranges = chunk_ranges(args.long_frames, args.chunk_frames, overlap)
+            seam_pairs = sorted({t for (start, _), (_, prev_stop) in zip(ranges[1:], ranges[:-1])
+                                 for t in range(max(start - 1, 0), min(prev_stop, args.long_frames - 1))})
+            other = [t for t in range(args.long_frames - 1) if t not in seam_pairs]
+            l_seq, l_ch = metrics.lmse(ref.albedo, seq.albedo), metrics.lmse(out.albedo, seq.albedo)
+            print(f"| {kind} | {args.seed} | {overlap} | {t_seq:.1f} | {t_ch:.1f} | {t_ch / t_seq:.2f} | "
+                  f"{l_seq:.4f} | {l_ch:.4f} | {l_ch / l_seq:.3f} | {_drift(ref.albedo, seq.albedo):.4f} | "
+                  f"{_drift(out.albedo, seq.albedo):.4f} | {_pair_flicker(ref.albedo, seq, seam_pairs):.4f} / "
+                  f"{_pair_flicker(out.albedo, seq, seam_pairs):.4f} | "
+                  f"{_pair_flicker(ref.albedo, seq, other):.4f} / {_pair_flicker(out.albedo, seq, other):.4f} |",
+                  flush=True)
+        ray.shutdown()
+
+
+def main(argv=None) -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--parts", nargs="+", default=["overheads", "many", "chunks"],
+                   choices=["overheads", "many", "chunks"])
+    p.add_argument("--videos", type=int, default=4, help="clips in 'overheads' and 'many'")
+    p.add_argument("--frames", type=int, default=8, help="frames per clip")
+    p.add_argument("--size", type=int, nargs=2, default=(120, 160), metavar=("H", "W"))
+    p.add_argument("--seed", type=int, default=1, help="first training seed (not 0)")
+    p.add_argument("--long-frames", type=int, default=36)
+    p.add_argument("--chunk-frames", type=int, default=12)
+    p.add_argument("--overlaps", type=int, nargs="+", default=[2], help="chunk overlaps to measure")
+    p.add_argument("--kinds", nargs="+", default=["static_moving_light"], choices=synthetic.KINDS)
+    args = p.parse_args(argv)
+    if args.seed == 0:
+        p.error("seed 0 is the evaluation seed; measure on training seeds (1 and up)")
+    print(f"nproc {os.cpu_count()}, load average {os.getloadavg()[0]:.2f}, ray "
+          f"{__import__('ray').__version__}")
+    if "overheads" in args.parts:
+        measure_overheads(args)
+    if "many" in args.parts:
+        measure_many(args)
+    if "chunks" in args.parts:
+        measure_chunks(args)
+
+
+if __name__ == "__main__":
+    main()
