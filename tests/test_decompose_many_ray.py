@@ -99,7 +99,7 @@ def _descendants_named(title: str) -> list[int]:
 
 @pytest.mark.slow
 def test_a_worker_killed_mid_task_is_retried_and_the_output_is_complete(cluster):
-    seqs = [_clip(6, T=6, size=(48, 64)), _clip(7, T=6, size=(48, 64), kind="free_camera")]
+    seqs = [_clip(6, T=5, size=(32, 48)), _clip(7, T=5, size=(32, 48), kind="free_camera")]
     serial = [iv.decompose(s.frames, flow=s.flow, params=SMALL) for s in seqs]
     out, killed = {}, []
 
