@@ -407,7 +407,7 @@ def run_decompose_many(args) -> int:
         if args.chunk_frames is not None and args.chunk_frames < 2:
             raise ValueError(f"--chunk-frames must be at least 2 frames, got {args.chunk_frames}")
         Path(args.out).mkdir(exist_ok=True)
-    targets, sub_args = {}, {}
+    sub_args: dict = {}
     for src, name in zip(sources, names):
         if src in failed:
             continue
