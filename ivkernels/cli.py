@@ -126,10 +126,10 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--engine", choices=("ray", "local"), default=None,
                    help="run the inputs (and chunks) as parallel tasks on a Ray cluster, or one after "
                         "another in this process (default for several inputs: local)")
-    d.add_argument("--address", default=None,
+    d.add_argument("--address", default=None, metavar="ADDR",
                    help="Ray cluster to join (with --engine ray; default: RAY_ADDRESS, else a local "
                         "cluster for this run)")
-    d.add_argument("--chunk-frames", type=int, default=None,
+    d.add_argument("--chunk-frames", type=int, default=None, metavar="N",
                    help="solve each input in parallel chunks of about N frames, stitched")
     return parser
 
@@ -411,7 +411,9 @@ def run_decompose_many(args) -> int:
     for src, name in zip(sources, names):
         if src in failed:
             continue
-        sub_args[src] = argparse.Namespace(**dict(vars(args), input=str(src), out=str(Path(args.out) / name)))
+        # each output is written quietly: the progress bar is the one over the tasks
+        sub_args[src] = argparse.Namespace(**dict(vars(args), input=str(src), out=str(Path(args.out) / name),
+                                                  quiet=True))
         target = OutputFolder(sub_args[src].out, force=args.force, contents=OUTPUT_CONTENTS,
                               protect={f"input {other}": other for other in sources})
         try:
