@@ -74,6 +74,13 @@ class Params:
         (Weiss: an albedo edge keeps its contrast while the light moves).
         Needs the flow.  0 (default): off; it loses on objects lit from very
         different directions, where the contrast changes nearly everywhere.
+    shading_step_gain, shading_step_tau, shading_step_chroma
+        Retinex's cue, per frame (:mod:`ivkernels.solver.step_evidence`):
+        Eq. 9's local pair terms weigh ``1 + gain * evidence``, the evidence
+        of a sharp (log-luminance step ``>~ tau``) grey (chromaticity change
+        ``<~ chroma``) step, so a grey albedo edge stays in the albedo where
+        no temporal term decides; coloured steps keep the calibrated
+        balance.  Gain 0: off.
     shading_gate_chroma
         With the gate on and this > 0, a contrast change where the input's
         log chromaticity changes by about this much is not taken for a
@@ -175,6 +182,9 @@ class Params:
     eps_shading: float = 0.001
     shading_cut_threshold: float = 0.5
     shading_gate_tau: float = 0.0
+    shading_step_gain: float = 0.0
+    shading_step_tau: float = 0.1
+    shading_step_chroma: float = 0.05
     shading_gate_chroma: float = 0.0
     lam_shading_nonlocal: float = 10000.0
     lam_coupling: float = 10.0
@@ -269,5 +279,8 @@ _RULES = {
     "shading_cut_threshold": Range(float, 0.0, why="a flow Sobel magnitude in pixels per pixel; "
                                                    "0 switches the cut off"),
     "shading_gate_tau": Range(float, 0.0, why="a log-contrast change; 0 switches the gate off"),
+    "shading_step_gain": Range(float, 0.0, why="a weight factor; 0 switches the step evidence off"),
+    "shading_step_tau": Range(float, 0.0, low_open=True, why="a log step"),
+    "shading_step_chroma": Range(float, 0.0, why="a change of log chromaticity; 0: chromaticity not looked at"),
     "shading_gate_chroma": Range(float, 0.0, why="a log-chromaticity change; 0: the gate ignores colour"),
 }

@@ -40,6 +40,7 @@ from ivkernels.kernels.workspace import Workspace
 from ivkernels.params import Params
 from ivkernels.priors import entropy_blur_weights
 from ivkernels.solver.motion_maps import shading_cut_gate
+from ivkernels.solver.step_evidence import chromatic_share, step_gate
 
 
 class WindowEnergy:
@@ -109,21 +110,29 @@ class WindowEnergy:
         The product of the cut at flow discontinuities
         (``Params.shading_cut_threshold``, :func:`ivkernels.solver.motion_maps.
         shading_cut_gate`) and the input's temporal gate
-        (``Params.shading_gate_tau``, ``maps.shading_gate``), each where it is
-        on; both need the flow, so without temporal terms there is none.
+        (``Params.shading_gate_tau``, ``maps.shading_gate``), both needing the
+        flow, and of the per-frame step evidence (``Params.shading_step_gain``,
+        :func:`ivkernels.solver.step_evidence.step_gate`), each where it is on.
         """
-        if not self.temporal:
-            return None
         be, params, flow = self.be, self.params, self.flow
         T, h, w = self.shape
         gate = None
-        if params.shading_cut_threshold > 0:
+        if self.temporal and params.shading_cut_threshold > 0:
             gate = shading_cut_gate(be, flow, params.shading_cut_threshold, T)
-        if params.shading_gate_tau > 0:
+        if self.temporal and params.shading_gate_tau > 0:
             edge_gate = be.empty((T, h, w))
             be.maps.shading_gate(self.I, flow, edge_gate, params.shading_gate_tau,
                                  tau_chroma=params.shading_gate_chroma)
             gate = edge_gate if gate is None else be.asarray(be.numpy(gate) * be.numpy(edge_gate))
+        if params.shading_step_gain > 0:
+            log_image = be.numpy(self.I)
+            tau_chroma = params.shading_step_chroma if params.shading_step_chroma > 0 else np.inf
+            gain = params.shading_step_gain
+            if np.isfinite(tau_chroma):
+                # trust a grey step as albedo as much as the scene's albedo edges are grey
+                gain *= (1.0 - chromatic_share(log_image, params.shading_step_tau, tau_chroma)) ** 2
+            steps = step_gate(log_image, gain, params.shading_step_tau, tau_chroma)
+            gate = be.asarray(steps) if gate is None else be.asarray(be.numpy(gate) * steps)
         return gate
 
     # ------------------------------------------------------------------ terms

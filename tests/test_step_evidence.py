@@ -1,0 +1,103 @@
+"""Retinex's per-frame cue on Eq. 9's local term (ivkernels.solver.step_evidence)."""
+import numpy as np
+import pytest
+
+import ivkernels as iv
+from ivkernels.solver.step_evidence import DARK_OFFSET, chromatic_share, step_evidence, step_gate
+
+
+def _reference(log_image, tau, tau_chroma):
+    """Pixel by pixel, pair by pair: the docstring's formula."""
+    I = np.log(np.exp(np.asarray(log_image, np.float64)) + DARK_OFFSET)
+    T, h, w, _ = I.shape
+    out = np.zeros((T, h, w))
+    for t in range(T):
+        for y in range(h):
+            for x in range(w):
+                best = 0.0
+                for dy in (-1, 0, 1):
+                    for dx in (-1, 0, 1):
+                        yy, xx = y + dy, x + dx
+                        if (dy, dx) == (0, 0) or not (0 <= yy < h and 0 <= xx < w):
+                            continue
+                        a, b = I[t, y, x], I[t, yy, xx]
+                        dL = abs(a.mean() - b.mean())
+                        dC = np.abs((a - a.mean()) - (b - b.mean())).max()
+                        ev = (1 - np.exp(-(dL / tau) ** 2)) * (np.exp(-(dC / tau_chroma) ** 2)
+                                                               if np.isfinite(tau_chroma) else 1.0)
+                        best = max(best, ev)
+                out[t, y, x] = best
+    return out
+
+
+@pytest.mark.parametrize("shape", [(1, 5, 7), (2, 6, 3), (1, 1, 4)])
+@pytest.mark.parametrize("tau_chroma", [0.05, np.inf])
+def test_matches_the_formula_pair_by_pair(shape, tau_chroma):
+    rng = np.random.default_rng(3)
+    log_image = rng.normal(0, 0.2, shape + (3,)).astype(np.float32)
+    got = step_evidence(log_image, 0.1, tau_chroma)
+    np.testing.assert_allclose(got, _reference(log_image, 0.1, tau_chroma), atol=1e-5)
+
+
+def test_chromatic_share_counts_the_sharp_steps_that_change_colour():
+    grey = np.zeros((1, 4, 6, 3), np.float32)
+    grey[:, :, 3:] = -1.0                                    # one grey step per row
+    assert chromatic_share(grey, 0.1, 0.05) == 0.0
+    coloured = grey.copy()
+    coloured[:, 2:, :] += np.log(np.array([1.0, 0.5, 0.5], np.float32))    # a colour step between rows
+    share = chromatic_share(coloured, 0.1, 0.05)
+    # sharp pairs: 4 horizontal grey steps, 6 vertical colour steps (the grey step's pair counts once)
+    assert share == pytest.approx(6 / 10)
+    assert chromatic_share(np.zeros((1, 3, 3, 3), np.float32), 0.1, 0.05) == 0.0
+
+
+def test_a_sharp_grey_step_counts_a_ramp_and_a_coloured_step_do_not():
+    h, w = 8, 40
+    x = np.arange(w, dtype=np.float32)
+    grey_step = np.where(x < 20, 0.0, -1.0)[None, None, :, None] * np.ones((1, h, 1, 3), np.float32)
+    ramp = (-x / w)[None, None, :, None] * np.ones((1, h, 1, 3), np.float32)      # same change, 40 px
+    colour_step = grey_step * np.array([1.0, 0.2, 0.6], np.float32)             # chromaticity changes
+    assert step_evidence(grey_step, 0.1, 0.05)[0, 4, 19] > 0.99
+    assert step_evidence(ramp, 0.1, 0.05).max() < 0.07                     # 1 - exp(-(0.025 / 0.1)^2)
+    assert step_evidence(colour_step, 0.1, 0.05).max() < 1e-6
+    assert step_evidence(colour_step, 0.1, np.inf)[0, 4, 19] > 0.9         # without the chroma test it counts
+
+
+def test_gate_is_one_plus_gain_times_evidence_and_checks_its_arguments():
+    rng = np.random.default_rng(0)
+    log_image = rng.normal(0, 0.3, (2, 5, 6, 3)).astype(np.float32)
+    np.testing.assert_allclose(step_gate(log_image, 4.0, 0.1, 0.05),
+                               1 + 4.0 * step_evidence(log_image, 0.1, 0.05), rtol=1e-6)
+    assert np.all(step_gate(log_image, 0.0, 0.1) == 1.0)
+    for bad in (dict(gain=-1.0, tau=0.1), dict(gain=1.0, tau=0.0), dict(gain=np.nan, tau=0.1),
+                dict(gain=1.0, tau=0.1, tau_chroma=0.0)):
+        with pytest.raises(ValueError):
+            step_gate(log_image, **bad)
+
+
+def test_params_refuse_bad_step_settings():
+    for field, value in (("shading_step_gain", -1.0), ("shading_step_tau", 0.0), ("shading_step_chroma", -0.1)):
+        with pytest.raises(ValueError):
+            iv.Params(**{field: value})
+
+
+def test_a_grey_checkerboard_stays_in_the_albedo_with_the_cue():
+    """Static grey checkerboard under smooth static light, no flow: without the
+    cue the squares go into the shading; with it the albedo keeps them."""
+    h, w, T = 48, 64, 2
+    yy, xx = np.mgrid[0:h, 0:w]
+    board = np.where(((yy // 8) + (xx // 8)) % 2 == 0, 0.7, 0.25).astype(np.float32)
+    light = (0.4 + 0.6 * (xx / w)).astype(np.float32)
+    frames = np.repeat((board * light)[None, :, :, None], 3, -1).repeat(T, 0)
+    flow = np.zeros((T - 1, h, w, 2), np.float32)
+
+    def board_contrast(params):
+        albedo = iv.decompose(frames, flow=flow, params=params, flow_passes=1).albedo[0, ..., 1]
+        dark, bright = board < 0.5, board > 0.5
+        return float(np.median(albedo[dark]) / np.median(albedo[bright]))
+
+    truth = 0.25 / 0.7
+    with_cue = board_contrast(iv.Params(shading_step_gain=16.0))
+    without = board_contrast(iv.Params(shading_step_gain=0.0))
+    assert abs(with_cue - truth) < abs(without - truth)
+    assert with_cue < 0.6
