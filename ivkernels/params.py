@@ -185,6 +185,7 @@ class Params:
     shading_step_gain: float = 0.0
     shading_step_tau: float = 0.1
     shading_step_chroma: float = 0.05
+    shading_step_stability: float = 0.0
     shading_gate_chroma: float = 0.0
     lam_shading_nonlocal: float = 10000.0
     lam_coupling: float = 10.0
@@ -281,6 +282,7 @@ _RULES = {
     "shading_gate_tau": Range(float, 0.0, why="a log-contrast change; 0 switches the gate off"),
     "shading_step_gain": Range(float, 0.0, why="a weight factor; 0 switches the step evidence off"),
     "shading_step_tau": Range(float, 0.0, low_open=True, why="a log step"),
+    "shading_step_stability": Range(float, 0.0, why="a change of log contrast; 0: not looked at"),
     "shading_step_chroma": Range(float, 0.0, why="a change of log chromaticity; 0: chromaticity not looked at"),
     "shading_gate_chroma": Range(float, 0.0, why="a log-chromaticity change; 0: the gate ignores colour"),
 }

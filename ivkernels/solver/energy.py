@@ -43,6 +43,10 @@ from ivkernels.solver.motion_maps import shading_cut_gate
 from ivkernels.solver.step_evidence import chromatic_share, step_gate
 
 
+#: Flow (pixels) below which a pixel counts as holding still for Weiss's cue.
+STATIC_FLOW = 0.25
+
+
 class WindowEnergy:
     """Eq. 2 for a window of ``T`` frames of size ``h x w``.
 
@@ -132,8 +136,31 @@ class WindowEnergy:
                 # trust a grey step as albedo as much as the scene's albedo edges are grey
                 gain *= (1.0 - chromatic_share(log_image, params.shading_step_tau, tau_chroma)) ** 2
             steps = step_gate(log_image, gain, params.shading_step_tau, tau_chroma)
+            if self.temporal and params.shading_step_stability > 0:
+                steps = 1.0 + (steps - 1.0) * self._step_stability(params.shading_step_stability)
             gate = be.asarray(steps) if gate is None else be.asarray(be.numpy(gate) * steps)
         return gate
+
+    def _step_stability(self, tau: float) -> np.ndarray:
+        """Weiss's cue on the step evidence, (T, h, w) in (0, 1]: a step whose
+        contrast changes from frame to frame is light, not albedo.
+
+        ``maps.shading_gate`` (``exp(-(e / tau)^2)``, ``e`` the change of the
+        log contrast to a neighbour from one frame to the next), read only
+        where the scene holds still (flow under :data:`STATIC_FLOW` pixels in
+        the frame's pairs): where it moves, a bilinear warp of a sharp step
+        changes its contrast by itself, and the cue would mistake every moving
+        albedo edge for light.  1 elsewhere.
+        """
+        be, flow = self.be, self.flow
+        T, h, w = self.shape
+        stable = be.empty((T, h, w))
+        be.maps.shading_gate(self.I, flow, stable, tau)
+        speed = np.sqrt((be.numpy(flow) ** 2).sum(axis=-1))            # (T-1, h, w)
+        moving = np.zeros((T, h, w), bool)
+        moving[:-1] |= speed >= STATIC_FLOW
+        moving[1:] |= speed >= STATIC_FLOW
+        return np.where(moving, 1.0, be.numpy(stable)).astype(np.float32)
 
     # ------------------------------------------------------------------ terms
     def _add_terms(self, rows, terms=None) -> None:
