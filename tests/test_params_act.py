@@ -42,6 +42,11 @@ MOVES = {
     "shading_cut_threshold": (0.05, {}, "truth"),
     "shading_gate_tau": (0.2, {}, "truth"),
     "shading_gate_chroma": (0.05, {"shading_gate_tau": 0.2}, "truth"),
+    "shading_step_gain": (0.0, {}, "truth"),
+    "shading_step_tau": (0.02, {}, "truth"),
+    "shading_step_chroma": (0.0, {}, "truth"),
+    # Weiss's cue is read where the scene holds still: a static scene under a moving light
+    "shading_step_stability": (0.0, {}, "truth:static_moving_light"),
     "lam_shading_nonlocal": (10.0, {}, "truth"),
     "lam_coupling": (1000.0, {}, "truth"),
     "sigma_s": (1.0, {}, "truth"),
