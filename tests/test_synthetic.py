@@ -4,7 +4,9 @@ import numpy as np
 import pytest
 
 import ivkernels.evaluation.synthetic as syn
-from ivkernels.evaluation.synthetic import AMBIENT, KINDS, TEXTURE_KINDS, SyntheticSequence, _build_scene, render_sequence
+from ivkernels.evaluation.synthetic import (AMBIENT, HARD_AMBIENT, KINDS, MOTION_KINDS, NEAR_GREY_TINT, SCENE_KINDS,
+                                            TEXTURE_KINDS, SyntheticSequence, _build_scene, degrade_frames,
+                                            render_kind, render_sequence, scene_kinds)
 
 SIZE = (72, 96)
 N_FRAMES = 4
@@ -12,7 +14,7 @@ N_FRAMES = 4
 
 @pytest.fixture(scope="module")
 def sequences():
-    return {kind: render_sequence(kind, n_frames=N_FRAMES, size=SIZE, seed=1) for kind in KINDS}
+    return {kind: render_sequence(kind, n_frames=N_FRAMES, size=SIZE, seed=1) for kind in MOTION_KINDS}
 
 
 def bilinear(img, x, y):
@@ -68,7 +70,7 @@ def test_frames_are_albedo_times_shading(sequences):
         np.testing.assert_array_equal(s.frames, s.albedo * s.shading[..., None])
 
 
-@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("kind", MOTION_KINDS)
 def test_every_texture_kind_is_used(kind):
     scene = _build_scene(kind, 2, np.random.default_rng(4))
     assert {obj.texture.kind for obj in scene.objects} == set(TEXTURE_KINDS)
@@ -81,7 +83,7 @@ def test_albedo_has_flat_regions_and_edges(sequences):
     assert (var < 0.01).mean() > 0.1 and (var > 0.1).mean() > 0.02
 
 
-@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("kind", MOTION_KINDS)
 def test_albedo_is_constant_along_true_flow(sequences, kind):
     """Warp albedo t+1 back by the flow: equals albedo t where visible and
     where the albedo is locally smooth (bilinear interpolation across a texture
@@ -105,7 +107,7 @@ def test_albedo_is_constant_along_true_flow(sequences, kind):
     assert np.percentile(err, 95) < 5e-3
 
 
-@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("kind", MOTION_KINDS)
 def test_visible_points_land_on_the_same_surface(sequences, kind):
     s = sequences[kind]
     H, W = SIZE
@@ -354,3 +356,195 @@ def test_curved_objects_fill_much_of_the_frame(sequences):
         curved = np.array([obj.shape in ("sphere", "cylinder") for obj in scene.objects])
         covered.append(curved[s.object_id].mean())
     assert np.mean(covered) > 0.1
+
+
+# --------------------------------------------------------------------------- #
+# what people film: palettes, hard light, coloured light, noise, new motions
+# --------------------------------------------------------------------------- #
+STYLE_SIZE = (45, 61)      # odd sizes
+
+
+@pytest.fixture(scope="module")
+def styled():
+    """One scene (static_moving_light, seed 3) in every palette and light."""
+    return {(p, lt): render_sequence("static_moving_light", n_frames=3, size=STYLE_SIZE, seed=3, palette=p, light=lt)
+            for p in ("colour", "grey", "mixed") for lt in ("soft", "hard")}
+
+
+def test_the_defaults_are_the_colour_soft_scene_and_the_classic_catalogue_entries():
+    for kind in KINDS:
+        a = render_sequence(kind, n_frames=2, size=(20, 28), seed=4)
+        b = render_sequence(kind, n_frames=2, size=(20, 28), seed=4, palette="colour", light="soft")
+        c = render_kind(kind, n_frames=2, size=(20, 28), seed=4)
+        for f in ("frames", "albedo", "shading", "flow", "visibility", "depth", "object_id"):
+            np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
+            np.testing.assert_array_equal(getattr(a, f), getattr(c, f))
+        assert c.options["name"] == kind and a.options["palette"] == "colour"
+
+
+def test_palette_and_light_keep_the_geometry_and_motion(styled):
+    ref = styled[("colour", "soft")]
+    for s in styled.values():
+        np.testing.assert_array_equal(s.depth, ref.depth)
+        np.testing.assert_array_equal(s.object_id, ref.object_id)
+        np.testing.assert_array_equal(s.flow, ref.flow)
+        np.testing.assert_array_equal(s.frames, s.albedo * s.shading[..., None])
+
+
+def _channel_ratio(albedo):
+    return albedo.max(axis=-1) / albedo.min(axis=-1)
+
+
+def test_grey_palette_is_achromatic_or_near_achromatic(styled):
+    for light in ("soft", "hard"):
+        a = styled[("grey", light)].albedo
+        ratio = _channel_ratio(a)
+        assert ratio.max() <= (1 + NEAR_GREY_TINT) / (1 - NEAR_GREY_TINT) + 1e-5
+        assert (ratio == 1.0).mean() > 0.3                  # most surfaces exactly grey
+        assert np.percentile(a.mean(axis=-1), 5) < 0.1      # dark materials and ink
+        assert _channel_ratio(styled[("colour", light)].albedo).max() > 1.5
+
+
+def test_mixed_palette_has_a_grey_checkerboard_floor_among_colours(styled):
+    s = styled[("mixed", "soft")]
+    floor = s.object_id == 0
+    ratio = _channel_ratio(s.albedo)
+    assert ratio[floor].max() <= (1 + NEAR_GREY_TINT) / (1 - NEAR_GREY_TINT) + 1e-5
+    levels = np.unique(np.round(s.albedo[floor][:, 0], 6))
+    assert len(levels) == 2 and levels[1] / levels[0] > 2.0      # two greys, a clear step
+    assert ratio[~floor].max() > 1.5                              # coloured walls and objects
+
+
+def test_hard_light_casts_shadows_with_no_direct_light(styled):
+    s = styled[("grey", "hard")]
+    assert s.shading.min() == np.float32(HARD_AMBIENT)
+    # The floor faces the bulb above it everywhere, so where its shading is the ambient
+    # term alone, a shadow ray was blocked: a cast shadow with zero direct light.
+    floor = s.object_id == 0
+    shadow = floor & (s.shading == np.float32(HARD_AMBIENT))
+    assert shadow.mean() > 0.005
+    lit = floor & ~shadow
+    assert np.median(s.shading[lit]) > 3 * HARD_AMBIENT
+    assert styled[("grey", "soft")].shading.min() >= np.float32(AMBIENT)
+
+
+def test_point_light_shadow_of_a_sphere_is_hard():
+    """A bulb, a sphere and a floor: a floor point is dark exactly when the segment to
+    the bulb passes within the radius of the sphere's centre (no penumbra)."""
+    T = 1
+    eye = np.broadcast_to(np.eye(3), (T, 3, 3))
+    sphere = syn._Object("sphere", [0.5], None, eye, np.broadcast_to([0.0, 1.0, 0.0], (T, 3)))
+    floor = syn._Object("plane", (), None, eye, np.zeros((T, 3)), casts_shadow=False)
+    bulb_at = np.array([0.3, 3.0, -0.2])
+    bulb = syn._AreaLight(np.broadcast_to(bulb_at, (T, 3)), np.broadcast_to([0.0, -1.0, 0.0], (T, 3)), 0.0,
+                          np.zeros((1, 2)), isotropic=True)
+    scene = syn._Scene([floor, sphere], [bulb], np.broadcast_to(np.eye(3), (T, 3, 3)), np.zeros((T, 3)))
+    rng = np.random.default_rng(0)
+    p = np.stack([rng.uniform(-2, 2, 4000), np.zeros(4000), rng.uniform(-2, 2, 4000)], axis=1)
+    n = np.broadcast_to([0.0, 1.0, 0.0], p.shape).copy()
+    e = syn._irradiance(scene, bulb, 0, p, n, np.zeros(len(p), np.int32))
+    v = bulb_at - p
+    s = np.clip(((sphere.translations[0] - p) * v).sum(axis=1) / (v * v).sum(axis=1), 0, 1)
+    dist = np.linalg.norm(p + s[:, None] * v - sphere.translations[0], axis=1)
+    d2 = (v * v).sum(axis=1)
+    expected = np.where(dist < 0.5, 0.0, v[:, 1] / np.sqrt(d2) / d2)     # cos / d^2, power 1
+    clear = np.abs(dist - 0.5) > 1e-6
+    np.testing.assert_allclose(e[clear], expected[clear], rtol=1e-5, atol=1e-9)
+    assert (dist < 0.5).sum() > 50
+
+
+def test_light_colour_is_folded_into_the_albedo():
+    white = render_sequence("rotating_shadows", n_frames=2, size=(24, 33), seed=5)
+    warm = render_sequence("rotating_shadows", n_frames=2, size=(24, 33), seed=5, light_colour=(1.0, 0.8, 0.5))
+    np.testing.assert_array_equal(warm.shading, white.shading)
+    np.testing.assert_allclose(warm.albedo, white.albedo * np.float32([1.0, 0.8, 0.5]), rtol=1e-6)
+    np.testing.assert_array_equal(warm.frames, warm.albedo * warm.shading[..., None])
+    tinted = render_sequence("rotating_shadows", n_frames=2, size=(24, 33), seed=5, light_colour="random")
+    c = np.array(tinted.options["light_colour"])
+    assert c.max() == 1.0 and 0.5 <= c.min() < 0.9
+    np.testing.assert_allclose(tinted.albedo, white.albedo * c.astype(np.float32), rtol=1e-6)
+
+
+@pytest.mark.parametrize("std", [0.005, 0.02])
+def test_gaussian_noise_has_the_requested_std(std):
+    frames = np.full((3, 41, 57, 3), 0.4, np.float32)
+    noisy = degrade_frames(frames, noise=("gaussian", std), seed=7)
+    d = (noisy - frames).astype(np.float64)
+    assert abs(d.std() / std - 1) < 0.03 and abs(d.mean()) < 3 * std / np.sqrt(d.size)
+    np.testing.assert_array_equal(noisy, degrade_frames(frames, noise=("gaussian", std), seed=7))
+    assert not np.array_equal(noisy, degrade_frames(frames, noise=("gaussian", std), seed=8))
+
+
+def test_poisson_noise_std_follows_the_signal():
+    frames = np.concatenate([np.full((2, 30, 40, 3), 0.1), np.full((2, 30, 40, 3), 0.6)], axis=1)
+    noisy = degrade_frames(frames, noise=("poisson", 500.0), seed=1)
+    for rows, v in ((slice(0, 30), 0.1), (slice(30, 60), 0.6)):
+        d = noisy[:, rows] - v
+        assert abs(d.mean()) < 0.002
+        assert abs(d.std() / np.sqrt(v / 500.0) - 1) < 0.05
+
+
+def test_jpeg_compression_changes_frames_a_little_and_truth_not_at_all():
+    clean = render_sequence("objects_camera", n_frames=2, size=(40, 56), seed=2, palette="grey")
+    jpeg = render_sequence("objects_camera", n_frames=2, size=(40, 56), seed=2, palette="grey",
+                           compression=("jpeg", 60))
+    np.testing.assert_array_equal(jpeg.albedo, clean.albedo)
+    np.testing.assert_array_equal(jpeg.shading, clean.shading)
+    codes = syn.srgb_encode(jpeg.frames.astype(np.float64)) * 255.0
+    assert np.abs(codes - np.round(codes)).max() < 1e-3                  # decoded 8-bit values
+    err = np.abs(syn.srgb_encode(jpeg.frames.astype(np.float64)) - syn.srgb_encode(clean.frames.astype(np.float64)))
+    assert 0.002 < err.mean() < 0.05
+    noisy = render_sequence("objects_camera", n_frames=2, size=(40, 56), seed=2, palette="grey",
+                            noise=("gaussian", 0.01))
+    assert abs((noisy.frames - clean.frames).std() - 0.01) < 0.002
+
+
+def test_new_motion_kinds_move_as_described(sequences):
+    fast = sequences["fast_light"]
+    assert np.all(fast.flow == 0.0) and np.all(fast.visibility == 1.0)
+    step = [np.abs(fast.shading[t + 1] - fast.shading[t]).mean() for t in range(N_FRAMES - 1)]
+    slow = sequences["static_moving_light"]
+    assert np.mean(step) > np.mean([np.abs(np.diff(slow.shading, axis=0)).mean()])
+    turning = sequences["turning_objects"]
+    mag = np.linalg.norm(turning.flow, axis=-1)
+    assert np.all(mag[turning.object_id[:-1] <= 1] == 0.0) and mag.max() > 0.5     # static camera
+    orbit = sequences["two_lights_orbit"]
+    assert np.median(np.linalg.norm(orbit.flow, axis=-1)) > 0.5
+    scene = _build_scene("two_lights_orbit", N_FRAMES, np.random.default_rng(1))
+    assert len([lt for lt in scene.lights if lt.role == "key"]) == 2
+    assert all(np.ptp(lt.centres, axis=0).max() == 0.0 for lt in scene.lights)      # static lamps
+    cam = _build_scene("camera_light", N_FRAMES, np.random.default_rng(1))
+    offset = cam.lights[0].centres - cam.cam_pos
+    in_camera = np.einsum("tk,tjk->tj", offset, cam.cam_rot)                         # world -> camera
+    np.testing.assert_allclose(in_camera, np.broadcast_to([0.25, -0.3, 0.0], in_camera.shape), atol=1e-12)
+
+
+def test_catalogue_entries_render_and_suites_partition():
+    assert set(scene_kinds("classic")) == set(KINDS)
+    assert set(scene_kinds("classic")) | set(scene_kinds("new")) == set(SCENE_KINDS)
+    assert not set(scene_kinds("classic")) & set(scene_kinds("new"))
+    assert {SCENE_KINDS[n].motion for n in SCENE_KINDS} == set(MOTION_KINDS)
+    assert all(SCENE_KINDS[n].static_scene for n in scene_kinds("static"))
+    for name in scene_kinds("new"):
+        s = render_kind(name, n_frames=2, size=(16, 20), seed=1)
+        k = SCENE_KINDS[name]
+        assert s.kind == k.motion and s.options["name"] == name and s.options["light"] == k.light
+        assert 0.0 <= s.frames.min() and s.frames.max() <= 1.0 and s.shading.max() <= 1.0
+    with pytest.raises(ValueError, match="unknown scene kind"):
+        render_kind("grey_flying_cars")
+    with pytest.raises(ValueError, match="unknown suite"):
+        scene_kinds("everything")
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(palette="sepia"), "unknown palette"),
+    (dict(light="neon"), "unknown light"),
+    (dict(light_colour=(1.0, 0.0, 0.5)), "light_colour"),
+    (dict(noise=("salt", 0.1)), "noise must be"),
+    (dict(noise=("gaussian", -0.1)), "std"),
+    (dict(compression=("png", 5)), "compression must be"),
+    (dict(compression=("jpeg", 101)), "jpeg quality"),
+])
+def test_bad_options_raise(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        render_sequence("static_moving_light", n_frames=2, size=(16, 16), **kwargs)

@@ -86,22 +86,59 @@ Sequence kinds (:data:`KINDS`)
     precess, spheres spin, and a bar floating above the scene turns under a
     small, high key lamp, so soft cast shadows sweep over textured floor, wall
     and objects.
+``turning_objects``
+    Static camera; the objects turn in place (8-15 degrees a frame) under a
+    low, static key lamp on the camera side, so long shadows turn with them.
+``camera_light``
+    The camera path of ``free_camera`` with a small lamp mounted on the
+    camera (0.25 right of and 0.3 above the lens, facing the view), so the
+    shading changes with the viewpoint; static objects and fill.
+``fast_light``
+    Static scene and camera; the key lamp orbits 70-100 degrees a frame,
+    rising and falling.
+``two_lights_orbit``
+    Static objects and two static key lamps on opposite sides; the camera
+    orbits the objects' centre at 3-5 degrees a frame, looking at it.
+
+Options (:func:`render_sequence`), orthogonal to the motion: the palette
+(``colour``, ``grey``: achromatic and near-achromatic checkerboards, stripes,
+print and dark materials, ``mixed``: a grey checkerboard floor among coloured
+surfaces), the light (``soft`` lamps or ``hard`` point bulbs with little
+ambient light), one light colour (folded into the albedo truth), and sensor
+noise and JPEG compression of the frames (truth unchanged).  The named
+evaluation kinds are :data:`SCENE_KINDS` (:func:`render_kind`); seed 0 of
+every kind is kept for reporting.
 
 Nothing here is used by the solver; it produces test and evaluation data.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 
-from ivkernels.colour import srgb_encode
+from ivkernels.colour import srgb_encode, srgb_to_linear
 
-__all__ = ["KINDS", "SyntheticSequence", "render_sequence"]
+__all__ = ["KINDS", "MOTION_KINDS", "PALETTES", "LIGHTS", "SCENE_KINDS", "SceneKind", "SyntheticSequence",
+           "degrade_frames", "render_kind", "render_sequence", "scene_kinds"]
 
+#: The project's first four motion kinds (the defaults of the perf scripts).
 KINDS = ("free_camera", "objects_camera", "static_moving_light", "rotating_shadows")
+#: Every motion kind :func:`render_sequence` draws: :data:`KINDS` and four more.
+MOTION_KINDS = KINDS + ("turning_objects", "camera_light", "fast_light", "two_lights_orbit")
+#: Motion kinds whose scene and camera stand still while the light moves (Weiss's setting).
+STATIC_SCENE_MOTIONS = ("static_moving_light", "fast_light")
+PALETTES = ("colour", "grey", "mixed")
+LIGHTS = ("soft", "hard")
+NOISE_KINDS = ("gaussian", "poisson")
+COMPRESSIONS = ("jpeg",)
 
 TEXTURE_KINDS = ("patches", "stripes", "noise", "uniform")
+GREY_TEXTURE_KINDS = ("checker", "glyphs")   # drawn only by the grey and mixed palettes
+HARD_AMBIENT = 0.01     # ambient term under a hard light (bounce light only)
+HARD_MARGIN = 0.15      # exposure headroom of a bulb (its peak is sharper than a lamp's, see _set_exposure)
+NEAR_GREY_TINT = 0.04   # largest relative channel deviation of a near-achromatic grey
 
 ALBEDO_MIN = 0.03
 AMBIENT = 0.03
@@ -138,9 +175,15 @@ class SyntheticSequence:
     object_id : (T, H, W) int32
         Index of the visible surface: 0 floor, 1 back wall, 2.. objects.
     kind : str
-        One of :data:`KINDS`.
+        The motion kind, one of :data:`MOTION_KINDS`.
     seed : int
         Seed of the scene and its motion.
+    options : dict
+        The rendering options (``palette``, ``light``, ``light_colour`` as
+        the (3,) colour applied or None, ``noise``, ``compression``) and, from
+        :func:`render_kind`, the catalogue ``name``.  With ``noise`` or
+        ``compression`` the frames are degraded copies of
+        ``albedo * shading`` (the truth is unchanged).
     """
 
     frames: np.ndarray
@@ -152,6 +195,7 @@ class SyntheticSequence:
     object_id: np.ndarray
     kind: str
     seed: int
+    options: dict = field(default_factory=dict)
 
     def frames_srgb8(self) -> np.ndarray:
         """Frames encoded with the sRGB transfer function, (T, H, W, 3) uint8."""
@@ -194,8 +238,12 @@ def _unit(v) -> np.ndarray:
 class _Texture:
     """A solid texture evaluated at 3-D points in object coordinates."""
 
-    def __init__(self, kind: str, rng, scale: float = 1.0):
+    def __init__(self, kind: str, rng, scale: float = 1.0, grey: bool = False, planar: bool = False):
         self.kind = kind
+        self.planar = planar
+        if grey or planar or kind in GREY_TEXTURE_KINDS:
+            self._init_grey(kind, rng, scale, grey, planar)
+            return
         self.rot = _random_rotation(rng) / scale  # feature sizes grow with ``scale``
         if kind == "patches":
             self.cell = rng.uniform(0.25, 0.55)
@@ -225,9 +273,86 @@ class _Texture:
         else:  # pragma: no cover - internal
             raise ValueError(kind)
 
+    def _init_grey(self, kind: str, rng, scale: float, grey: bool, planar: bool) -> None:
+        """The achromatic textures (``grey``) and the planar ones, drawn from
+        ``rng`` (the renderer's second stream, so the colour scenes are
+        untouched).  A grey texture's colours are :func:`_grey_levels`
+        (equal channels), times a tint of at most ``NEAR_GREY_TINT`` for a
+        third of them (near-achromatic: paper, concrete, fabric)."""
+        if planar:   # a turn about the plane's normal (local y) keeps the pattern in the plane
+            self.rot = _axis_angle([0, 1, 0], rng.uniform(0, 2 * np.pi)) / scale
+        else:
+            self.rot = _random_rotation(rng) / scale
+        tint = np.ones(3)
+        if grey and rng.uniform() < 1.0 / 3.0:
+            u = rng.normal(size=3)
+            u -= u.mean()
+            tint = 1.0 + NEAR_GREY_TINT * u / np.abs(u).max()
+
+        def levels(n, lo=0.03, hi=0.85):
+            if grey:
+                return _grey_levels(rng, n, lo, hi)[:, None] * tint
+            return rng.uniform(max(lo, 0.06), hi, (n, 3))
+
+        if kind == "patches":
+            self.cell = rng.uniform(0.25, 0.55)
+            self.offset = rng.uniform(0.0, 1.0, 3)
+            self.palette = levels(16)
+        elif kind in ("stripes", "checker"):
+            self.period = rng.uniform(0.18, 0.4)
+            self.duty = rng.uniform(0.35, 0.65)
+            self.cell = rng.uniform(0.25, 0.5)
+            self.offset = rng.uniform(0.0, 1.0, 3)
+            c = levels(2)
+            while np.abs(np.log(c[0] / c[1])).max() < 0.8:   # a clear step (a factor 2.2 at least)
+                c = levels(2)
+            self.colours = c
+        elif kind == "glyphs":   # dark print on light paper: rows of 5x7 glyphs, word gaps
+            self.char = rng.uniform(0.12, 0.2) * scale   # character width (scene units)
+            self.offset = rng.uniform(0.0, 1.0, 2)
+            paper = rng.uniform(0.55, 0.85)
+            ink = rng.uniform(0.03, 0.12)
+            self.colours = np.array([paper, ink])[:, None] * tint if grey else \
+                np.array([[paper] * 3, rng.uniform(0.03, 0.3, 3)])
+            self.glyphs = _glyph_font(rng)
+        elif kind in ("noise", "uniform"):
+            n_waves = 6
+            lo, hi = (0.6, 2.0) if kind == "noise" else (1.5, 3.0)
+            wavelength = rng.uniform(lo, hi, (4, n_waves))
+            direction = _unit(rng.normal(size=(4, n_waves, 3)))
+            self.k = direction * (2 * np.pi / wavelength)[..., None]
+            self.phase = rng.uniform(0, 2 * np.pi, (4, n_waves))
+            if kind == "noise":
+                self.base = levels(1, 0.2, 0.65)[0]
+                self.amp = np.array([0.3, 0.0 if grey else 0.12])
+            else:    # a dark material when grey (tyres, coats, slate)
+                self.base = levels(1, 0.04, 0.12)[0] if grey else levels(1, 0.15, 0.85)[0]
+                self.amp = np.array([0.03, 0.0 if grey else 0.01])
+        else:  # pragma: no cover - internal
+            raise ValueError(kind)
+
     def __call__(self, q: np.ndarray) -> np.ndarray:
         """Albedo (N, 3) at points ``q`` (N, 3) in object coordinates."""
         p = _mul(q, self.rot)
+        if self.planar:
+            p[:, 1] = 0.0      # on the plane: the pattern depends on (x, z) only
+        if self.kind == "checker":
+            c = np.floor(p / self.cell + self.offset).astype(np.int64)
+            out = self.colours[(c[:, 0] + c[:, 1] + c[:, 2]) & 1]
+            return np.clip(out, ALBEDO_MIN, 1.0)
+        if self.kind == "glyphs":
+            u = p[:, 0] / self.char + self.offset[0]
+            v = (p[:, 2] if self.planar else p[:, 1]) / (1.6 * self.char) + self.offset[1]
+            cu, cv = np.floor(u).astype(np.int64), np.floor(v).astype(np.int64)
+            col = np.floor((u - cu) * 7.0).astype(np.int64) - 1        # 5 columns in 7
+            row = np.floor((v - cv) * 10.0).astype(np.int64) - 1       # 7 rows in 10
+            h = (cu * 73856093) ^ (cv * 19349663)
+            gid = h % len(self.glyphs)
+            word_gap = (h // 7) % 100 < 18
+            inside = (col >= 0) & (col < 5) & (row >= 0) & (row < 7) & ~word_gap
+            ink = np.zeros(len(p), bool)
+            ink[inside] = self.glyphs[gid[inside], row[inside], col[inside]]
+            return np.clip(self.colours[ink.astype(np.int64)], ALBEDO_MIN, 1.0)
         if self.kind == "patches":
             c = np.floor(p / self.cell + self.offset).astype(np.int64)
             h = (c[:, 0] * 73856093) ^ (c[:, 1] * 19349663) ^ (c[:, 2] * 83492791)
@@ -240,6 +365,37 @@ class _Texture:
             noise = np.cos(arg).sum(axis=-1) / np.sqrt(arg.shape[-1])  # ~unit variance
             out = self.base * (1.0 + self.amp[0] * noise[:, :1]) + self.amp[1] * noise[:, 1:]
         return np.clip(out, ALBEDO_MIN, 1.0)
+
+
+def _grey_levels(rng, n: int, lo: float = 0.03, hi: float = 0.85) -> np.ndarray:
+    """``n`` grey reflectances (n,) in ``[lo, hi]``; when ``lo < 0.1`` three in
+    ten are dark materials in ``[lo, 0.1]``, the rest lie in ``[0.1, hi]``."""
+    if lo >= 0.1:
+        return rng.uniform(lo, hi, n)
+    dark = rng.uniform(size=n) < 0.3
+    return np.where(dark, rng.uniform(lo, 0.1, n), rng.uniform(0.1, hi, n))
+
+
+def _glyph_font(rng, n: int = 32) -> np.ndarray:
+    """``n`` glyph bitmaps (n, 7, 5) bool, each the union of two to four
+    strokes (bars, posts and diagonals on the 5x7 grid of a printed
+    character), so that a line of them reads as print, not as noise."""
+    font = np.zeros((n, 7, 5), bool)
+    rows, cols = np.mgrid[0:7, 0:5]
+    for g in range(n):
+        for _ in range(int(rng.integers(2, 5))):
+            kind = rng.integers(3)
+            if kind == 0:     # horizontal bar
+                r, c0 = rng.integers(7), rng.integers(0, 3)
+                font[g, r, c0:c0 + int(rng.integers(3, 6))] = True
+            elif kind == 1:   # vertical post
+                c, r0 = rng.integers(5), rng.integers(0, 3)
+                font[g, r0:r0 + int(rng.integers(4, 8)), c] = True
+            else:             # diagonal
+                slope = rng.choice([-1, 1])
+                c0 = 0 if slope > 0 else 4
+                font[g] |= (cols == c0 + slope * np.round(rows * 4 / 6).astype(int))
+    return font
 
 
 # --------------------------------------------------------------------------- #
@@ -459,6 +615,9 @@ class _AreaLight:
     radius: float
     pattern: np.ndarray  # (S, 2)
     power: float = 1.0
+    share: float = KEY_SHARE   # largest contribution to visible shading (_set_exposure)
+    role: str = "key"          # "key" or "fill" (a fill is dropped under a hard light)
+    isotropic: bool = False    # a bare bulb: no cosine lobe about ``normals``
 
     def samples(self, t: int) -> np.ndarray:
         """World positions (S, 3) of the sample points at frame ``t``."""
@@ -475,6 +634,7 @@ class _Scene:
     lights: list
     cam_rot: np.ndarray     # (T, 3, 3) world -> camera
     cam_pos: np.ndarray     # (T, 3)
+    ambient: float = AMBIENT
 
 
 # --------------------------------------------------------------------------- #
@@ -500,10 +660,12 @@ def _aim(centres, target) -> np.ndarray:
     return _unit(np.asarray(target, dtype=np.float64) - centres)
 
 
-def _build_scene(kind: str, n_frames: int, rng, aspect: float = 0.75) -> _Scene:
+def _build_scene(kind: str, n_frames: int, rng, aspect: float = 0.75, style: dict | None = None,
+                 style_rng=None) -> _Scene:
     """The room, objects, camera path and lights of one sequence (see the
     module docstring), drawn from ``rng``; ``aspect`` (``H / W``) sets the
-    field of view used for the exposure."""
+    field of view used for the exposure.  ``style`` (palette, light) is
+    applied by :func:`_restyle` with draws from ``style_rng``."""
     T = n_frames
     tt = np.arange(T, dtype=np.float64)
     z_wall = rng.uniform(5.5, 6.5)
@@ -591,6 +753,10 @@ def _build_scene(kind: str, n_frames: int, rng, aspect: float = 0.75) -> _Scene:
                 turn = rng.uniform(0.3, 0.8) * rng.choice([-1, 1])
                 rots = np.stack([_axis_angle([0, 1, 0], turn * np.sin(omega * k + phase)) @ rot0
                                  for k in tt])
+        elif kind == "turning_objects":   # turning in place, a little faster
+            rate = np.deg2rad(rng.uniform(8.0, 15.0)) * rng.choice([-1, 1])
+            axis = _unit(rng.normal(size=3)) if shape == "sphere" else np.array([0.0, 1.0, 0.0])
+            rots = np.stack([_axis_angle(axis, rate * k) @ rot0 for k in tt])
         elif kind == "rotating_shadows":
             rate = np.deg2rad(rng.uniform(6.0, 12.0)) * rng.choice([-1, 1])
             axis = _unit(rng.normal(size=3)) if shape == "sphere" else np.array([0.0, 1.0, 0.0])
@@ -617,12 +783,23 @@ def _build_scene(kind: str, n_frames: int, rng, aspect: float = 0.75) -> _Scene:
     yaw = np.full(T, yaw0)
     pitch = np.full(T, pitch0)
     roll = np.zeros(T)
-    if kind in ("free_camera", "objects_camera"):
-        amp = np.array([0.45, 0.12, 0.35]) if kind == "free_camera" else np.array([0.35, 0.08, 0.3])
+    centre = np.array([0.0, 0.0, 0.0])
+    if len(objects) > 2:
+        centre = np.mean([obj.translations[0] for obj in objects[2:]], axis=0)
+    centre[1] = 0.0
+    if kind in ("free_camera", "objects_camera", "camera_light"):
+        amp = np.array([0.35, 0.08, 0.3]) if kind == "objects_camera" else np.array([0.45, 0.12, 0.35])
         omega = rng.uniform(0.18, 0.3, 3)
         phase = rng.uniform(0, 2 * np.pi, 3)
         cam_pos = cam_pos + amp * np.sin(omega * tt[:, None] + phase)
-    if kind == "free_camera":
+    if kind == "two_lights_orbit":   # about the objects' centre, looking at it, 3-5 degrees a frame
+        radius = centre[2] - cam_z
+        rate = np.deg2rad(rng.uniform(3.0, 5.0)) * rng.choice([-1, 1])
+        phi = rate * (tt - (T - 1) / 2.0) + np.deg2rad(rng.uniform(-5.0, 5.0))
+        cam_pos = np.stack([centre[0] + radius * np.sin(phi), np.full(T, cam_height),
+                            centre[2] - radius * np.cos(phi)], axis=1)
+        yaw = -phi
+    if kind in ("free_camera", "camera_light"):
         amp = np.deg2rad([7.0, 3.0, 3.0])
         omega = rng.uniform(0.2, 0.3, 3)
         phase = rng.uniform(0, 2 * np.pi, 3)
@@ -633,10 +810,6 @@ def _build_scene(kind: str, n_frames: int, rng, aspect: float = 0.75) -> _Scene:
 
     # ---- lights: a key lamp above the objects, on the camera side of their
     # centre, and a large dim fill beside the camera on the other side.
-    centre = np.array([0.0, 0.0, 0.0])
-    if len(objects) > 2:
-        centre = np.mean([obj.translations[0] for obj in objects[2:]], axis=0)
-    centre[1] = 0.0
     target = centre + [0.0, 0.4, 0.0]
     if kind == "free_camera":      # travels around the scene, nearer and farther, up and down
         theta = rng.uniform(0, 2 * np.pi) + 0.55 * rng.choice([-1, 1]) * tt
@@ -648,6 +821,19 @@ def _build_scene(kind: str, n_frames: int, rng, aspect: float = 0.75) -> _Scene:
         rho = np.full(T, rng.uniform(1.6, 2.2))
         height = 3.0 + 0.3 * np.sin(0.7 * tt)
         radius = rng.uniform(0.25, 0.4)
+    elif kind == "fast_light":   # orbits at 70-100 degrees a frame, rising and falling
+        theta = rng.uniform(0, 2 * np.pi) + np.deg2rad(rng.uniform(70.0, 100.0)) * rng.choice([-1, 1]) * tt
+        rho = np.full(T, rng.uniform(1.6, 2.4))
+        height = 2.9 + 0.5 * np.sin(1.3 * tt + rng.uniform(0, 2 * np.pi))
+        radius = rng.uniform(0.25, 0.4)
+    elif kind == "turning_objects":   # low and static, on the camera side: long shadows
+        theta = np.full(T, np.deg2rad(rng.uniform(-160, -20)))
+        rho = np.full(T, rng.uniform(2.6, 3.4))
+        height = np.full(T, rng.uniform(1.0, 1.5))
+        radius = rng.uniform(0.2, 0.3)
+    elif kind == "camera_light":   # a lamp on the camera: placed below, after the camera path
+        theta = rho = height = np.zeros(T)
+        radius = rng.uniform(0.08, 0.12)
     else:
         theta = np.full(T, np.deg2rad(rng.uniform(-150, -30)))
         if low:   # small and high: the bar's shadow keeps a core
@@ -660,17 +846,78 @@ def _build_scene(kind: str, n_frames: int, rng, aspect: float = 0.75) -> _Scene:
             radius = rng.uniform(0.25, 0.4)
     key_pos = centre + np.stack([rho * np.cos(theta), height, rho * np.sin(theta)], axis=1)
     key_pos[:, 2] = np.minimum(key_pos[:, 2], z_wall - 0.6)
-    key = _AreaLight(key_pos, _aim(key_pos, target), radius, _disc_pattern(KEY_SAMPLES, rng))
+    key_dir = _aim(key_pos, target)
+    if kind == "camera_light":   # 0.25 right of and 0.3 above the lens, facing the view direction
+        key_pos = cam_pos + np.einsum("j,tjk->tk", [0.25, -0.3, 0.0], cam_rot)
+        key_dir = np.einsum("j,tjk->tk", [0.0, 0.0, 1.0], cam_rot)
+    key = _AreaLight(key_pos, key_dir, radius, _disc_pattern(KEY_SAMPLES, rng))
 
     side = -np.sign(key_pos[0, 0] - centre[0]) or 1.0
     fill_pos = np.array([centre[0] + side * rng.uniform(1.8, 2.8), rng.uniform(1.9, 2.5),
                          cam_z + rng.uniform(-0.3, 1.2)])
     fill_pos = np.broadcast_to(fill_pos, (T, 3)).copy()
     fill = _AreaLight(fill_pos, _aim(fill_pos, target), rng.uniform(0.7, 1.0),
-                      _disc_pattern(FILL_SAMPLES, rng))
-    scene = _Scene(objects, [key, fill], cam_rot, cam_pos)
+                      _disc_pattern(FILL_SAMPLES, rng), share=FILL_SHARE, role="fill")
+    lights = [key, fill]
+    if kind == "two_lights_orbit":   # a second static lamp on the other side, a little weaker
+        theta2 = np.arctan2(key_pos[0, 2] - centre[2], key_pos[0, 0] - centre[0]) + np.pi \
+            + np.deg2rad(rng.uniform(-40.0, 40.0))
+        rho2, height2 = rng.uniform(1.4, 2.2), rng.uniform(2.4, 3.2)
+        pos2 = centre + np.array([rho2 * np.cos(theta2), height2, rho2 * np.sin(theta2)])
+        pos2[2] = min(pos2[2], z_wall - 0.6)
+        pos2 = np.broadcast_to(pos2, (T, 3)).copy()
+        key.share, fill.share = 0.45, 0.12
+        lights.append(_AreaLight(pos2, _aim(pos2, target), rng.uniform(0.2, 0.35),
+                                 _disc_pattern(KEY_SAMPLES, rng), share=0.3))
+    scene = _Scene(objects, lights, cam_rot, cam_pos)
+    if style is not None:
+        _restyle(scene, style, style_rng)
     _set_exposure(scene, aspect)
     return scene
+
+
+def _restyle(scene: _Scene, style: dict, rng) -> None:
+    """Apply the palette and the light of ``style`` to a built scene, drawing
+    from ``rng`` (a stream apart from the scene's, so geometry, motion and
+    light positions are those of the colour scene with the same seed).
+
+    ``palette="grey"``: every surface achromatic or near-achromatic (see
+    :class:`_Texture`): a grey checkerboard or grey stripes on the floor,
+    print (glyphs) or grey patches on the wall, grey patches, stripes and
+    checkers on the objects, smooth grey noise on one, a dark material on
+    another.  ``palette="mixed"``: a grey checkerboard floor and one dark grey
+    object; the wall and the other objects keep their colours.
+    ``light="hard"``: every key lamp becomes a bare point bulb at its centre
+    (isotropic, one shadow ray: hard cast shadows), the fills go, and the
+    ambient term drops to ``HARD_AMBIENT``; the bulbs share the exposure in
+    the ratio of the lamps they replace.
+    """
+    palette, light = style.get("palette", "colour"), style.get("light", "soft")
+    floor, wall, objs = scene.objects[0], scene.objects[1], scene.objects[2:]
+    if palette in ("grey", "mixed"):
+        floor.texture = _Texture("checker" if palette == "mixed" or rng.uniform() < 0.7 else "stripes",
+                                 rng, 2.4, grey=True, planar=True)
+        dark = [o for o in objs if o.texture.kind == "uniform"]
+        for o in dark:
+            o.texture = _Texture("uniform", rng, grey=True)
+    if palette == "grey":
+        if rng.uniform() < 0.6:    # a printed wall (a poster, a notice board) or grey patches
+            wall.texture = _Texture("glyphs", rng, 2.5, grey=True, planar=True)
+        else:
+            wall.texture = _Texture("patches", rng, 2.0, grey=True, planar=True)
+        for o in objs:
+            kind = o.texture.kind
+            if kind in ("patches", "stripes") and rng.uniform() < 0.3:
+                kind = str(rng.choice(["checker", "glyphs"]))
+            if o.texture.kind != "uniform":
+                o.texture = _Texture(kind, rng, 1.5 if kind == "glyphs" else 1.0, grey=True)
+    if light == "hard":
+        keys = [lt for lt in scene.lights if lt.role == "key"]
+        total = sum(lt.share for lt in keys)
+        budget = 1.0 - HARD_AMBIENT - HARD_MARGIN
+        scene.lights = [_AreaLight(lt.centres, lt.normals, 0.0, np.zeros((1, 2)), share=budget * lt.share / total,
+                                   isotropic=True) for lt in keys]
+        scene.ambient = HARD_AMBIENT
 
 
 # --------------------------------------------------------------------------- #
@@ -727,10 +974,13 @@ def _irradiance(scene, light, t, p, n, which, shadows=True):
         cos_s = nx * lx                     # cosines times d
         cos_s += ny * ly
         cos_s += nz * lz
-        cos_e = e32[0] * lx                 # -(e . l)
-        cos_e += e32[1] * ly
-        cos_e += e32[2] * lz
-        np.negative(cos_e, out=cos_e)
+        if light.isotropic:                 # a point emitter: cosine 1, times d
+            cos_e = np.sqrt(d2)
+        else:
+            cos_e = e32[0] * lx             # -(e . l)
+            cos_e += e32[1] * ly
+            cos_e += e32[2] * lz
+            np.negative(cos_e, out=cos_e)
         np.maximum(cos_s, 0.0, out=cos_s)
         np.maximum(cos_e, 0.0, out=cos_e)
         g = cos_s * cos_e
@@ -763,7 +1013,7 @@ def _irradiance(scene, light, t, p, n, which, shadows=True):
 def _shade(scene, t, p, n, which):
     """Shading (N,) of world points ``p`` with normals ``n`` owned by objects
     ``which`` (the paper's grey shading s; Lambertian with soft cast shadows)."""
-    shading = np.full(len(p), AMBIENT)
+    shading = np.full(len(p), scene.ambient)
     for light in scene.lights:
         shading += _irradiance(scene, light, t, p, n, which)
     return shading
@@ -802,8 +1052,8 @@ def _set_exposure(scene, aspect: float) -> None:
                 n[m] = _mul(_normal(obj.shape, obj.size, q), obj.rotations[t].T)
         for i, light in enumerate(scene.lights):
             peaks[i] = max(peaks[i], float(_irradiance(scene, light, t, p, n, which, shadows=False).max()))
-    for light, share, peak in zip(scene.lights, (KEY_SHARE, FILL_SHARE), peaks):
-        light.power = share / peak if peak > 0.0 else 0.0
+    for light, peak in zip(scene.lights, peaks):
+        light.power = light.share / peak if peak > 0.0 else 0.0
 
 
 def _project(scene, t, p, focal, cx, cy):
@@ -813,8 +1063,8 @@ def _project(scene, t, p, focal, cx, cy):
 
 
 def _check_args(kind, n_frames, size, seed):
-    if not isinstance(kind, str) or kind not in KINDS:
-        raise ValueError(f"unknown kind {kind!r}; expected one of {', '.join(KINDS)}")
+    if not isinstance(kind, str) or kind not in MOTION_KINDS:
+        raise ValueError(f"unknown kind {kind!r}; expected one of {', '.join(MOTION_KINDS)}")
     if isinstance(n_frames, bool) or not isinstance(n_frames, (int, np.integer)):
         raise TypeError(f"n_frames must be an int, got {type(n_frames).__name__}")
     if n_frames < 2:
@@ -833,14 +1083,102 @@ def _check_args(kind, n_frames, size, seed):
     return int(n_frames), int(h), int(w), int(seed)
 
 
+def _check_number(name: str, v, lo: float, hi: float) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not (lo <= v <= hi):
+        raise ValueError(f"{name} must be a number in [{lo}, {hi}], got {v!r}")
+    return float(v)
+
+
+def _check_options(palette, light, light_colour, noise, compression):
+    if palette not in PALETTES:
+        raise ValueError(f"unknown palette {palette!r}; expected one of {', '.join(PALETTES)}")
+    if light not in LIGHTS:
+        raise ValueError(f"unknown light {light!r}; expected one of {', '.join(LIGHTS)}")
+    if light_colour is not None and not (isinstance(light_colour, str) and light_colour == "random"):
+        c = np.asarray(light_colour, dtype=np.float64) if np.ndim(light_colour) == 1 else None
+        if c is None or c.shape != (3,) or not np.all(np.isfinite(c)) or c.min() <= 0:
+            raise ValueError(f"light_colour must be None, 'random' or three positive numbers, got {light_colour!r}")
+    if noise is not None:
+        if not isinstance(noise, (tuple, list)) or len(noise) != 2 or noise[0] not in NOISE_KINDS:
+            raise ValueError(f"noise must be None, ('gaussian', std) or ('poisson', photons at white), "
+                             f"got {noise!r}")
+        if noise[0] == "gaussian":
+            _check_number("gaussian noise std", noise[1], 0.0, 1.0)
+        else:
+            _check_number("poisson photons at white", noise[1], 1.0, 1e9)
+    if compression is not None:
+        if not isinstance(compression, (tuple, list)) or len(compression) != 2 or compression[0] not in COMPRESSIONS:
+            raise ValueError(f"compression must be None or ('jpeg', quality 1-100), got {compression!r}")
+        q = compression[1]
+        if isinstance(q, bool) or not isinstance(q, (int, np.integer)) or not 1 <= q <= 100:
+            raise ValueError(f"jpeg quality must be an int in [1, 100], got {q!r}")
+
+
+def _light_colour(light_colour, rng) -> np.ndarray | None:
+    """The light colour (3,) with its largest channel 1, or None for white.
+    ``"random"``: a warm (tungsten, sunset) or cool (overcast, LED) tint,
+    the weakest channel 0.55-0.85 of the strongest."""
+    if light_colour is None:
+        return None
+    if isinstance(light_colour, str):
+        g, b = rng.uniform(0.75, 0.92), rng.uniform(0.55, 0.85)
+        c = np.array([1.0, g, b]) if rng.uniform() < 0.6 else np.array([b, g, 1.0])
+    else:
+        c = np.asarray(light_colour, dtype=np.float64)
+    return c / c.max()
+
+
+def degrade_frames(frames: np.ndarray, noise=None, compression=None, seed: int = 0) -> np.ndarray:
+    """Sensor noise and compression applied to linear frames, as a camera does.
+
+    Parameters
+    ----------
+    frames : (T, H, W, 3) float, linear RGB in [0, 1].
+    noise : None, ``("gaussian", std)`` (additive, linear units) or
+        ``("poisson", photons)`` (shot noise: a value ``v`` becomes
+        ``Poisson(v * photons) / photons``, so its std is ``sqrt(v / photons)``).
+        The result is clipped to [0, 1] (a sensor saturates and reads no
+        negative light).
+    compression : None or ``("jpeg", quality)``: every frame is encoded to
+        8-bit sRGB, through JPEG at that quality (OpenCV, 4:2:0 chroma
+        subsampling as in H.264) and decoded back to linear.
+    seed : seed of the noise (``numpy.random.default_rng``).
+
+    Returns
+    -------
+    (T, H, W, 3) float32 linear RGB in [0, 1].
+    """
+    _check_options("colour", "soft", None, noise, compression)
+    out = np.asarray(frames, dtype=np.float64)
+    rng = np.random.default_rng(seed)
+    if noise is not None:
+        if noise[0] == "gaussian":
+            out = out + rng.normal(0.0, float(noise[1]), out.shape)
+        else:
+            out = rng.poisson(np.clip(out, 0.0, None) * float(noise[1])) / float(noise[1])
+        out = np.clip(out, 0.0, 1.0)
+    if compression is not None:
+        params = [cv2.IMWRITE_JPEG_QUALITY, int(compression[1])]
+        codes = np.round(srgb_encode(out) * 255.0).astype(np.uint8)
+        decoded = np.empty_like(codes)
+        for t in range(len(codes)):
+            ok, buf = cv2.imencode(".jpg", np.ascontiguousarray(codes[t, ..., ::-1]), params)
+            if not ok:  # pragma: no cover - OpenCV failure
+                raise RuntimeError("JPEG encoding failed")
+            decoded[t] = cv2.imdecode(buf, cv2.IMREAD_COLOR)[..., ::-1]
+        out = srgb_to_linear(decoded / 255.0)
+    return out.astype(np.float32)
+
+
 def render_sequence(kind: str, n_frames: int = 8, size: tuple[int, int] = (240, 320),
-                    seed: int = 0) -> SyntheticSequence:
+                    seed: int = 0, *, palette: str = "colour", light: str = "soft", light_colour=None,
+                    noise=None, compression=None) -> SyntheticSequence:
     """Render a Lambertian sequence with exact albedo, shading, flow and visibility.
 
     Parameters
     ----------
     kind : str
-        One of :data:`KINDS` (see the module docstring).
+        The motion, one of :data:`MOTION_KINDS` (see the module docstring).
     n_frames : int
         Number of frames T >= 2.
     size : (H, W)
@@ -850,12 +1188,30 @@ def render_sequence(kind: str, n_frames: int = 8, size: tuple[int, int] = (240, 
         scaled by the size ratio.
     seed : int
         Seed of ``numpy.random.default_rng`` for the scene and motion.
+    palette : ``"colour"`` (random RGB), ``"grey"`` (achromatic and
+        near-achromatic: grey checkerboards, stripes, print, dark materials)
+        or ``"mixed"`` (a grey checkerboard floor and a dark grey object among
+        coloured surfaces).  The scene's geometry, motion and light positions
+        do not depend on it.
+    light : ``"soft"`` (disc lamps, a fill and an ambient term) or ``"hard"``
+        (bare point bulbs, hard cast shadows, ambient ``HARD_AMBIENT``).
+    light_colour : None (white), ``"random"`` or a triple: one colour for every
+        lamp.  The model's shading is grey, so the colour is folded into the
+        truth: ``albedo`` is the reflectance times the colour (largest channel
+        1), ``shading`` is unchanged, and ``frames = albedo * shading`` still.
+    noise, compression : see :func:`degrade_frames`; applied to the frames
+        only (seeded by ``seed``), the truth stays exact.
+
+    The defaults reproduce the sequences of the four original kinds bit for
+    bit: the options draw from a second stream (``default_rng([seed, 33, m])``,
+    ``m`` the index of ``kind`` in :data:`MOTION_KINDS`).
 
     Returns
     -------
     SyntheticSequence
         ``frames = albedo * shading[..., None]`` in linear RGB (paper Eq. 1)
-        with its ground truth; see :class:`SyntheticSequence`.
+        with its ground truth (up to the noise and compression asked for);
+        see :class:`SyntheticSequence`.
 
     Examples
     --------
@@ -866,7 +1222,11 @@ def render_sequence(kind: str, n_frames: int = 8, size: tuple[int, int] = (240, 
     True
     """
     T, H, W, seed = _check_args(kind, n_frames, size, seed)
-    scene = _build_scene(kind, T, np.random.default_rng(seed), aspect=H / W)
+    _check_options(palette, light, light_colour, noise, compression)
+    style_rng = np.random.default_rng([seed, 33, MOTION_KINDS.index(kind)])
+    style = None if (palette, light) == ("colour", "soft") else {"palette": palette, "light": light}
+    scene = _build_scene(kind, T, np.random.default_rng(seed), aspect=H / W, style=style, style_rng=style_rng)
+    colour = _light_colour(light_colour, style_rng)
     focal = FOCAL_PER_WIDTH * W
     cx, cy = (W - 1) / 2.0, (H - 1) / 2.0
     ys, xs = np.mgrid[0:H, 0:W].astype(np.float64)
@@ -926,8 +1286,16 @@ def render_sequence(kind: str, n_frames: int = 8, size: tuple[int, int] = (240, 
 
     shading_img = shading.reshape(T, H, W)
     albedo_img = albedo.reshape(T, H, W, 3)
+    if colour is not None:
+        albedo_img = (albedo_img * colour.astype(np.float32)).astype(np.float32)
+    frames = albedo_img * shading_img[..., None]
+    if noise is not None or compression is not None:
+        frames = degrade_frames(frames, noise, compression, seed=seed)
+    options = dict(palette=palette, light=light, light_colour=None if colour is None else tuple(colour),
+                   noise=None if noise is None else tuple(noise),
+                   compression=None if compression is None else tuple(compression))
     return SyntheticSequence(
-        frames=albedo_img * shading_img[..., None],
+        frames=frames,
         albedo=albedo_img,
         shading=shading_img,
         flow=flow.reshape(T - 1, H, W, 2),
@@ -936,4 +1304,97 @@ def render_sequence(kind: str, n_frames: int = 8, size: tuple[int, int] = (240, 
         object_id=object_id.reshape(T, H, W),
         kind=kind,
         seed=seed,
+        options=options,
     )
+
+
+# --------------------------------------------------------------------------- #
+# the catalogue of evaluation kinds
+# --------------------------------------------------------------------------- #
+@dataclass(frozen=True)
+class SceneKind:
+    """One evaluation kind: a motion and the options of :func:`render_sequence`."""
+
+    motion: str
+    palette: str = "colour"
+    light: str = "soft"
+    light_colour: object = None
+    noise: tuple | None = None
+    compression: tuple | None = None
+
+    @property
+    def static_scene(self) -> bool:
+        """Scene and camera still, the light moving: where the Weiss median applies."""
+        return self.motion in STATIC_SCENE_MOTIONS
+
+
+#: The named evaluation kinds.  The first four are the project's original
+#: kinds (``render_kind(name) == render_sequence(name)``); the others span what
+#: people film: achromatic and near-achromatic albedo (grey checkerboards,
+#: stripes, print, dark materials), hard cast shadows from point bulbs with
+#: little ambient light, coloured light, sensor noise and compression, and the
+#: motions ``turning_objects`` (objects turning in place under a low static
+#: lamp), ``camera_light`` (a lamp on the moving camera), ``fast_light`` (a
+#: lamp orbiting 70-100 degrees a frame) and ``two_lights_orbit`` (two static
+#: lamps, the camera orbiting the objects).
+SCENE_KINDS = {
+    "free_camera": SceneKind("free_camera"),
+    "objects_camera": SceneKind("objects_camera"),
+    "static_moving_light": SceneKind("static_moving_light"),
+    "rotating_shadows": SceneKind("rotating_shadows"),
+    "grey_turning_hard": SceneKind("turning_objects", "grey", "hard"),
+    "mixed_turning_hard": SceneKind("turning_objects", "mixed", "hard"),
+    "mixed_moving_light_hard": SceneKind("static_moving_light", "mixed", "hard"),
+    "mixed_objects_hard": SceneKind("objects_camera", "mixed", "hard"),
+    "mixed_camera_light_hard": SceneKind("camera_light", "mixed", "hard"),
+    "mixed_fast_light_hard": SceneKind("fast_light", "mixed", "hard"),
+    "mixed_two_lights_orbit_hard": SceneKind("two_lights_orbit", "mixed", "hard"),
+    "grey_moving_light_soft": SceneKind("static_moving_light", "grey"),
+    "grey_rotating_hard": SceneKind("rotating_shadows", "grey", "hard"),
+    "grey_two_lights_orbit_soft": SceneKind("two_lights_orbit", "grey"),
+    "grey_free_camera_noisy": SceneKind("free_camera", "grey", noise=("gaussian", 0.01),
+                                        compression=("jpeg", 80)),
+    "colour_turning_warm_light": SceneKind("turning_objects", light_colour="random"),
+    "colour_fast_light_noisy": SceneKind("fast_light", noise=("poisson", 400.0), compression=("jpeg", 70)),
+}
+
+
+def scene_kinds(suite: str = "all") -> tuple[str, ...]:
+    """Names of :data:`SCENE_KINDS`: ``"classic"`` (the four of :data:`KINDS`),
+    ``"new"`` (the others), ``"all"``, ``"static"`` (static scene, moving
+    light), ``"achromatic"`` (grey palette) or ``"hard"`` (hard light)."""
+    pick = {
+        "classic": lambda n, k: n in KINDS,
+        "new": lambda n, k: n not in KINDS,
+        "all": lambda n, k: True,
+        "static": lambda n, k: k.static_scene,
+        "achromatic": lambda n, k: k.palette == "grey",
+        "hard": lambda n, k: k.light == "hard",
+    }
+    if suite not in pick:
+        raise ValueError(f"unknown suite {suite!r}; expected one of {', '.join(pick)}")
+    return tuple(n for n, k in SCENE_KINDS.items() if pick[suite](n, k))
+
+
+def render_kind(name: str, n_frames: int = 8, size: tuple[int, int] = (240, 320),
+                seed: int = 0) -> SyntheticSequence:
+    """Render the evaluation kind ``name`` of :data:`SCENE_KINDS`.
+
+    Seed 0 of every kind is for reporting only (``perf/accuracy.py``): choose
+    weights, thresholds and designs on other seeds.  The scene is that of
+    ``render_sequence(kind.motion, ..., seed)`` with the kind's options; the
+    returned sequence's ``options["name"]`` is ``name``.
+
+    Examples
+    --------
+    >>> seq = render_kind("grey_turning_hard", n_frames=2, size=(24, 32), seed=1)
+    >>> seq.kind, seq.options["palette"], seq.options["light"]
+    ('turning_objects', 'grey', 'hard')
+    """
+    if not isinstance(name, str) or name not in SCENE_KINDS:
+        raise ValueError(f"unknown scene kind {name!r}; expected one of {', '.join(SCENE_KINDS)}")
+    k = SCENE_KINDS[name]
+    seq = render_sequence(k.motion, n_frames, size, seed, palette=k.palette, light=k.light,
+                          light_colour=k.light_colour, noise=k.noise, compression=k.compression)
+    seq.options["name"] = name
+    return seq
