@@ -84,3 +84,21 @@ def test_real_objects_are_linear_and_consistent():
     diff = obj.diffuse[m]
     alpha = np.sum(prod * diff) / np.sum(prod * prod)
     assert np.sqrt(np.mean((alpha * prod - diff) ** 2) / np.mean(diff ** 2)) < 0.1
+
+
+def test_achromatic_object_is_luminance_in_three_equal_channels(tmp_path, rng):
+    albedo, shading, mask = _write_object(tmp_path / "frog1", rng)
+    obj = load_mit_object("frog1", root=tmp_path, achromatic=True)
+    colour = load_mit_object("frog1", root=tmp_path)
+    assert obj.achromatic and not colour.achromatic
+    weights = np.array([0.2126, 0.7152, 0.0722])            # Rec. 709
+    for grey, rgb in ((obj.frames, colour.frames), (obj.albedo, colour.albedo), (obj.diffuse, colour.diffuse)):
+        assert grey.shape == rgb.shape and grey.dtype == np.float32
+        np.testing.assert_array_equal(grey[..., 0], grey[..., 1])
+        np.testing.assert_array_equal(grey[..., 0], grey[..., 2])
+        np.testing.assert_allclose(grey[..., 0], (rgb.astype(np.float64) * weights).sum(-1), rtol=1e-6, atol=1e-7)
+    # a white light: lum(frame) = lum(reflectance) * shading, so the derived shading is the written one
+    np.testing.assert_allclose(obj.frame_shading[:, mask], shading[:, mask], rtol=2e-3)
+    np.testing.assert_array_equal(obj.mask, colour.mask)
+    with pytest.raises(TypeError, match="achromatic"):
+        load_mit_object("frog1", root=tmp_path, achromatic="yes")

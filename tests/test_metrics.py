@@ -2,8 +2,9 @@
 import numpy as np
 import pytest
 
-from ivkernels.evaluation.metrics import (_dis_flow, albedo_consistency, albedo_flicker, angular_error, endpoint_error, flow_errors,
-                               intrinsic_lmse, lmse, temporal_incoherence)
+from ivkernels.evaluation.metrics import (_dis_flow, albedo_consistency, albedo_drift, albedo_flicker, angular_error,
+                                          dark_ratio, endpoint_error, flow_errors, intrinsic_lmse, lmse, luminance,
+                                          temporal_incoherence)
 
 
 def _lmse_loops(est, truth, mask, window, step):
@@ -321,3 +322,78 @@ def test_albedo_flicker_rejects(rng):
         albedo_flicker(albedo, eps=0.0)
     with pytest.raises(ValueError, match="99th percentile"):
         albedo_flicker(np.zeros_like(albedo))
+
+
+
+# ----------------------------------------------------------------------------
+# dark_ratio and albedo_drift (footage without ground truth)
+# ----------------------------------------------------------------------------
+
+def _footage(seed=0, t=4, h=30, w=40):
+    """Albedo and shading (T, H, W) where exactly 10% of the input pixels are darker
+    than all others: dark coats (albedo 0.05-0.08) in full light, on a pale floor
+    (0.5-0.9) under a shading in [0.5, 1]."""
+    rng = np.random.default_rng(seed)
+    n = t * h * w
+    albedo = rng.uniform(0.5, 0.9, n)
+    shading = rng.uniform(0.5, 1.0, n)
+    dark = rng.permutation(n)[: n // 10]
+    albedo[dark] = rng.uniform(0.05, 0.08, len(dark))
+    shading[dark] = 1.0                     # input <= 0.08 < 0.25 <= every other pixel
+    return albedo.reshape(t, h, w), shading.reshape(t, h, w), np.isin(np.arange(n), dark).reshape(t, h, w)
+
+
+def test_dark_ratio_on_a_constructed_case():
+    albedo, shading, dark = _footage()
+    frames = albedo * shading
+    expected = np.median(albedo[dark]) / np.median(albedo)
+    assert dark_ratio(albedo, frames) == pytest.approx(expected, rel=1e-12)
+    assert dark_ratio(albedo, frames) <= 0.4                              # the truth keeps the coats dark
+    assert dark_ratio(np.ones_like(frames), frames) == pytest.approx(1.0)  # everything in the shading
+    # scale-invariant, and RGB with equal channels reads as its grey
+    rgb = np.repeat(albedo[..., None], 3, axis=-1)
+    assert dark_ratio(3.0 * rgb, np.repeat(frames[..., None], 3, axis=-1)) == pytest.approx(expected, rel=1e-12)
+    np.testing.assert_allclose(luminance(rgb), albedo, rtol=1e-12)
+
+
+def test_dark_ratio_with_a_mask_counts_only_the_mask():
+    albedo, shading, _ = _footage(1)
+    frames = albedo * shading
+    mask = np.zeros(albedo.shape[1:], bool)
+    mask[:, :17] = True
+    assert dark_ratio(albedo, frames, mask=mask) == pytest.approx(dark_ratio(albedo[:, :, :17], frames[:, :, :17]))
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda f: dark_ratio(f, f[:, :5]), "differ in size"),
+    (lambda f: dark_ratio(f, f, fraction=1.0), "fraction"),
+    (lambda f: dark_ratio(f[0, 0], f[0, 0]), "expected"),
+    (lambda f: dark_ratio(f, f, mask=np.zeros(f.shape[1:], bool)), "mask is empty"),
+    (lambda f: albedo_drift(f[:1]), "at least 2"),
+    (lambda f: luminance(f), "last axis of 3"),
+])
+def test_dark_ratio_and_drift_refuse_bad_input(call, match):
+    albedo, shading, _ = _footage()
+    with pytest.raises(ValueError, match=match):
+        call(albedo * shading)
+
+
+def test_albedo_drift_on_a_known_ramp():
+    rng = np.random.default_rng(3)
+    base = rng.uniform(0.05, 0.9, (1, 17, 23, 3))
+    t = np.arange(24)
+    ramp = base * np.exp(-0.0004 * t)[:, None, None, None]        # -0.04% a frame
+    assert albedo_drift(ramp) == pytest.approx(-4.0, rel=1e-9)     # -4% per 100 frames
+    assert albedo_drift(np.broadcast_to(base, ramp.shape)) == pytest.approx(0.0, abs=1e-9)
+    # a linear (not exponential) ramp: the log-line fit, by hand with least squares
+    lin = base * (1 + 0.01 * t)[:, None, None, None]
+    levels = np.log(np.median(lin @ np.array([0.2126, 0.7152, 0.0722]), axis=(1, 2)))
+    design = np.stack([t, np.ones_like(t)], axis=1).astype(float)
+    slope = np.linalg.lstsq(design, levels, rcond=None)[0][0]
+    assert albedo_drift(lin) == pytest.approx(1e4 * slope, rel=1e-9)
+    # only the mask counts: a drifting region outside it is ignored
+    mixed = np.broadcast_to(base, ramp.shape).copy()
+    mixed[:, :, 12:] = ramp[:, :, 12:]
+    mask = np.zeros((17, 23), bool)
+    mask[:, :12] = True
+    assert albedo_drift(mixed, mask=mask) == pytest.approx(0.0, abs=1e-9)

@@ -30,6 +30,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from ivkernels.evaluation.metrics import luminance
+
 __all__ = ["MIT_OBJECTS", "MITObject", "default_mit_root", "available_mit_objects", "load_mit_object"]
 
 #: The ten training objects (Barron & Malik's training split).
@@ -64,6 +66,9 @@ class MITObject:
         each frame's luminance exactly, so specular highlights and
         inter-reflections count as shading; read shading LMSE on these
         sequences with that in mind.
+    achromatic : bool
+        True when loaded as greyscale footage (luminance in three equal
+        channels, see :func:`load_mit_object`).
     """
 
     name: str
@@ -73,6 +78,7 @@ class MITObject:
     shading: np.ndarray
     diffuse: np.ndarray
     frame_shading: np.ndarray
+    achromatic: bool = False
 
 
 def default_mit_root() -> Path:
@@ -81,7 +87,7 @@ def default_mit_root() -> Path:
     env = os.environ.get("IVKERNELS_MIT_DATA")
     if env:
         return Path(env)
-    return Path(__file__).resolve().parents[1].parent / "shared" / "data" / "mit-berkeley-train"
+    return Path(__file__).resolve().parents[2].parent / "shared" / "data" / "mit-berkeley-train"
 
 
 def available_mit_objects(root=None) -> tuple[str, ...]:
@@ -116,7 +122,7 @@ def _resize(img: np.ndarray, scale: float) -> np.ndarray:
     return cv2.resize(img, size, interpolation=cv2.INTER_AREA if scale < 1.0 else cv2.INTER_LINEAR)
 
 
-def load_mit_object(name: str, root=None, scale: float = 1.0) -> MITObject:
+def load_mit_object(name: str, root=None, scale: float = 1.0, achromatic: bool = False) -> MITObject:
     """Load one MIT-Berkeley training object as a ten-frame moving-light video.
 
     Parameters
@@ -128,6 +134,13 @@ def load_mit_object(name: str, root=None, scale: float = 1.0) -> MITObject:
         linear values); the mask keeps only pixels wholly inside the object
         after resizing.  The objects are 234-600 px on a side; 0.5 makes them
         four times faster to process.
+    achromatic : the object as greyscale footage: every image replaced by its
+        Rec. 709 luminance (:func:`ivkernels.evaluation.metrics.luminance`) in
+        three equal channels, so the frames are luminance and the albedo truth
+        is the luminance reflectance.  A white light makes ``lum(frame) =
+        lum(reflectance) * shading`` exactly, so the pair is as consistent
+        as in colour; the derived ``frame_shading`` is ``lum(frame) /
+        lum(reflectance)`` in both cases.
 
     Returns
     -------
@@ -146,6 +159,8 @@ def load_mit_object(name: str, root=None, scale: float = 1.0) -> MITObject:
     if isinstance(scale, bool) or not isinstance(scale, (int, float, np.integer, np.floating)) \
             or not (0.0 < scale <= 1.0):
         raise ValueError(f"scale must be a number in (0, 1], got {scale!r}")
+    if not isinstance(achromatic, (bool, np.bool_)):
+        raise TypeError(f"achromatic must be True or False, got {achromatic!r}")
     root = default_mit_root() if root is None else Path(root)
     folder = root / name
     if not folder.is_dir():
@@ -160,7 +175,10 @@ def load_mit_object(name: str, root=None, scale: float = 1.0) -> MITObject:
     shapes = {frames.shape[1:], albedo.shape, diffuse.shape, shading.shape + (3,), mask.shape + (3,)}
     if len(shapes) != 1:
         raise ValueError(f"{folder}: images differ in size: {sorted(shapes)}")
+    if achromatic:
+        grey = lambda img: np.repeat(luminance(img).astype(np.float32)[..., None], 3, axis=-1)  # noqa: E731
+        frames, albedo, diffuse = grey(frames), grey(albedo), grey(diffuse)
     lum_a = albedo.mean(axis=-1)
     frame_shading = np.where(mask & (lum_a > 0), frames.mean(axis=-1) / np.maximum(lum_a, 1e-12), 0.0)
     return MITObject(name=name, frames=frames, albedo=albedo, mask=mask, shading=shading, diffuse=diffuse,
-                     frame_shading=frame_shading.astype(np.float32))
+                     frame_shading=frame_shading.astype(np.float32), achromatic=bool(achromatic))

@@ -13,6 +13,10 @@
 * :func:`albedo_flicker` — the same change with one scale per sequence, so
   that a frame that brightens or darkens as a whole counts; ``flow=None``
   for static scenes, and an optional mask (e.g. an object).
+* :func:`dark_ratio` and :func:`albedo_drift` — checks on footage without
+  ground truth: whether the darkest input pixels keep a dark albedo (a
+  split that puts dark materials in the shading gives a ratio near 1), and
+  how fast the albedo's level creeps over the frames.
 
 All inputs are NumPy arrays; computations run in float64.
 """
@@ -34,6 +38,9 @@ __all__ = [
     "temporal_incoherence",
     "albedo_consistency",
     "albedo_flicker",
+    "luminance",
+    "dark_ratio",
+    "albedo_drift",
 ]
 
 _REC709 = np.array([0.2126, 0.7152, 0.0722])
@@ -454,3 +461,105 @@ def albedo_flicker(albedo, flow=None, visibility=None, mask=None, eps: float = 1
     if count == 0:
         raise ValueError("albedo_flicker: no visible pixel with known flow lands inside the next frame")
     return total / count
+
+
+# ----------------------------------------------------------------------------
+# footage without ground truth: dark materials and drift
+# ----------------------------------------------------------------------------
+
+def luminance(x) -> np.ndarray:
+    """Rec. 709 luminance ``0.2126 R + 0.7152 G + 0.0722 B`` of linear RGB
+    ``(..., 3)``, float64 ``(...)``."""
+    x = _float_array(x, "luminance")
+    if x.ndim < 1 or x.shape[-1] != 3:
+        raise ValueError(f"luminance: expected linear RGB with a last axis of 3, got shape {x.shape}")
+    return x @ _REC709
+
+
+def _luminance_stack(x, name: str) -> np.ndarray:
+    """``(T, H, W, 3)`` linear RGB or ``(T, H, W)`` grey -> float64 ``(T, H, W)``."""
+    x = _float_array(x, name)
+    if x.ndim == 4 and x.shape[-1] == 3:
+        return x @ _REC709
+    if x.ndim == 3:
+        return x
+    raise ValueError(f"{name}: expected (T, H, W, 3) linear RGB or (T, H, W) grey, got shape {x.shape}")
+
+
+def dark_ratio(albedo, frames, fraction: float = 0.1, mask=None) -> float:
+    """Whether dark materials stay dark in the albedo.
+
+    ::
+
+        dark_ratio = median{ lum(A)(x) : lum(I)(x) <= q_fraction(lum(I)) } / median{ lum(A)(x) }
+
+    over every pixel of every frame (inside ``mask``), ``q_fraction`` the
+    ``fraction`` quantile of the input luminance.  The darkest input pixels
+    are dark materials, shadows or both; a split that keeps the materials in
+    the albedo gives a small ratio (a dark coat on a pale floor: 0.1-0.4),
+    one that explains every dark pixel as shading gives about 1.  The ratio
+    is scale-invariant (the albedo's global scale cancels).
+
+    Parameters
+    ----------
+    albedo : ``(T, H, W, 3)`` linear RGB or ``(T, H, W)`` grey.
+    frames : the input, same layout and size (linear).
+    fraction : share of the input's pixels counted as dark, in (0, 1).
+    mask : bool ``(H, W)`` or ``(T, H, W)``, or None (all pixels).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> frames = np.full((2, 10, 10), 0.6); frames[:, :, :2] = 0.06   # a dark material, 20% of the image
+    >>> round(dark_ratio(frames, frames), 3), round(dark_ratio(np.ones_like(frames), frames), 3)
+    (0.1, 1.0)
+    """
+    a = _luminance_stack(albedo, "dark_ratio: albedo")
+    i = _luminance_stack(frames, "dark_ratio: frames")
+    if a.shape != i.shape:
+        raise ValueError(f"dark_ratio: albedo {a.shape} and frames {i.shape} differ in size")
+    if isinstance(fraction, bool) or not (0.0 < float(fraction) < 1.0):
+        raise ValueError(f"dark_ratio: fraction must be in (0, 1), got {fraction!r}")
+    sel = np.ones(a.shape, bool) if mask is None else _as_bool_mask(mask, a.shape)
+    if not sel.any():
+        raise ValueError("dark_ratio: the mask is empty")
+    dark = sel & (i <= np.quantile(i[sel], fraction))
+    overall = float(np.median(a[sel]))
+    if overall <= 0:
+        raise ValueError("dark_ratio: the albedo's median luminance is not positive")
+    return float(np.median(a[dark])) / overall
+
+
+def albedo_drift(albedo, mask=None) -> float:
+    """Drift of the albedo's level, in percent per 100 frames.
+
+    The level of frame ``t`` is the median albedo luminance ``m_t`` (inside
+    ``mask``); a least-squares line ``log m_t = c + b t`` is fitted over the
+    frames and ``drift = 100 * b * 100`` (the relative change per 100
+    frames, in percent, signed).  Under constant light a good split holds its
+    level (``|drift| <= 0.5``); an albedo that brightens 1% a frame drifts
+    about 100% per 100 frames.
+
+    Parameters
+    ----------
+    albedo : ``(T, H, W, 3)`` linear RGB or ``(T, H, W)`` grey, ``T >= 2``.
+    mask : bool ``(H, W)`` or ``(T, H, W)``, or None.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> a = 0.5 * np.exp(0.001 * np.arange(5))[:, None, None] * np.ones((5, 4, 6))   # +0.1% a frame
+    >>> round(albedo_drift(a), 6)
+    10.0
+    """
+    a = _luminance_stack(albedo, "albedo_drift: albedo")
+    t = a.shape[0]
+    if t < 2:
+        raise ValueError(f"albedo_drift: needs at least 2 frames, got {t}")
+    sel = np.ones(a.shape, bool) if mask is None else _as_bool_mask(mask, a.shape)
+    levels = np.array([np.median(a[k][sel[k]]) if sel[k].any() else np.nan for k in range(t)])
+    if np.sum(np.isfinite(levels)) < 2 or np.any(levels[np.isfinite(levels)] <= 0):
+        raise ValueError("albedo_drift: needs a positive median level in at least 2 frames")
+    ok = np.isfinite(levels)
+    slope = np.polyfit(np.arange(t)[ok], np.log(levels[ok]), 1)[0]
+    return float(slope * 100.0 * 100.0)
