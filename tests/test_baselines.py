@@ -3,8 +3,9 @@ Weiss (2001) temporal median, plain and along the flow."""
 import numpy as np
 import pytest
 
-from ivkernels.evaluation.baselines import (GROSSE_THRESHOLDS, TUNED_THRESHOLDS, _invert_flow, _poisson_neumann,
-                                 color_retinex, weiss, weiss_flow)
+from ivkernels.evaluation.baselines import (GROSSE_THRESHOLDS, LUMINANCE_TUNED_THRESHOLD, TUNED_THRESHOLDS,
+                                            _invert_flow, _poisson_neumann, color_retinex, luminance_retinex, weiss,
+                                            weiss_flow)
 from ivkernels.evaluation.metrics import albedo_flicker, lmse
 
 
@@ -276,3 +277,74 @@ def test_weiss_beats_the_input_and_grosse_retinex_on_the_static_moving_light_kin
     a, s = weiss(seq.frames)
     c, _ = color_retinex(seq.frames, thresholds="grosse")
     assert lmse(a, seq.albedo) < lmse(c, seq.albedo) < lmse(seq.frames, seq.albedo)
+
+
+
+# ----------------------------------------------------------------------------
+# luminance Retinex
+# ----------------------------------------------------------------------------
+
+def _grey_blocks_times_smooth(rng, h=61, w=79, block=10):
+    """Grey blocks (steps of at least a factor 1.5) times the smooth shading of
+    :func:`_blocks_times_smooth`, as (T=2, H, W, 3) with equal channels."""
+    levels = np.array([0.08, 0.15, 0.3, 0.6, 0.9])
+    cells = levels[rng.integers(0, 5, (2, h // block + 1, w // block + 1))]
+    # neighbouring cells differ: re-draw equal neighbours by stepping one level
+    for axis in (1, 2):
+        same = np.diff(cells, axis=axis) == 0
+        idx = np.searchsorted(levels, np.take(cells, range(1, cells.shape[axis]), axis=axis))
+        bumped = levels[np.where(idx + 1 < 5, idx + 1, idx - 1)]
+        part = np.take(cells, range(1, cells.shape[axis]), axis=axis)
+        part = np.where(same, bumped, part)
+        cells = np.concatenate([np.take(cells, [0], axis=axis), part], axis=axis)
+    albedo = np.repeat(np.repeat(cells, block, 1), block, 2)[:, :h, :w]
+    _, shading, _ = _blocks_times_smooth(rng, h, w, block)
+    frames = albedo * shading
+    return np.repeat(albedo[..., None], 3, -1), shading, np.repeat(frames[..., None], 3, -1)
+
+
+def test_luminance_retinex_recovers_grey_blocks_where_colour_retinex_cannot(rng):
+    albedo, shading, frames = _grey_blocks_times_smooth(rng)
+    a, s = luminance_retinex(frames.astype(np.float32), threshold=0.2)
+    assert a.shape == frames.shape and s.shape == frames.shape[:3] and a.dtype == s.dtype == np.float32
+    np.testing.assert_allclose(a * s[..., None], frames, rtol=1e-5, atol=1e-7)
+    np.testing.assert_allclose(np.percentile(a.reshape(2, -1), 99, axis=1), 1.0, rtol=1e-5)
+    base = lmse(frames, albedo)
+    assert lmse(a, albedo) < 0.05 * base
+    # colour Retinex with the tuned grey threshold (2.0) leaves grey steps in the shading
+    a_c, _ = color_retinex(frames.astype(np.float32))
+    assert lmse(a_c, albedo) > 0.5 * base
+
+
+def test_luminance_retinex_against_a_hand_computed_split():
+    """One row: a ramp of small steps (shading) and one large step (reflectance)."""
+    x = np.arange(12)
+    shading = np.exp(0.02 * x)                      # log steps 0.02 < threshold
+    albedo = np.where(x < 6, 0.2, 0.6)              # one log step 1.1 > threshold
+    image = np.repeat((albedo * shading)[None, :, None], 3, axis=-1)      # (1, 12, 3)
+    a, s = luminance_retinex(image, threshold=0.5)
+    # the shading keeps every small step and drops the large one, with the shading's
+    # own 0.02 that the large step carries: exp(0.02 x - 0.02 [x >= 6]) up to a scale
+    expected = np.exp(0.02 * x - 0.02 * (x >= 6))
+    ratio = s[0] / expected
+    np.testing.assert_allclose(ratio, ratio[0], rtol=1e-5)
+    np.testing.assert_allclose(a[0, :, 0] / a[0, 0, 0], albedo * shading / expected / (albedo[0] * shading[0]),
+                               rtol=1e-5)
+
+
+def test_luminance_retinex_keeps_the_input_chromaticity_in_the_albedo(rng):
+    _, _, image = _blocks_times_smooth(rng, 31, 45, 7)
+    a, s = luminance_retinex(image)
+    chroma = lambda v: v / v.sum(-1, keepdims=True)           # noqa: E731
+    np.testing.assert_allclose(chroma(a.astype(np.float64)), chroma(image), rtol=1e-5, atol=1e-7)
+    a_default, _ = luminance_retinex(image, threshold=LUMINANCE_TUNED_THRESHOLD)
+    np.testing.assert_array_equal(a, a_default)
+    a1, s1 = luminance_retinex(image[None])
+    np.testing.assert_array_equal(a1[0], a)
+
+
+@pytest.mark.parametrize("kw, msg", [(dict(threshold=0.0), "threshold"), (dict(threshold=True), "threshold"),
+                                     (dict(eps=-1.0), "eps")])
+def test_luminance_retinex_rejects(kw, msg):
+    with pytest.raises(ValueError, match=msg):
+        luminance_retinex(np.full((4, 5, 3), 0.5), **kw)

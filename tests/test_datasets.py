@@ -102,3 +102,37 @@ def test_achromatic_object_is_luminance_in_three_equal_channels(tmp_path, rng):
     np.testing.assert_array_equal(obj.mask, colour.mask)
     with pytest.raises(TypeError, match="achromatic"):
         load_mit_object("frog1", root=tmp_path, achromatic="yes")
+
+
+def test_grey_footage_from_a_written_middlebury_pair(tmp_path):
+    from ivkernels.colour import srgb_to_linear
+
+    folder = tmp_path / "middlebury" / "Odd"
+    folder.mkdir(parents=True)
+    rng = np.random.default_rng(2)
+    written = []
+    for k in (10, 11):
+        img = rng.integers(0, 256, (17, 23, 3)).astype(np.uint8)
+        cv2.imwrite(str(folder / f"frame{k}.png"), img[..., ::-1])
+        written.append(img)
+    (tmp_path / "middlebury" / "Empty").mkdir()
+    assert datasets.available_footage(tmp_path) == ("middlebury/Odd",)
+    grey = datasets.load_grey_footage("middlebury/Odd", root=tmp_path)
+    assert grey.shape == (2, 17, 23, 3) and grey.dtype == np.float32
+    linear = srgb_to_linear(np.stack(written) / 255.0)
+    expected = linear @ np.array([0.2126, 0.7152, 0.0722])
+    for c in range(3):
+        np.testing.assert_allclose(grey[..., c], expected, rtol=1e-5, atol=1e-6)
+    half = datasets.load_grey_footage("middlebury/Odd", root=tmp_path, scale=0.5)
+    assert half.shape == (2, 8, 12, 3)                  # round(8.5) = 8, round(11.5) = 12
+    with pytest.raises(ValueError, match="unknown footage"):
+        datasets.load_grey_footage("holiday.mp4", root=tmp_path)
+    with pytest.raises(ValueError, match="n_frames"):
+        datasets.load_grey_footage("middlebury/Odd", root=tmp_path, n_frames=1)
+
+
+@pytest.mark.skipif(datasets.FOOTAGE_CLIP not in datasets.available_footage(), reason="the real clip is not present")
+def test_grey_footage_of_the_real_clip():
+    grey = datasets.load_grey_footage(datasets.FOOTAGE_CLIP, n_frames=3)
+    assert grey.shape == (3, 240, 320, 3)
+    np.testing.assert_array_equal(grey[..., 0], grey[..., 2])

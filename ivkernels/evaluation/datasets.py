@@ -31,8 +31,10 @@ import cv2
 import numpy as np
 
 from ivkernels.evaluation.metrics import luminance
+from ivkernels.io import read_frames, read_image
 
-__all__ = ["MIT_OBJECTS", "MITObject", "default_mit_root", "available_mit_objects", "load_mit_object"]
+__all__ = ["MIT_OBJECTS", "MITObject", "default_mit_root", "available_mit_objects", "load_mit_object",
+           "FOOTAGE_CLIP", "default_data_root", "available_footage", "load_grey_footage"]
 
 #: The ten training objects (Barron & Malik's training split).
 MIT_OBJECTS = ("apple", "box", "cup1", "dinosaur", "frog1", "panther", "paper1", "phone",
@@ -182,3 +184,69 @@ def load_mit_object(name: str, root=None, scale: float = 1.0, achromatic: bool =
     frame_shading = np.where(mask & (lum_a > 0), frames.mean(axis=-1) / np.maximum(lum_a, 1e-12), 0.0)
     return MITObject(name=name, frames=frames, albedo=albedo, mask=mask, shading=shading, diffuse=diffuse,
                      frame_shading=frame_shading.astype(np.float32), achromatic=bool(achromatic))
+
+
+# --------------------------------------------------------------------------- #
+# footage without ground truth, in grey
+# --------------------------------------------------------------------------- #
+#: The real clip of ``real-video/`` (people and their hard shadows on a pavement).
+FOOTAGE_CLIP = "street_shadows"
+
+
+def default_data_root() -> Path:
+    """The folder holding ``middlebury/`` and ``real-video/``: the parent of
+    :func:`default_mit_root`."""
+    return default_mit_root().parent
+
+
+def available_footage(root=None) -> tuple[str, ...]:
+    """Names :func:`load_grey_footage` can read under ``root`` (default
+    :func:`default_data_root`): ``"middlebury/<name>"`` for every Middlebury
+    folder with ``frame10.png`` and ``frame11.png``, and
+    :data:`FOOTAGE_CLIP` when ``real-video/street_shadows.avi`` is there."""
+    root = default_data_root() if root is None else Path(root)
+    names = []
+    mb = root / "middlebury"
+    if mb.is_dir():
+        names += [f"middlebury/{d.name}" for d in sorted(mb.iterdir())
+                  if (d / "frame10.png").is_file() and (d / "frame11.png").is_file()]
+    if (root / "real-video" / f"{FOOTAGE_CLIP}.avi").is_file():
+        names.append(FOOTAGE_CLIP)
+    return tuple(names)
+
+
+def load_grey_footage(name: str, root=None, n_frames: int = 24, scale: float | None = None) -> np.ndarray:
+    """Footage without ground truth as greyscale video: Rec. 709 luminance
+    (:func:`ivkernels.evaluation.metrics.luminance`) in three equal channels.
+
+    Parameters
+    ----------
+    name : one of :func:`available_footage`: ``"middlebury/<name>"`` (the two
+        frames ``frame10``, ``frame11``) or :data:`FOOTAGE_CLIP` (its first
+        ``n_frames`` frames).
+    root : the data folder (default :func:`default_data_root`).
+    n_frames : frames read from the clip (at least 2).
+    scale : resize factor in (0, 1] (area averaging in linear light); default
+        1 for Middlebury and 2/3 for the clip (480x360 -> 320x240).
+
+    Returns
+    -------
+    ``(T, H, W, 3)`` float32 linear, equal channels.
+    """
+    root = default_data_root() if root is None else Path(root)
+    if isinstance(n_frames, bool) or not isinstance(n_frames, (int, np.integer)) or n_frames < 2:
+        raise ValueError(f"n_frames must be an int >= 2, got {n_frames!r}")
+    if name.startswith("middlebury/"):
+        folder = root / name
+        if not folder.is_dir():
+            raise FileNotFoundError(f"no folder {folder}")
+        frames = np.stack([read_image(folder / f"frame{k}.png") for k in (10, 11)])
+        scale = 1.0 if scale is None else scale
+        if scale != 1.0:
+            frames = np.stack([_resize(f, float(scale)) for f in frames])
+    elif name == FOOTAGE_CLIP:
+        path = root / "real-video" / f"{FOOTAGE_CLIP}.avi"
+        frames = read_frames(path, stop=int(n_frames), scale=2.0 / 3.0 if scale is None else scale)
+    else:
+        raise ValueError(f"unknown footage {name!r}; expected 'middlebury/<name>' or {FOOTAGE_CLIP!r}")
+    return np.repeat(luminance(frames).astype(np.float32)[..., None], 3, axis=-1)
