@@ -1,8 +1,10 @@
-"""Accuracy on the synthetic sequences and the MIT-Berkeley objects, as the paper's Fig. 6.
+"""Accuracy on the synthetic kinds, the MIT-Berkeley objects and greyscale footage, as the paper's Fig. 6.
 
-For every synthetic kind (8 frames at 320x240 by default, plus one kind at
-640x480 with ``--large``) and, when the data are present, every MIT-Berkeley
-training object as a real ten-frame moving-light sequence, prints:
+For every synthetic kind (names of ``synthetic.SCENE_KINDS``, by ``--suite``
+or ``--kinds``; 8 frames at 320x240 by default, plus one kind at 640x480 with
+``--large``) and, when the data are present, every MIT-Berkeley training
+object as a real ten-frame moving-light sequence, in colour and as greyscale
+footage (``--mit-modes``), prints:
 
     LMSE A / S / mean   LMSE of albedo, shading and their mean (Grosse et al.);
                         on MIT inside the object mask, albedo against the one
@@ -16,123 +18,65 @@ training object as a real ten-frame moving-light sequence, prints:
                         the mask on MIT), one scale per sequence
     s                   seconds of the method
 
-for the methods (``--methods`` runs a subset):
-
-    IV            intrinsic video with estimated flow (the default flow method)
-    IV-noflow     the ablation without temporal terms and motion weights
-    IV-gtflow     intrinsic video with ground-truth flow (synthetic only)
-    CRET          per-frame colour Retinex, Grosse et al.'s thresholds
-    CRET-tuned    per-frame colour Retinex, thresholds chosen on training data
-                  (``baselines.TUNED_THRESHOLDS``, perf/tune_baselines.py)
-    Weiss         Weiss's temporal median of log-derivatives (static scenes;
-                  on moving kinds it shows what ignoring the motion costs)
-    Weiss-gtflow  Weiss along the ground-truth flow and visibility (synthetic
-                  only; equal to Weiss on the static kind)
-    Weiss-flow    Weiss along a cheap estimated flow (OpenCV DIS on the input,
-                  ``--weiss-flow-method``), no visibility (synthetic only)
-    input         the input video taken as albedo
-    GT            the ground truth (its EPE and flicker are the floor)
+for the methods of ``perf/common.py`` (``--methods`` runs a subset).  Then
+the ratio of IV's LMSE to the best per-frame baseline (luminance or colour
+Retinex with thresholds tuned on training data, ``LRET`` / ``CRET-tuned``) and
+to the Weiss median on static-scene moving-light kinds and MIT, worst first,
+with issue 33's targets; and the greyscale-footage check (``--footage``: the
+Middlebury frames and the real clip in grey, ``datasets.load_grey_footage``):
+``metrics.dark_ratio`` and ``metrics.albedo_drift`` of every method, worst
+first.
 
 Evaluation uses seed 0 of every kind, never used for choices; ``--seed``
 evaluates a training seed with the same script.  All IV rows go through
-:func:`run_iv` (``--iv-param NAME=VALUE`` sets fields of ``ivkernels.Params``,
+``common.run_iv`` (``--iv-param NAME=VALUE`` sets fields of ``ivkernels.Params``,
 ``--iv-option NAME=VALUE`` other keyword arguments of ``decompose``).
 
-    python perf/accuracy.py [--frames 8] [--size 240 320] [--seed 0] [--methods CRET Weiss ...]
-                            [--kinds ...] [--no-mit] [--mit-scale 0.5] [--large] [--backend warp]
+    python perf/accuracy.py [--suite all] [--frames 8] [--size 240 320] [--seed 0] [--methods IV LRET ...]
+                            [--kinds ...] [--no-mit] [--mit-modes colour achromatic] [--mit-scale 0.5]
+                            [--no-footage] [--footage-frames 24] [--large] [--backend warp] [--save ROWS.json]
+    python perf/accuracy.py --load ROWS.json [MORE.json ...]     # merge runs split in parts, print the tables
 """
 from __future__ import annotations
 
 import argparse
-import ast
+import json
 import time
 
 import numpy as np
 
-import ivkernels as iv
+from common import (EVAL_SEED, METHODS, PER_FRAME_BASELINES, SYNTHETIC_ONLY, evaluate_kind,
+                    iv_params_from, key_values, mean_rows, measure, run_method)
 from ivkernels.evaluation import datasets, metrics, synthetic
-from ivkernels.evaluation.baselines import color_retinex, weiss, weiss_flow
 
-EVAL_SEED = 0
-METHODS = ("IV", "IV-noflow", "IV-gtflow", "CRET", "CRET-tuned", "Weiss", "Weiss-gtflow", "Weiss-flow",
-           "input", "GT")
-SYNTHETIC_ONLY = ("IV-gtflow", "Weiss-gtflow", "Weiss-flow")
-IV_METHODS = ("IV", "IV-noflow", "IV-gtflow")
+SUITES = ("classic", "new", "all", "static", "achromatic", "hard")
+#: issue 33's targets: IV / best per-frame baseline per kind and on the mean, IV / Weiss
+TARGET_PER_KIND, TARGET_MEAN, TARGET_DARK_RATIO, TARGET_DRIFT = 0.9, 0.7, 0.4, 0.5
+DRIFT_MIN_FRAMES = 8
 
 
-def run_iv(frames, variant: str, flow_gt=None, backend: str = "warp", params=None, **options):
-    """The one call of :func:`ivkernels.decompose` behind every IV row.
-
-    ``variant``: ``"IV"`` (estimated flow), ``"IV-noflow"`` (``temporal=False``)
-    or ``"IV-gtflow"`` (``flow=flow_gt``).  ``params`` (an
-    :class:`ivkernels.Params`) and ``options`` (further keyword arguments of
-    ``decompose``) apply to all three.  Returns ``(albedo, shading)``.
-    """
-    if variant == "IV":
-        video = iv.decompose(frames, backend=backend, params=params, **options)
-    elif variant == "IV-noflow":
-        video = iv.decompose(frames, temporal=False, backend=backend, params=params, **options)
-    elif variant == "IV-gtflow":
-        if flow_gt is None:
-            raise ValueError("IV-gtflow needs the ground-truth flow")
-        video = iv.decompose(frames, flow=flow_gt, backend=backend, params=params, **options)
-    else:
-        raise ValueError(f"unknown IV variant {variant!r}")
-    return video.albedo, video.shading
-
-
-def run_method(name: str, frames, truth: dict, args):
-    """``(albedo, shading)`` of one method; ``truth`` holds albedo, shading, flow, visibility."""
-    if name in IV_METHODS:
-        return run_iv(frames, name, truth["flow"], backend=args.backend, params=args.iv_params,
-                      **args.iv_options)
-    if name == "CRET":
-        return color_retinex(frames, thresholds="grosse")
-    if name == "CRET-tuned":
-        return color_retinex(frames, thresholds="tuned")
-    if name == "Weiss":
-        return weiss(frames)
-    if name == "Weiss-gtflow":
-        return weiss_flow(frames, truth["flow"], truth["visibility"])
-    if name == "Weiss-flow":
-        flow = iv.estimate_flow(np.clip(frames, 0.0, 1.0), method=args.weiss_flow_method, backend=args.backend)
-        return weiss_flow(frames, flow)
-    if name == "input":
-        return frames, np.ones(frames.shape[:3], np.float32)
-    if name == "GT":
-        return truth["albedo"], truth["shading"]
-    raise ValueError(f"unknown method {name!r}")
-
-
-def measure(frames, truth: dict, methods, args, mask=None) -> dict:
-    rows = {}
-    for name in methods:
-        t0 = time.perf_counter()
-        albedo, shading = run_method(name, frames, truth, args)
-        seconds = time.perf_counter() - t0
-        albedo = np.broadcast_to(albedo, frames.shape)
-        lmse = metrics.intrinsic_lmse(albedo, shading, truth["albedo"], truth["shading"], mask=mask)
-        tin = metrics.temporal_incoherence(albedo, truth["flow"], truth["visibility"])
-        flow = truth["flow"] if np.any(truth["flow"]) else None
-        vis = truth["visibility"] if flow is not None else None
-        flicker = metrics.albedo_flicker(albedo, flow, vis, mask=mask)
-        rows[name] = dict(lmse, epe=tin["epe"], epe_visible=tin["epe_visible"], flicker=flicker, seconds=seconds)
-    return rows
-
-
-def evaluate_kind(kind: str, n_frames: int, size, seed: int, methods, args) -> dict:
-    seq = synthetic.render_sequence(kind, n_frames=n_frames, size=tuple(size), seed=seed)
-    truth = dict(albedo=seq.albedo, shading=seq.shading, flow=seq.flow, visibility=seq.visibility)
-    return measure(seq.frames, truth, methods, args)
-
-
-def evaluate_mit(name: str, scale: float, methods, args) -> dict:
-    obj = datasets.load_mit_object(name, root=args.mit_root, scale=scale)
+def evaluate_mit(name: str, scale: float, methods, args, achromatic: bool = False) -> tuple[dict, tuple]:
+    obj = datasets.load_mit_object(name, root=args.mit_root, scale=scale, achromatic=achromatic)
     t, h, w, _ = obj.frames.shape
     truth = dict(albedo=np.broadcast_to(obj.albedo, obj.frames.shape), shading=obj.frame_shading,
                  flow=np.zeros((t - 1, h, w, 2), np.float32), visibility=np.ones((t - 1, h, w), np.float32))
     methods = [m for m in methods if m not in SYNTHETIC_ONLY]
     return measure(obj.frames, truth, methods, args, mask=obj.mask), (w, h)
+
+
+def evaluate_footage(name: str, methods, args) -> tuple[dict, tuple]:
+    """``{method: {dark_ratio, drift, seconds}}`` on one greyscale footage item (no truth)."""
+    scale = args.middlebury_scale if name.startswith("middlebury/") else None
+    frames = datasets.load_grey_footage(name, root=args.data_root, n_frames=args.footage_frames, scale=scale)
+    rows = {}
+    for method in methods:
+        t0 = time.perf_counter()
+        albedo, _ = run_method(method, frames, {}, args)
+        seconds = time.perf_counter() - t0
+        albedo = np.broadcast_to(albedo, frames.shape)
+        rows[method] = dict(dark_ratio=metrics.dark_ratio(albedo, frames), drift=metrics.albedo_drift(albedo),
+                            seconds=seconds)
+    return rows, frames.shape[:3]
 
 
 def print_table(title: str, rows: dict) -> None:
@@ -141,14 +85,7 @@ def print_table(title: str, rows: dict) -> None:
           f"{'flicker':>8} {'s':>6}")
     for name, r in rows.items():
         print(f"{name:<12} {r['albedo']:8.4f} {r['shading']:8.4f} {r['mean']:9.4f} {r['epe']:7.3f} "
-              f"{r['epe_visible']:8.3f} {r['flicker']:8.4f} {r['seconds']:6.1f}")
-
-
-def mean_rows(per_item: dict) -> dict:
-    """Mean of every column over the items, for the methods every item has."""
-    items = list(per_item.values())
-    names = [m for m in items[0] if all(m in rows for rows in items)]
-    return {m: {k: float(np.mean([rows[m][k] for rows in items])) for k in items[0][m]} for m in names}
+              f"{r['epe_visible']:8.3f} {r['flicker']:8.4f} {r['seconds']:6.1f}", flush=True)
 
 
 def _ratio_line(label: str, num, den, limit: float, strict: bool = False) -> str:
@@ -177,43 +114,100 @@ def print_summary(mean: dict, per_kind: dict, mit_mean: dict | None) -> None:
         d = mean["IV"]["epe"] - mean["GT"]["epe"]
         print(f"  {'albedo EPE: IV - GT (px)':<52} {mean['IV']['epe']:8.3f} - {mean['GT']['epe']:8.3f} = "
               f"{d:+6.3f}  (required <= 0.30: {'met' if d <= 0.3 else f'missed by {d - 0.3:+.3f}'})")
-    context = [(n, b) for b in ("CRET", "CRET-tuned", "Weiss-gtflow", "Weiss") for n in ("IV", "IV-noflow")
+    context = [(n, b) for b in ("LRET", "CRET", "CRET-tuned", "Weiss-gtflow", "Weiss") for n in ("IV", "IV-noflow")
                if have(n, b)]
     if context:
         print("context (no target)")
-    for base in ("CRET", "CRET-tuned", "Weiss-gtflow", "Weiss"):
-        for name in ("IV", "IV-noflow"):
-            if have(name, base):
-                print(f"  {name + ' / ' + base:<52} {mean[name]['mean'] / mean[base]['mean']:27.3f}")
+    for name, base in context:
+        print(f"  {name + ' / ' + base:<52} {mean[name]['mean'] / mean[base]['mean']:27.3f}")
     if mit_mean:
-        print("MIT objects (albedo LMSE in the mask)")
+        print("MIT objects in colour (albedo LMSE in the mask)")
         for base, limit, strict in (("CRET", 1.0, True), ("CRET-tuned", 1.0, True), ("Weiss", 1.0, False)):
             if "IV" in mit_mean and base in mit_mean:
                 print(_ratio_line(f"MIT: IV / {base}", mit_mean["IV"]["albedo"], mit_mean[base]["albedo"],
                                   limit, strict=strict))
 
 
-def _key_values(items, name: str) -> dict:
-    out = {}
-    for item in items or ():
-        key, sep, value = item.partition("=")
-        if not sep or not key:
-            raise SystemExit(f"{name}: expected NAME=VALUE, got {item!r}")
-        try:
-            out[key] = ast.literal_eval(value)
-        except (ValueError, SyntaxError):
-            out[key] = value
-    return out
+def ratio_rows(items: dict, key: str, static: set) -> list[dict]:
+    """Per item, IV's ``key`` LMSE against the best per-frame baseline present
+    (:data:`common.PER_FRAME_BASELINES`) and, for the items in ``static``, the
+    Weiss median; the worst ratio first.  ``items``: ``{label: {method: row}}``."""
+    out = []
+    for label, rows in items.items():
+        bases = [b for b in PER_FRAME_BASELINES if b in rows]
+        if "IV" not in rows or not (bases or (label in static and "Weiss" in rows)):
+            continue
+        row = dict(label=label, iv=rows["IV"][key])
+        if bases:
+            best = min(bases, key=lambda b: rows[b][key])
+            row.update(best=best, base=rows[best][key], ratio=rows["IV"][key] / rows[best][key])
+        if label in static and "Weiss" in rows:
+            row.update(weiss=rows["Weiss"][key], weiss_ratio=rows["IV"][key] / rows["Weiss"][key])
+        row["worst"] = max(row.get("ratio", 0.0), row.get("weiss_ratio", 0.0))
+        out.append(row)
+    return sorted(out, key=lambda r: -r["worst"])
 
 
-def iv_params_from(parser, items):
-    """``ivkernels.Params`` with the ``--iv-param NAME=VALUE`` settings, or None without any;
-    a bad name or value ends in ``parser.error``."""
-    changes = _key_values(items, "--iv-param")
-    try:
-        return iv.Params().replace(**changes) if changes else None
-    except (TypeError, ValueError) as exc:
-        parser.error(f"--iv-param: {exc}")
+def print_ratios(title: str, rows: list[dict], per_kind_limit: float, weiss_strict: bool) -> None:
+    """The table of :func:`ratio_rows` with the verdicts against the limits."""
+    if not rows:
+        return
+    print(f"\n{title}")
+    print(f"{'item':<34} {'IV':>8} {'best per-frame':>20} {'IV/best':>8} {'Weiss':>8} {'IV/Weiss':>9}  verdict")
+    for r in rows:
+        best = f"{r['best']} {r['base']:.4f}" if "best" in r else "-"
+        ratio = f"{r['ratio']:8.3f}" if "ratio" in r else f"{'-':>8}"
+        weiss = f"{r['weiss']:8.4f} {r['weiss_ratio']:9.3f}" if "weiss" in r else f"{'-':>8} {'-':>9}"
+        misses = []
+        if "ratio" in r and r["ratio"] > per_kind_limit:
+            misses.append(f"best x{per_kind_limit} by {r['ratio'] - per_kind_limit:+.3f}")
+        if "weiss_ratio" in r and (r["weiss_ratio"] >= 1.0 if weiss_strict else r["weiss_ratio"] > 1.0):
+            misses.append(f"Weiss by {r['weiss_ratio'] - 1.0:+.3f}")
+        verdict = "missed: " + ", ".join(misses) if misses else "met"
+        print(f"{r['label']:<34} {r['iv']:8.4f} {best:>20} {ratio} {weiss}  {verdict}")
+
+
+def print_kind_summary(per_kind: dict) -> None:
+    """Issue 33's per-kind table: IV / best per-frame baseline (<= 0.9), IV / Weiss on
+    static-scene kinds (< 1), worst first, and the mean (<= 0.7)."""
+    static = {k for k in per_kind if synthetic.SCENE_KINDS[k].static_scene}
+    rows = ratio_rows(per_kind, "mean", static)
+    print_ratios(f"issue 33: IV / best per-frame baseline per kind (LMSE mean; required <= {TARGET_PER_KIND}, "
+                 f"and < 1 against Weiss on static-scene kinds), worst kind first", rows, TARGET_PER_KIND, True)
+    with_base = [r for r in rows if "ratio" in r]
+    if with_base:
+        iv_mean = float(np.mean([r["iv"] for r in with_base]))
+        base_mean = float(np.mean([r["base"] for r in with_base]))
+        print(_ratio_line(f"mean over {len(with_base)} kinds: IV / best per-frame", iv_mean, base_mean, TARGET_MEAN))
+        print(f"  {'(mean of the per-kind ratios)':<52} {np.mean([r['ratio'] for r in with_base]):27.3f}")
+
+
+def print_footage(per_item: dict, sizes: dict) -> None:
+    """Dark ratio and drift of every method on every footage item (``sizes``: its
+    (frames, width, height)), worst IV dark ratio first.  The drift is judged on
+    items of at least :data:`DRIFT_MIN_FRAMES` frames (on a pair it is one
+    frame-to-frame change scaled up fifty times)."""
+    if not per_item:
+        return
+    methods = list(next(iter(per_item.values())))
+    order = sorted(per_item, key=lambda n: -per_item[n].get("IV", {}).get("dark_ratio", 0.0))
+    print(f"\ngreyscale footage: dark ratio (median albedo over the darkest 10% of input pixels / overall; "
+          f"required <= {TARGET_DARK_RATIO} for IV) and albedo drift (% per 100 frames; required |drift| <= "
+          f"{TARGET_DRIFT} on items of >= {DRIFT_MIN_FRAMES} frames), worst IV dark ratio first")
+    print(f"{'item':<24} {'frames':>12} " + " ".join(f"{m + ' dark':>13} {m + ' drift':>13}" for m in methods))
+    for name in order:
+        rows = per_item[name]
+        print(f"{name:<24} {'x'.join(map(str, sizes[name])):>12} " + " ".join(
+            f"{rows[m]['dark_ratio']:13.3f} {rows[m]['drift']:13.2f}" for m in methods))
+    if all("IV" in rows for rows in per_item.values()):
+        worst = max(per_item[n]["IV"]["dark_ratio"] for n in order)
+        verdict = 'met' if worst <= TARGET_DARK_RATIO else f'missed by {worst - TARGET_DARK_RATIO:+.3f}'
+        print(f"  IV: worst dark ratio {worst:.3f} ({verdict})")
+        long = [n for n in order if sizes[n][0] >= DRIFT_MIN_FRAMES]
+        if long:
+            drift = max(abs(per_item[n]["IV"]["drift"]) for n in long)
+            verdict = 'met' if drift <= TARGET_DRIFT else f'missed by {drift - TARGET_DRIFT:+.2f}'
+            print(f"  IV: worst |drift| {drift:.2f}% per 100 frames over {', '.join(long)} ({verdict})")
 
 
 def main(argv=None) -> int:
@@ -224,38 +218,86 @@ def main(argv=None) -> int:
                         help=f"synthetic seed (default {EVAL_SEED}, the evaluation seed; others are training seeds)")
     parser.add_argument("--methods", nargs="+", default=list(METHODS), choices=METHODS, metavar="METHOD",
                         help=f"subset of {' '.join(METHODS)}")
-    parser.add_argument("--kinds", nargs="*", default=list(synthetic.KINDS))
+    parser.add_argument("--suite", default="all", choices=SUITES,
+                        help="the synthetic kinds when --kinds is not given (synthetic.scene_kinds; default all)")
+    parser.add_argument("--kinds", nargs="*", default=None, metavar="KIND",
+                        help="names of synthetic.SCENE_KINDS (overrides --suite; none for MIT / footage only)")
     parser.add_argument("--large", action="store_true", help="also run one kind at 640x480")
     parser.add_argument("--backend", default="warp", choices=["warp", "taichi"])
     parser.add_argument("--mit", dest="mit", action="store_true", default=None,
                         help="evaluate the MIT-Berkeley objects (default: when the data are present)")
     parser.add_argument("--no-mit", dest="mit", action="store_false")
+    parser.add_argument("--mit-modes", nargs="+", default=["colour", "achromatic"], choices=["colour", "achromatic"],
+                        help="the MIT objects in colour and/or as greyscale footage (default both)")
     parser.add_argument("--mit-scale", type=float, default=0.5, help="resize factor of the MIT objects")
     parser.add_argument("--mit-objects", nargs="*", default=None, help="subset of the MIT objects")
     parser.add_argument("--mit-root", default=None)
+    parser.add_argument("--footage", dest="footage", action="store_true", default=None,
+                        help="the greyscale-footage check (default: when the data are present)")
+    parser.add_argument("--no-footage", dest="footage", action="store_false")
+    parser.add_argument("--footage-items", nargs="*", default=None,
+                        help="subset of datasets.available_footage() (e.g. middlebury/Venus street_shadows)")
+    parser.add_argument("--footage-frames", type=int, default=24, help="frames of the real clip")
+    parser.add_argument("--middlebury-scale", type=float, default=0.5, help="resize factor of the Middlebury frames")
+    parser.add_argument("--data-root", default=None, help="folder of middlebury/ and real-video/")
     parser.add_argument("--weiss-flow-method", default="dis", help="flow method of the Weiss-flow row")
     parser.add_argument("--iv-param", action="append", metavar="NAME=VALUE",
                         help="a field of ivkernels.Params for every IV row (repeatable)")
     parser.add_argument("--iv-option", action="append", metavar="NAME=VALUE",
                         help="a keyword argument of decompose for every IV row (repeatable)")
+    parser.add_argument("--save", metavar="JSON", help="write every row to this file")
+    parser.add_argument("--load", nargs="+", metavar="JSON",
+                        help="print the tables of rows saved by --save (merged; nothing is run)")
     args = parser.parse_args(argv)
     methods = [m for m in METHODS if m in args.methods]
     args.iv_params = iv_params_from(parser, args.iv_param)
-    args.iv_options = _key_values(args.iv_option, "--iv-option")
+    args.iv_options = key_values(args.iv_option, "--iv-option")
+    kinds = list(synthetic.scene_kinds(args.suite)) if args.kinds is None else list(args.kinds)
+    unknown = [k for k in kinds if k not in synthetic.SCENE_KINDS]
+    if unknown:
+        parser.error(f"--kinds: unknown {', '.join(unknown)}; expected names of synthetic.SCENE_KINDS: "
+                     f"{', '.join(synthetic.SCENE_KINDS)}")
     if args.seed != EVAL_SEED:
         print(f"note: seed {args.seed} is a training seed, not the evaluation seed {EVAL_SEED}")
 
-    per_kind = {}
-    for kind in args.kinds:
+    if args.load:
+        saved = load_rows(args.load)
+        per_kind, mit_by_mode, footage, sizes = saved["kinds"], saved["mit"], saved["footage"], saved["sizes"]
+        for kind, rows in per_kind.items():
+            print_table(f"{kind} (from {', '.join(args.load)})", rows)
+        for mode, per_obj in mit_by_mode.items():
+            for name, rows in per_obj.items():
+                print_table(f"MIT {name} ({mode})", rows)
+    else:
+        per_kind, mit_by_mode, footage, sizes = evaluate_all(parser, args, kinds, methods)
+    if args.save:
+        print(f"\nrows saved to {args.save}")
+    report(per_kind, mit_by_mode, footage, sizes)
+    if args.large and kinds and not args.load:
+        kind = kinds[0]
+        rows = evaluate_kind(kind, args.frames, (480, 640), args.seed, methods, args)
+        print_table(f"{kind}: {args.frames} frames at 640x480", rows)
+    return 0
+
+
+def evaluate_all(parser, args, kinds, methods):
+    """Run every method on the kinds, the MIT objects and the footage asked for,
+    printing each item's table as it is done (and writing every row so far to
+    ``args.save``, so a long run stopped early keeps what finished); returns
+    ``(per_kind, mit_by_mode, footage, sizes)``."""
+    per_kind, mit_by_mode, footage, sizes = {}, {}, {}, {}
+
+    def checkpoint():
+        if args.save:
+            with open(args.save, "w") as f:
+                json.dump(dict(kinds=per_kind, mit=mit_by_mode, footage=footage, sizes=sizes), f, indent=1)
+
+    for kind in kinds:
         per_kind[kind] = evaluate_kind(kind, args.frames, args.size, args.seed, methods, args)
         print_table(f"{kind}: seed {args.seed}, {args.frames} frames at {args.size[1]}x{args.size[0]}",
                     per_kind[kind])
-    mean = {}
-    if per_kind:
-        mean = mean_rows(per_kind)
-        print_table(f"mean over {len(per_kind)} kinds", mean)
+        checkpoint()
 
-    mit_mean = None
     objects = datasets.available_mit_objects(args.mit_root)
     if args.mit_objects is not None:
         missing = sorted(set(args.mit_objects) - set(objects))
@@ -267,20 +309,69 @@ def main(argv=None) -> int:
     if args.mit:
         if not objects:
             parser.error(f"no MIT-Berkeley objects under {args.mit_root or datasets.default_mit_root()}")
-        per_obj = {}
-        for name in objects:
-            per_obj[name], (w, h) = evaluate_mit(name, args.mit_scale, methods, args)
-            print_table(f"MIT {name}: 10 lights at {w}x{h} (scale {args.mit_scale})", per_obj[name])
-        mit_mean = mean_rows(per_obj)
-        print_table(f"MIT: mean over {len(per_obj)} objects", mit_mean)
+        for mode in args.mit_modes:
+            per_obj = mit_by_mode.setdefault(mode, {})
+            for name in objects:
+                per_obj[name], (w, h) = evaluate_mit(name, args.mit_scale, methods, args,
+                                                     achromatic=mode == "achromatic")
+                print_table(f"MIT {name} ({mode}): 10 lights at {w}x{h} (scale {args.mit_scale})", per_obj[name])
+                checkpoint()
 
-    print_summary(mean, per_kind, mit_mean)
-    if args.large and args.kinds:
-        kind = args.kinds[0]
-        rows = evaluate_kind(kind, args.frames, (480, 640), args.seed, methods, args)
-        print_table(f"{kind}: {args.frames} frames at 640x480", rows)
-    return 0
+    items = datasets.available_footage(args.data_root)
+    if args.footage_items is not None:
+        missing = sorted(set(args.footage_items) - set(items))
+        if missing:
+            parser.error(f"footage not found: {', '.join(missing)}")
+        items = tuple(args.footage_items)
+    if args.footage is None:
+        args.footage = bool(items)
+    if args.footage:
+        if not items:
+            parser.error(f"no footage under {args.data_root or datasets.default_data_root()}")
+        foot_methods = [m for m in methods if m not in SYNTHETIC_ONLY + ("GT", "Weiss")]
+        for name in items:
+            footage[name], (t, h, w) = evaluate_footage(name, foot_methods, args)
+            sizes[name] = (t, w, h)
+            print(f"footage {name} ({t} frames at {w}x{h}, grey): " + ", ".join(
+                f"{m} dark {r['dark_ratio']:.3f} drift {r['drift']:+.2f}% ({r['seconds']:.1f} s)"
+                for m, r in footage[name].items()), flush=True)
+            checkpoint()
+    return per_kind, mit_by_mode, footage, sizes
 
+
+def load_rows(paths) -> dict:
+    """The rows of one or more ``--save`` files, merged: an item in several files
+    gets the methods of all of them (a later file's row of the same method wins)."""
+    out = dict(kinds={}, mit={}, footage={}, sizes={})
+    for path in paths:
+        with open(path) as f:
+            data = json.load(f)
+        for section in ("kinds", "footage"):
+            for item, rows in data[section].items():
+                out[section].setdefault(item, {}).update(rows)
+        for mode, per_obj in data["mit"].items():
+            for item, rows in per_obj.items():
+                out["mit"].setdefault(mode, {}).setdefault(item, {}).update(rows)
+        out["sizes"].update({k: tuple(v) for k, v in data["sizes"].items()})
+    return out
+
+
+def report(per_kind: dict, mit_by_mode: dict, footage: dict, sizes: dict) -> None:
+    """The means, issue 10's summary and issue 33's ratio tables."""
+    mean = {}
+    if per_kind:
+        mean = mean_rows(per_kind)
+        print_table(f"mean over {len(per_kind)} kinds", mean)
+    mit_items = {}
+    for mode, per_obj in mit_by_mode.items():
+        print_table(f"MIT ({mode}): mean over {len(per_obj)} objects", mean_rows(per_obj))
+        mit_items.update({f"MIT {name} ({mode})": rows for name, rows in per_obj.items()})
+    mit_colour = mit_by_mode.get("colour")
+    print_summary(mean, per_kind, mean_rows(mit_colour) if mit_colour else None)
+    print_kind_summary(per_kind)
+    print_ratios("issue 33: MIT objects, IV / best per-frame baseline and IV / Weiss (albedo LMSE in the mask; "
+                 "required <= 1), worst first", ratio_rows(mit_items, "albedo", set(mit_items)), 1.0, False)
+    print_footage(footage, sizes)
 
 if __name__ == "__main__":
     raise SystemExit(main())

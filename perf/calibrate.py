@@ -4,46 +4,29 @@ Every configuration is a set of :class:`ivkernels.Params` fields; for each it
 decomposes the synthetic training sequences (seeds other than 0, which is kept
 for reporting) with ground-truth flow and without temporal terms, and prints
 the LMSE (Grosse et al., mean of albedo and shading) per kind and the mean.
-With ``--mit`` it also decomposes the MIT-Berkeley training objects (each
-a static object under ten lights, so with their exact zero flow) and prints
-the albedo LMSE inside the mask per object and its mean, on separate rows.
+The kinds are names of ``synthetic.SCENE_KINDS`` (``--kinds``, or a
+``--suite`` of them).  With ``--mit`` it also decomposes the MIT-Berkeley
+training objects (each a static object under ten lights, so with their exact
+zero flow; ``--mit-achromatic`` as greyscale footage) and prints the albedo
+LMSE inside the mask per object and its mean, on separate rows.
 Choices made with it are recorded in the docstring of :class:`ivkernels.Params`
 and in perf/RESULTS.md with the command that produced them.
 
     python perf/calibrate.py --seeds 12 13 --frames 6 --size 120 160 \\
         --grid lam_shading_local=2,10,30 lam_albedo_smooth=0.1,0.3,1
     python perf/calibrate.py --kinds --mit --grid lam_shading_local=10,30
+    python perf/calibrate.py --suite new --seeds 1 --mit --mit-achromatic --grid lam_shading_local=10,30,100
 """
 from __future__ import annotations
 
 import argparse
-import itertools
 import time
 
 import numpy as np
 
 import ivkernels as iv
-from ivkernels.evaluation import metrics, synthetic
-
-EVAL_SEED = 0
-
-
-def parse_value(text: str):
-    """A Params value from the command line: ``true`` / ``false``, an int, or a float."""
-    if text.lower() in ("true", "false"):
-        return text.lower() == "true"
-    return int(text) if text.lstrip("-").isdigit() else float(text)
-
-
-def parse_grid(items: list[str]) -> list[dict]:
-    """``["a=1,2", "b=3", "c=false"]`` -> every combination as a dict (ints kept int, switches bool)."""
-    axes = []
-    for item in items:
-        name, _, values = item.partition("=")
-        if not values:
-            raise SystemExit(f"--grid entries look like name=v1,v2; got {item!r}")
-        axes.append([(name, parse_value(v)) for v in values.split(",")])
-    return [dict(combo) for combo in itertools.product(*axes)] if axes else [{}]
+from common import EVAL_SEED, parse_grid
+from ivkernels.evaluation import datasets, metrics, synthetic
 
 
 def score(seq, params, temporal: bool) -> float:
@@ -65,27 +48,32 @@ def main(argv=None) -> int:
     parser.add_argument("--seeds", type=int, nargs="+", default=[12])
     parser.add_argument("--frames", type=int, default=6)
     parser.add_argument("--size", type=int, nargs=2, default=(120, 160), metavar=("H", "W"))
-    parser.add_argument("--kinds", nargs="*", default=list(synthetic.KINDS))
+    parser.add_argument("--kinds", nargs="*", default=None, choices=list(synthetic.SCENE_KINDS), metavar="KIND",
+                        help="names of synthetic.SCENE_KINDS (default: the suite's); none for MIT only")
+    parser.add_argument("--suite", default="classic",
+                        choices=("classic", "new", "all", "static", "achromatic", "hard"),
+                        help="the kinds when --kinds is not given (synthetic.scene_kinds; default classic)")
     parser.add_argument("--grid", nargs="*", default=[], help="name=v1,v2 ... (Params fields)")
     parser.add_argument("--base", nargs="*", default=[], help="name=v fields fixed for every row")
     parser.add_argument("--no-ablation", action="store_true", help="skip the temporal=False rows")
     parser.add_argument("--mit", action="store_true", help="also the MIT-Berkeley training objects")
     parser.add_argument("--mit-scale", type=float, default=0.5)
+    parser.add_argument("--mit-achromatic", action="store_true",
+                        help="the MIT objects as greyscale footage (luminance in, luminance reflectance as truth)")
     parser.add_argument("--mit-objects", nargs="+", default=None, metavar="NAME",
                         help="a subset of the MIT objects (default: every one present)")
     args = parser.parse_args(argv)
     if EVAL_SEED in args.seeds:
         raise SystemExit(f"seed {EVAL_SEED} is the evaluation seed; choose weights on other seeds")
     base = parse_grid(args.base)[0]
-    seqs = [(kind, seed, synthetic.render_sequence(kind, n_frames=args.frames, size=tuple(args.size),
-                                                   seed=seed))
-            for seed in args.seeds for kind in args.kinds]
+    kinds = args.kinds if args.kinds is not None else synthetic.scene_kinds(args.suite)
+    seqs = [(kind, seed, synthetic.render_kind(kind, n_frames=args.frames, size=tuple(args.size), seed=seed))
+            for seed in args.seeds for kind in kinds]
     objects = []
     if args.mit:
-        from ivkernels.evaluation import datasets
-
         names = args.mit_objects or datasets.available_mit_objects()
-        objects = [datasets.load_mit_object(name, scale=args.mit_scale) for name in names]
+        objects = [datasets.load_mit_object(name, scale=args.mit_scale, achromatic=args.mit_achromatic)
+                   for name in names]
         if not objects:
             raise SystemExit("--mit: the MIT-Berkeley objects are not present (ivkernels.evaluation.datasets)")
     header = " ".join(f"{k[:8]}/{s}" for k, s, _ in seqs)

@@ -26,7 +26,7 @@ import time
 import numpy as np
 
 import ivkernels as iv
-from calibrate import parse_grid
+from common import parse_grid
 from ivkernels.evaluation import metrics, synthetic
 
 

@@ -33,7 +33,7 @@ import argparse
 import numpy as np
 
 import ivkernels as iv
-from calibrate import parse_grid
+from common import parse_grid
 from ivkernels.evaluation import baselines, datasets, metrics, synthetic
 from ivkernels.backends.registry import get_backend
 from ivkernels.priors import load_albedo_prior

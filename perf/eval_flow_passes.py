@@ -26,7 +26,7 @@ import sys
 import time
 
 import ivkernels as iv
-from calibrate import parse_grid
+from common import parse_grid
 from eval_flow import parse_settings
 from ivkernels.evaluation import metrics, synthetic
 from ivkernels.evaluation.joint import occlusion_iou

@@ -23,7 +23,7 @@ import argparse
 import numpy as np
 
 import ivkernels as iv
-from calibrate import EVAL_SEED, parse_grid
+from common import EVAL_SEED, parse_grid
 from ivkernels.evaluation import metrics, synthetic
 
 

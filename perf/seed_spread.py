@@ -2,7 +2,7 @@
 
 A comparison read at one seed can be a draw of the renderer: which shapes,
 textures and motions the sequence happened to get.  For every seed this
-script runs the evaluation of ``accuracy.py`` (``evaluate_kind``, 8 frames at
+script runs the evaluation of ``accuracy.py`` (``common.evaluate_kind``, 8 frames at
 320x240 by default) for two methods and prints each method's LMSE mean (the
 mean of albedo and shading LMSE) over the kinds, the ratio NUM / DEN over the
 kinds and per kind, and then, over the training seeds, the ratio's mean,
@@ -15,21 +15,31 @@ on it.
 
     python perf/seed_spread.py                                  # IV-gtflow / IV, seeds 1-13
     python perf/seed_spread.py --seeds 0 1 2 3 --ratio IV IV-noflow --kinds rotating_shadows
+    python perf/seed_spread.py --seeds 1 2 3 --ratio IV LRET --suite new
 """
 from __future__ import annotations
 
 import argparse
 import statistics
 
-from accuracy import EVAL_SEED, IV_METHODS, METHODS, evaluate_kind, iv_params_from, mean_rows
+from common import EVAL_SEED, IV_METHODS, METHODS, evaluate_kind, iv_params_from, mean_rows
 
 from ivkernels.evaluation import synthetic
 
 TRAINING_SEEDS = tuple(range(1, 14))
+SUITES = ("classic", "new", "all", "static", "achromatic", "hard")
+
+
+def short_label(kind: str) -> str:
+    """A column label of at most 8 characters: the first word of a classic kind,
+    the first three letters of each word of the others."""
+    if kind in synthetic.KINDS:
+        return kind.split("_")[0][:8]
+    return "".join(w[:3] for w in kind.split("_"))[:8]
 
 
 def seed_row(seed: int, kinds, methods, args) -> dict:
-    """``{kind: {method: row}}`` of one seed, rows as ``accuracy.measure`` returns them."""
+    """``{kind: {method: row}}`` of one seed, rows as ``common.measure`` returns them."""
     return {kind: evaluate_kind(kind, args.frames, args.size, seed, methods, args) for kind in kinds}
 
 
@@ -54,7 +64,10 @@ def main(argv=None) -> int:
     parser.add_argument("--seeds", type=int, nargs="+", default=list(TRAINING_SEEDS))
     parser.add_argument("--ratio", nargs=2, default=("IV-gtflow", "IV"), metavar=("NUM", "DEN"),
                         help="the two methods compared, NUM / DEN (names as in accuracy.py)")
-    parser.add_argument("--kinds", nargs="+", default=list(synthetic.KINDS), choices=synthetic.KINDS)
+    parser.add_argument("--kinds", nargs="+", default=None, choices=list(synthetic.SCENE_KINDS), metavar="KIND",
+                        help="names of synthetic.SCENE_KINDS (default: the suite's)")
+    parser.add_argument("--suite", default="classic", choices=SUITES,
+                        help="the kinds when --kinds is not given (synthetic.scene_kinds; default classic)")
     parser.add_argument("--frames", type=int, default=8)
     parser.add_argument("--size", type=int, nargs=2, default=(240, 320), metavar=("H", "W"))
     parser.add_argument("--backend", default="warp", choices=["warp", "taichi"])
@@ -75,8 +88,8 @@ def main(argv=None) -> int:
         parser.error("--iv-param applies to IV methods only, and neither method is one")
     args.iv_options = {}
 
-    kinds = list(args.kinds)
-    short = {kind: kind.split("_")[0][:8] for kind in kinds}
+    kinds = list(args.kinds) if args.kinds is not None else list(synthetic.scene_kinds(args.suite))
+    short = {kind: short_label(kind) for kind in kinds}
     print(f"{num} / {den}, LMSE mean, {args.frames} frames at {args.size[1]}x{args.size[0]}"
           + (f", Params changes {' '.join(args.iv_param)}" if args.iv_param else ""))
     print(f"{'seed':>6} {num:>10} {den:>10} {'ratio':>7}  " + " ".join(f"{short[k]:>8}" for k in kinds))
