@@ -16,7 +16,12 @@ from ivkernels.io import write_png_sequence
 #: further (5.7e-3 in log albedo after 30 steps, measured); its kernels are
 #: checked against the references in test_kernels_coarse_basis.py and its
 #: gradient in test_solver.py.
-BUDGET = Params(outer_iterations=2, lbfgs_iterations=15, coarse_basis_spacing=0)
+#: A short budget, so the NumPy references finish in seconds.  The step evidence
+#: (``shading_step_gain``) is off: with it the energy is stiffer and 15 L-BFGS
+#: steps leave float32 and float64 4.5e-3 apart in log albedo (measured), a
+#: difference of stopping, not of kernels; tests/test_backends_agree.py checks
+#: the default energy, step evidence included, solved to convergence.
+BUDGET = Params(outer_iterations=2, lbfgs_iterations=15, coarse_basis_spacing=0, shading_step_gain=0.0)
 
 
 @pytest.fixture(scope="module")
