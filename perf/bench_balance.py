@@ -25,15 +25,11 @@ rows, the median seconds of all of the pair's calls per configuration, and
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from bench_launch import time_configs  # noqa: E402
-from eval_flow import SEQUENCES, default_data_dir, middlebury_pairs  # noqa: E402
+from common import SEQUENCES, default_data_dir, middlebury_pairs, time_configs
 
 
 def record_median_calls(be, frames) -> list:

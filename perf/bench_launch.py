@@ -24,48 +24,14 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import sys
-import time
 
 import numpy as np
 
+from common import largest_input_elements, time_configs
+
 KERNELS = ("vecops.axpy", "colour.luminance", "energy_shading.shading_smoothness", "median.median5x5")
 SIZES = ((15, 20), (30, 40), (60, 80), (120, 160), (240, 320), (480, 640))
-
-
-def largest_input_elements(values: dict) -> int:
-    """Elements of the largest array among a case's values."""
-    return max((v.size for v in values.values() if isinstance(v, np.ndarray)), default=0)
-
-
-def time_configs(call, be, configs: dict, repeat: int, budget_s: float,
-                 setting: str = "MIN_BAND_ELEMENTS") -> dict:
-    """Median seconds of ``call`` under each ``{name: (threads, value)}`` configuration,
-    ``value`` given to the launch setting ``setting`` (an attribute of
-    :mod:`ivkernels.kernels.launch`, restored afterwards), in rotating order."""
-    from ivkernels.kernels import launch
-
-    default = getattr(launch, setting)
-    times = {name: [] for name in configs}
-    names = list(configs)
-    t_start = time.perf_counter()
-    try:
-        for r in range(-1, repeat):                      # round -1 warms every configuration
-            for name in names[r % len(names):] + names[:r % len(names)]:
-                n, value = configs[name]
-                setattr(launch, setting, value)
-                with launch.threads(n):
-                    t0 = time.perf_counter()
-                    call()
-                    be.synchronize()
-                    if r >= 0:
-                        times[name].append(time.perf_counter() - t0)
-            if r >= 4 and time.perf_counter() - t_start > budget_s:
-                break
-    finally:
-        setattr(launch, setting, default)
-    return {name: statistics.median(v) for name, v in times.items()}
 
 
 def main(argv=None) -> int:

@@ -37,7 +37,7 @@ def run_one(args) -> dict:
     import numpy as np
 
     import ivkernels as iv
-    from calibrate import parse_grid
+    from common import parse_grid
     from ivkernels.evaluation import synthetic
     from ivkernels.kernels.launch import set_threads
 

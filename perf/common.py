@@ -26,14 +26,21 @@ Methods (:data:`METHODS`), each returning ``(albedo, shading)``:
 from __future__ import annotations
 
 import ast
+import dataclasses
 import itertools
+import statistics
 import time
+from pathlib import Path
 
 import numpy as np
 
 import ivkernels as iv
 from ivkernels.evaluation import metrics, synthetic
 from ivkernels.evaluation.baselines import color_retinex, luminance_retinex, weiss, weiss_flow
+from ivkernels.flow import ClassicNLSettings
+from ivkernels.flowio import read_flo
+from ivkernels.io import read_image
+from ivkernels.kernels import launch
 
 #: Seed 0 of every synthetic kind is for reporting only; choices are made on other seeds.
 EVAL_SEED = 0
@@ -172,3 +179,72 @@ def mean_rows(per_item: dict) -> dict:
     items = list(per_item.values())
     names = [m for m in items[0] if all(m in rows for rows in items)]
     return {m: {k: float(np.mean([rows[m][k] for rows in items])) for k in items[0][m]} for m in names}
+
+
+def parse_settings(items) -> dict:
+    """``["lam=3", "data_term=gradient"]`` -> typed fields of :class:`ClassicNLSettings`."""
+    types = {f.name: f.type for f in dataclasses.fields(ClassicNLSettings)}
+    out = {}
+    for item in items:
+        key, _, value = item.partition("=")
+        if key not in types:
+            raise SystemExit(f"unknown Classic+NL setting {key!r}")
+        typ = types[key]
+        out[key] = (int(value) if typ == "int" else float(value) if typ == "float"
+                    else value.lower() in ("1", "true", "yes") if typ == "bool" else value)
+    return out
+
+
+# ---------------------------------------------------------------- Middlebury pairs (eval_flow, bench_balance)
+
+SEQUENCES = ("Dimetrodon", "Grove2", "Grove3", "Hydrangea", "RubberWhale", "Urban2", "Urban3", "Venus")
+
+
+def default_data_dir() -> Path:
+    here = Path(__file__).resolve()
+    for base in (here.parents[1], *here.parents[2:4]):
+        for cand in (base / "shared" / "data" / "middlebury", base / "data" / "middlebury"):
+            if cand.is_dir():
+                return cand
+    return Path("/work/shared/data/middlebury")
+
+
+def middlebury_pairs(root: Path, names):
+    for name in names:
+        d = root / name
+        frames = np.stack([read_image(d / "frame10.png"), read_image(d / "frame11.png")])
+        yield name, frames, read_flo(d / "flow10.flo")[None]
+
+
+# ---------------------------------------------------------------- timing launch configurations (bench_launch, bench_balance)
+
+def largest_input_elements(values: dict) -> int:
+    """Elements of the largest array among a case's values."""
+    return max((v.size for v in values.values() if isinstance(v, np.ndarray)), default=0)
+
+
+def time_configs(call, be, configs: dict, repeat: int, budget_s: float,
+                 setting: str = "MIN_BAND_ELEMENTS") -> dict:
+    """Median seconds of ``call`` under each ``{name: (threads, value)}`` configuration,
+    ``value`` given to the launch setting ``setting`` (an attribute of
+    :mod:`ivkernels.kernels.launch`, restored afterwards), in rotating order."""
+    default = getattr(launch, setting)
+    times = {name: [] for name in configs}
+    names = list(configs)
+    t_start = time.perf_counter()
+    try:
+        for r in range(-1, repeat):                      # round -1 warms every configuration
+            for name in names[r % len(names):] + names[:r % len(names)]:
+                n, value = configs[name]
+                setattr(launch, setting, value)
+                with launch.threads(n):
+                    t0 = time.perf_counter()
+                    call()
+                    be.synchronize()
+                    if r >= 0:
+                        times[name].append(time.perf_counter() - t0)
+            if r >= 4 and time.perf_counter() - t_start > budget_s:
+                break
+    finally:
+        setattr(launch, setting, default)
+    return {name: statistics.median(v) for name, v in times.items()}

@@ -23,7 +23,6 @@ from __future__ import annotations
 import argparse
 import time
 
-import numpy as np
 
 import ivkernels as iv
 from common import parse_grid

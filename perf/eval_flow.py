@@ -22,30 +22,10 @@ from pathlib import Path
 
 import numpy as np
 
+from common import SEQUENCES, default_data_dir, middlebury_pairs, parse_settings
 from ivkernels.flow import FLOW_METHODS, estimate_flow
-from ivkernels.flowio import read_flo
-from ivkernels.io import read_image
 from ivkernels.kernels.launch import set_threads
 from ivkernels.evaluation.metrics import flow_errors
-
-SEQUENCES = ("Dimetrodon", "Grove2", "Grove3", "Hydrangea", "RubberWhale", "Urban2", "Urban3", "Venus")
-
-
-def default_data_dir() -> Path:
-    here = Path(__file__).resolve()
-    for base in (here.parents[1], *here.parents[2:4]):
-        for cand in (base / "shared" / "data" / "middlebury", base / "data" / "middlebury"):
-            if cand.is_dir():
-                return cand
-    return Path("/work/shared/data/middlebury")
-
-
-def middlebury_pairs(root: Path, names):
-    for name in names:
-        d = root / name
-        frames = np.stack([read_image(d / "frame10.png"), read_image(d / "frame11.png")])
-        yield name, frames, read_flo(d / "flow10.flo")[None]
-
 
 def synthetic_pairs(size, n_frames: int):
     from ivkernels.evaluation.synthetic import KINDS, render_sequence
@@ -53,24 +33,6 @@ def synthetic_pairs(size, n_frames: int):
     for kind in KINDS:
         seq = render_sequence(kind, n_frames=n_frames, size=size, seed=1)
         yield f"syn:{kind}", seq.frames, seq.flow
-
-
-def parse_settings(items) -> dict:
-    """``["lam=3", "data_term=gradient"]`` -> typed fields of :class:`ClassicNLSettings`."""
-    import dataclasses
-
-    from ivkernels.flow import ClassicNLSettings
-
-    types = {f.name: f.type for f in dataclasses.fields(ClassicNLSettings)}
-    out = {}
-    for item in items:
-        key, _, value = item.partition("=")
-        if key not in types:
-            raise SystemExit(f"unknown Classic+NL setting {key!r}")
-        typ = types[key]
-        out[key] = (int(value) if typ == "int" else float(value) if typ == "float"
-                    else value.lower() in ("1", "true", "yes") if typ == "bool" else value)
-    return out
 
 
 def main(argv=None) -> int:

@@ -26,8 +26,7 @@ import sys
 import time
 
 import ivkernels as iv
-from common import parse_grid
-from eval_flow import parse_settings
+from common import parse_grid, parse_settings
 from ivkernels.evaluation import metrics, synthetic
 from ivkernels.evaluation.joint import occlusion_iou
 

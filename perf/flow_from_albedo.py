@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import argparse
 
-import numpy as np
 
 import ivkernels as iv
 from ivkernels.evaluation import metrics, synthetic

@@ -482,7 +482,7 @@ def print_stages(rec: Recorder, total: float, roof: dict, diag_seconds: dict, pl
     print("  'in kernels': inside family host functions (kernels, their launches, their own host code);\n"
           "  'launch ovh': launches x one empty launch (part of 'in kernels'); 'host py/np': the stage's\n"
           "  time outside family functions and backend calls (Python, NumPy, L-BFGS vector algebra).")
-    print(f"  decompose()'s own diagnostics['seconds']: "
+    print("  decompose()'s own diagnostics['seconds']: "
           + ", ".join(f"{k} {v:.2f}" for k, v in diag_seconds.items()))
 
 

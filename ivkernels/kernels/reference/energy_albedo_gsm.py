@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.kernels.contract import Acc, Array, Family, Finite, FinitePositive, Int, Out, Rule, Workspace
+from ivkernels.kernels.contract import Acc, Array, Family, Finite, FinitePositive, Int, Rule, Workspace
 
 FAMILY = Family("energy_albedo_gsm", "The albedo's GSM smoothness (Eq. 11).")
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.kernels.contract import Acc, Array, Family, Out, Real, Rule
+from ivkernels.kernels.contract import Acc, Array, Family, Real, Rule
 
 FAMILY = Family("energy_shading", "Local smoothness and coupling of the shading (Eq. 9, 13).")
 

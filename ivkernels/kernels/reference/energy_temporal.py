@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.kernels.contract import Acc, Array, Family, Out, Positive, Real, Workspace
+from ivkernels.kernels.contract import Acc, Array, Family, Positive, Real, Workspace
 
 FAMILY = Family("energy_temporal", "The temporal terms (Eq. 4, 8).")
 
