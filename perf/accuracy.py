@@ -298,12 +298,16 @@ def evaluate_all(parser, args, kinds, methods):
                     per_kind[kind])
         checkpoint()
 
-    objects = datasets.available_mit_objects(args.mit_root)
-    if args.mit_objects is not None:
-        missing = sorted(set(args.mit_objects) - set(objects))
+    def chosen(available, asked, what):
+        """The items asked for (all available ones by default); a missing one ends in parser.error."""
+        if asked is None:
+            return tuple(available)
+        missing = sorted(set(asked) - set(available))
         if missing:
-            parser.error(f"MIT objects not found: {', '.join(missing)}")
-        objects = tuple(args.mit_objects)
+            parser.error(f"{what} not found: {', '.join(missing)}")
+        return tuple(asked)
+
+    objects = chosen(datasets.available_mit_objects(args.mit_root), args.mit_objects, "MIT objects")
     if args.mit is None:
         args.mit = bool(objects)
     if args.mit:
@@ -317,12 +321,7 @@ def evaluate_all(parser, args, kinds, methods):
                 print_table(f"MIT {name} ({mode}): 10 lights at {w}x{h} (scale {args.mit_scale})", per_obj[name])
                 checkpoint()
 
-    items = datasets.available_footage(args.data_root)
-    if args.footage_items is not None:
-        missing = sorted(set(args.footage_items) - set(items))
-        if missing:
-            parser.error(f"footage not found: {', '.join(missing)}")
-        items = tuple(args.footage_items)
+    items = chosen(datasets.available_footage(args.data_root), args.footage_items, "footage")
     if args.footage is None:
         args.footage = bool(items)
     if args.footage:
