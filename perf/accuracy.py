@@ -189,7 +189,7 @@ def print_footage(per_item: dict, sizes: dict) -> None:
     frame-to-frame change scaled up fifty times)."""
     if not per_item:
         return
-    methods = list(next(iter(per_item.values())))
+    methods = list(dict.fromkeys(m for rows in per_item.values() for m in rows))
     order = sorted(per_item, key=lambda n: -per_item[n].get("IV", {}).get("dark_ratio", 0.0))
     print(f"\ngreyscale footage: dark ratio (median albedo over the darkest 10% of input pixels / overall; "
           f"required <= {TARGET_DARK_RATIO} for IV) and albedo drift (% per 100 frames; required |drift| <= "
@@ -198,7 +198,8 @@ def print_footage(per_item: dict, sizes: dict) -> None:
     for name in order:
         rows = per_item[name]
         print(f"{name:<24} {'x'.join(map(str, sizes[name])):>12} " + " ".join(
-            f"{rows[m]['dark_ratio']:13.3f} {rows[m]['drift']:13.2f}" for m in methods))
+            f"{rows[m]['dark_ratio']:13.3f} {rows[m]['drift']:13.2f}" if m in rows else f"{'-':>13} {'-':>13}"
+            for m in methods))
     if all("IV" in rows for rows in per_item.values()):
         worst = max(per_item[n]["IV"]["dark_ratio"] for n in order)
         verdict = 'met' if worst <= TARGET_DARK_RATIO else f'missed by {worst - TARGET_DARK_RATIO:+.3f}'
