@@ -26,6 +26,7 @@ from ivkernels import validation as v
 from ivkernels.backends import check_device, get_backend
 from ivkernels.flow.classic_nl import DATA_TERMS, PRESETS, ClassicNL, ClassicNLSettings, settings_for
 from ivkernels.flow.opencv_flow import dis_flow, farneback_flow
+from ivkernels.kernels.memory import release_free_memory
 from ivkernels.kernels.thread_count import check_threads, get_threads
 from ivkernels.kernels.thread_count import threads as launch_threads
 
@@ -96,4 +97,6 @@ def estimate_flow(frames, method: str = "classic_nl_fast", backend: str = "warp"
     with launch_threads(threads):
         be = get_backend(backend, device)
         be.use_threads(threads)
-        return ClassicNL(be, settings)(frames, init)
+        flow = ClassicNL(be, settings)(frames, init)
+    release_free_memory()       # the pyramid's scratch is freed: its heap pages go back (kernels/memory.py)
+    return flow
