@@ -89,6 +89,32 @@ def test_sor_converges_to_solution_of_system(kernel_backend, rng, quad_frac):
     assert r < (1e-2 if quad_frac == 0.0 else 1e-4) * r0
 
 
+@pytest.mark.parametrize("n_threads, min_elements", [(1, None), (2, None), (2, 1), (5, 1)])
+def test_warp_full_sweep_equals_the_two_half_sweeps_bitwise(rng, monkeypatch, n_threads, min_elements):
+    """The fused sweep of the Warp backend is bit for bit parity 0 then parity 1, on odd sizes
+    split into several row bands (down to bands of one and two rows)."""
+    from ivkernels.backends import get_backend
+    from ivkernels.kernels import launch
+    if min_elements is not None:
+        monkeypatch.setattr(launch, "MIN_BAND_ELEMENTS", min_elements)
+    be = get_backend("warp", "cpu")
+    t, h, w = (3, 41, 67) if min_elements is None else (1, 7, 9)
+    lam, omega = 3.0, 1.9
+    _, _, smooth, system = irls_system(rng, t, h, w, 0.0, 2.0, lam)
+    du = rng.normal(scale=0.3, size=(t, h, w, 2)).astype(np.float32)
+    sys_b, s_b = be.asarray(system), be.asarray(smooth)
+    halves, fused = be.asarray(du.copy()), be.asarray(du.copy())
+    with launch.threads(n_threads):
+        bands = launch.row_bands(t * h, n_threads, 1, launch.min_band_rows(t * h, [fused, sys_b, s_b]))
+        assert len(bands) == n_threads
+        for _ in range(4):
+            for parity in (0, 1):
+                be.flow_classic.sor_sweep(halves, sys_b, s_b, lam, omega, parity)
+            be.flow_classic.sor_full_sweep(fused, sys_b, s_b, lam, omega)
+    assert not np.array_equal(be.numpy(halves), du)
+    np.testing.assert_array_equal(be.numpy(fused), be.numpy(halves))
+
+
 def test_thin_edges_of_a_step_is_one_pixel_wide(kernel_backend):
     flow = np.zeros((1, 12, 20, 2), np.float32)
     flow[:, :, 10:, 0] = 2.0                       # u jumps between columns 9 and 10

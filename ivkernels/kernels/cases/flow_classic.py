@@ -149,6 +149,12 @@ def _sor(parity):
                 variant=f"parity={parity}", updates=("du",), tol=Tol(1e-3, 1e-4))
 
 
+def _sor_full(rng, T, H, W):
+    s = irls_system(rng, T, H, W)
+    return {"du": normal(rng, (T, H, W, 2), 0.0, 0.3), "system": s["system"], "smooth": s["smooth"],
+            "lam": 3.0, "omega": 1.7}
+
+
 def _apply_update(limit):
     def make(rng, T, H, W):
         return {"flow": normal(rng, (T, H, W, 2), 0.0, 2.0), "du": normal(rng, (T, H, W, 2), 0.0, 3.0),
@@ -211,6 +217,9 @@ CASES = (
             lambda v: {"out": ref.assemble_system(v["flow"], v["data"], v["smooth"], v["lam"])},
             tol=Tol(1e-4, 0.0, 1e-5)),
     _sor(0), _sor(1),
+    Case(FC, "sor_full_sweep", _sor_full, ("du", "system", "smooth", "lam", "omega"), ("du",),
+         lambda v: {"du": ref.sor_full_sweep(v["du"], v["system"], v["smooth"], v["lam"], v["omega"])},
+         updates=("du",), tol=Tol(1e-3, 1e-4)),
     _apply_update(1.0), _apply_update(0.0),
     _simple("select_masked", _select_masked, ("mask", "inside_mask", "outside_mask", "out"), ("out",),
             lambda v: {"out": ref.select_masked(v["mask"], v["inside_mask"], v["outside_mask"])}, tol=EXACT,

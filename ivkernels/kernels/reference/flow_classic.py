@@ -58,6 +58,9 @@ FAMILY.declare("assemble_system(flow, data, smooth, lam, out)", "Per-pixel 2x2 s
                flow="T H W 2", data="T H W 5", smooth="T H W 4", lam=Real, out=Out("T H W 5"))
 FAMILY.declare("sor_sweep(du, system, smooth, lam, omega, parity)", "Red-black SOR half sweep on du in place.",
                du=Out("T H W 2"), system="T H W 5", smooth="T H W 4", lam=Real, omega=Real, parity=Choice(0, 1))
+FAMILY.declare("sor_full_sweep(du, system, smooth, lam, omega)",
+               "Red-black SOR full sweep on du in place: the parity 0 then 1 half sweeps.",
+               du=Out("T H W 2"), system="T H W 5", smooth="T H W 4", lam=Real, omega=Real)
 FAMILY.declare("apply_update(flow, du, out, limit=1.0)", "``out = flow + clip(du, -limit, limit)``.",
                flow="T H W 2", du="T H W 2", out=Out("T H W 2"), limit=Real)
 FAMILY.declare("select_masked(mask, inside_mask, outside_mask, out)",
@@ -201,6 +204,12 @@ def sor_sweep(du, system, smooth, lam, omega, parity):
     du[..., 0] = np.where(colour, (1 - omega) * du[..., 0] + omega * new_u, du[..., 0])
     du[..., 1] = np.where(colour, (1 - omega) * du[..., 1] + omega * new_v, du[..., 1])
     return du
+
+
+def sor_full_sweep(du, system, smooth, lam, omega):
+    """Returns ``du`` after a full red-black sweep: :func:`sor_sweep` with parity 0, then 1."""
+    du = sor_sweep(du, system, smooth, lam, omega, 0)
+    return sor_sweep(du, system, smooth, lam, omega, 1)
 
 
 def system_residual(du, system, smooth, lam):

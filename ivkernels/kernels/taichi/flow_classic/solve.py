@@ -10,7 +10,7 @@ from ivkernels.kernels.reference.flow_classic import FAMILY
 
 host = implements(FAMILY, FRONT)
 
-__all__ = ["assemble_system", "sor_sweep", "apply_update", "select_masked"]
+__all__ = ["assemble_system", "sor_sweep", "sor_full_sweep", "apply_update", "select_masked"]
 
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
@@ -128,6 +128,13 @@ def assemble_system(flow, data, smooth, lam: float, out) -> None:
 def sor_sweep(du, system, smooth, lam: float, omega: float, parity: int) -> None:
     """See :func:`ivkernels.kernels.warp.flow_classic.sor_sweep`."""
     _sor_sweep(du, system, smooth, float(lam), float(omega), int(parity))
+
+
+@host("sor_full_sweep")
+def sor_full_sweep(du, system, smooth, lam: float, omega: float) -> None:
+    """See :func:`ivkernels.kernels.warp.flow_classic.sor_full_sweep` (here the two half sweeps in order)."""
+    _sor_sweep(du, system, smooth, float(lam), float(omega), 0)
+    _sor_sweep(du, system, smooth, float(lam), float(omega), 1)
 
 
 @host("apply_update")
