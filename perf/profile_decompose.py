@@ -70,6 +70,8 @@ FLOPS_PER_ELEMENT = {
     # red-black SOR, per pixel of one colour (half the pixels per call): 8 neighbour
     # products and sums (24), the 2x2 determinant and solve (13), the relaxation (8)
     ("flow_classic", "sor_sweep"): (0.5 * 45, "du/1"),
+    # a full red-black sweep (sor_full_sweep): the same per pixel, every pixel once
+    ("flow_classic", "sor_full_sweep"): (45, "du/1"),
     ("flow_classic", "assemble_system"): (40, "flow/1"),
     ("flow_classic", "smoothness_weights"): (4 * 8, "flow/1"),
     ("flow_classic", "data_coefficients_channels"): (2 * 3 * 22, "du/1"),

@@ -34,7 +34,7 @@ def test_profile_prints_stages_families_kernels_and_host_steps():
     # every family is seen, also one split into a package of modules (flow_classic)
     for family in ("flow_classic", "median", "vecops", "energy_albedo_gsm"):
         assert f"\n  {family} " in out
-    assert "flow_classic.sor_sweep" in out
+    assert "flow_classic.sor_full_sweep" in out
     total = [line for line in out.splitlines() if line.startswith("  total ")][0].split()
     assert int(total[-1]) > 0 and int(total[-2]) > 0          # energy evaluations and launches counted
 

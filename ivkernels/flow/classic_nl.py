@@ -457,8 +457,7 @@ class ClassicNL:
             lam = (s.lam_quadratic or s.lam) * s.lam_coarse_factor ** depth
         fc.assemble_system(flow, lv.data, lv.smooth, lam, lv.system)
         for _ in range(sweeps):
-            fc.sor_sweep(lv.du, lv.system, lv.smooth, lam, s.sor_omega, 0)
-            fc.sor_sweep(lv.du, lv.system, lv.smooth, lam, s.sor_omega, 1)
+            fc.sor_full_sweep(lv.du, lv.system, lv.smooth, lam, s.sor_omega)
         if not s.median:
             fc.apply_update(flow, lv.du, flow, s.limit_update)
             return
