@@ -1,5 +1,4 @@
-"""perf/profile.py: it runs and prints every table; importing it as ``profile`` gives the standard library's.
-perf/eval_flow_sor_fused.py: its fused SOR sweep gives the two half-sweeps' bits."""
+"""perf/profile.py: it runs and prints every table; importing it as ``profile`` gives the standard library's."""
 import subprocess
 import sys
 from pathlib import Path
@@ -39,16 +38,6 @@ def test_profile_prints_stages_families_kernels_and_host_steps():
     assert int(total[-1]) > 0 and int(total[-2]) > 0          # energy evaluations and launches counted
 
 
-def test_fused_sor_prototype_matches_the_two_half_sweeps_bit_for_bit():
-    # odd sizes, several frames: the band edges and frame edges fall on rows of both colours
-    proc = subprocess.run([sys.executable, str(PERF / "eval_flow_sor_fused.py"), "--shape", "3", "17", "23",
-                           "--repeat", "2", "--sweeps", "3"], capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
-    lines = [line for line in proc.stdout.splitlines() if "thread(s)" in line]
-    assert len(lines) == 2 and all(line.endswith("bitwise equal after 3 x 3 sweeps: True") for line in lines)
-
-
-@pytest.mark.slow
 def test_eval_flow_windows_prints_its_line():
     proc = subprocess.run([sys.executable, str(PERF / "eval_flow_windows.py"), "--mode", "noahead", "--frames", "10",
                            "--size", "32", "40"], capture_output=True, text=True, timeout=600)
