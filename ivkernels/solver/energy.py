@@ -40,7 +40,7 @@ from ivkernels.kernels.workspace import Workspace
 from ivkernels.params import Params
 from ivkernels.priors import entropy_blur_weights
 from ivkernels.solver.motion_maps import shading_cut_gate
-from ivkernels.solver.step_evidence import chromatic_share, step_gate
+from ivkernels.solver.step_evidence import grey_step_gate
 
 
 #: Flow (pixels) below which a pixel counts as holding still for Weiss's cue.
@@ -129,13 +129,9 @@ class WindowEnergy:
                                  tau_chroma=params.shading_gate_chroma)
             gate = edge_gate if gate is None else be.asarray(be.numpy(gate) * be.numpy(edge_gate))
         if params.shading_step_gain > 0:
-            log_image = be.numpy(self.I)
             tau_chroma = params.shading_step_chroma if params.shading_step_chroma > 0 else np.inf
-            gain = params.shading_step_gain
-            if np.isfinite(tau_chroma):
-                # trust a grey step as albedo as much as the scene's albedo edges are grey
-                gain *= (1.0 - chromatic_share(log_image, params.shading_step_tau, tau_chroma)) ** 2
-            steps = step_gate(log_image, gain, params.shading_step_tau, tau_chroma)
+            steps = grey_step_gate(be.numpy(self.I), params.shading_step_gain, params.shading_step_tau,
+                                   tau_chroma)
             if self.temporal and params.shading_step_stability > 0:
                 steps = 1.0 + (steps - 1.0) * self._step_stability(params.shading_step_stability)
             gate = be.asarray(steps) if gate is None else be.asarray(be.numpy(gate) * steps)

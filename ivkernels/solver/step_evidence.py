@@ -27,9 +27,15 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["chromatic_share", "step_evidence", "step_gate", "DARK_OFFSET"]
+__all__ = ["chromatic_share", "grey_step_gate", "step_evidence", "step_gate", "DARK_OFFSET"]
 
-NEIGHBOURS_8 = [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if (dy, dx) != (0, 0)]
+#: Half of the eight neighbour offsets: with them every pair of neighbours is
+#: seen once, and a pair's evidence, which does not depend on its order, goes
+#: to both of its pixels.
+HALF_NEIGHBOURS = ((0, 1), (1, 0), (1, 1), (1, -1))
+
+#: The horizontal and vertical pairs, over which :func:`chromatic_share` counts.
+AXIS_NEIGHBOURS = ((0, 1), (1, 0))
 
 #: Linear offset added before the log when reading steps: ``log(i + DARK_OFFSET)``.
 #: In the darkest pixels a log step says little (sensor noise and compression
@@ -38,8 +44,53 @@ NEIGHBOURS_8 = [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if (dy, dx) !
 DARK_OFFSET = 0.02
 
 
-def _offset_log(log_image: np.ndarray) -> np.ndarray:
-    return np.log(np.exp(np.asarray(log_image, np.float32)) + np.float32(DARK_OFFSET))
+def _luminance_chroma(log_image: np.ndarray):
+    """``L`` (T, h, w) and ``C`` (T, h, w, 3): mean and chromaticity of ``log(i + DARK_OFFSET)``."""
+    I = np.log(np.exp(np.asarray(log_image, np.float32)) + np.float32(DARK_OFFSET))
+    L = I.mean(axis=-1)
+    return L, I - L[..., None]
+
+
+def _pair_slices(shape, dy: int, dx: int):
+    """Index tuples of the pixels ``x`` and of their neighbours ``x + (dy, dx)`` (``dy >= 0``)."""
+    _, h, w = shape
+    xs, xn = slice(max(0, -dx), w - max(0, dx)), slice(max(0, dx), w + min(0, dx))
+    return (slice(None), slice(0, h - dy), xs), (slice(None), slice(dy, h), xn)
+
+
+def _chroma_change(C, a, b) -> np.ndarray:
+    return np.abs(C[a] - C[b]).max(axis=-1)
+
+
+def _share(L, C, tau: float, tau_chroma: float) -> float:
+    sharp_steps = chromatic_steps = 0
+    for dy, dx in AXIS_NEIGHBOURS:
+        a, b = _pair_slices(L.shape, dy, dx)
+        chromatic = _chroma_change(C, a, b) > tau_chroma
+        sharp_steps += int(np.count_nonzero(chromatic | (np.abs(L[a] - L[b]) > tau)))
+        chromatic_steps += int(np.count_nonzero(chromatic))
+    return chromatic_steps / sharp_steps if sharp_steps else 0.0
+
+
+def _evidence(L, C, tau: float, tau_chroma: float) -> np.ndarray:
+    out = np.zeros(L.shape, np.float32)
+    for dy, dx in HALF_NEIGHBOURS:
+        a, b = _pair_slices(L.shape, dy, dx)
+        ev = 1.0 - np.exp(-((L[a] - L[b]) / np.float32(tau)) ** 2)
+        if np.isfinite(tau_chroma):
+            ev *= np.exp(-(_chroma_change(C, a, b) / np.float32(tau_chroma)) ** 2)
+        np.maximum(out[a], ev, out=out[a])
+        np.maximum(out[b], ev, out=out[b])
+    return out
+
+
+def _check(gain: float, tau: float, tau_chroma: float) -> None:
+    if not (np.isfinite(gain) and gain >= 0):
+        raise ValueError(f"gain must be a non-negative number, got {gain!r}")
+    if not (np.isfinite(tau) and tau > 0):
+        raise ValueError(f"tau must be a positive number, got {tau!r}")
+    if not tau_chroma > 0:
+        raise ValueError(f"tau_chroma must be a positive number, got {tau_chroma!r}")
 
 
 def chromatic_share(log_image: np.ndarray, tau: float, tau_chroma: float) -> float:
@@ -53,44 +104,19 @@ def chromatic_share(log_image: np.ndarray, tau: float, tau_chroma: float) -> flo
     most of its edges, a grey step is mostly light; where it never does, a
     grey step is all the albedo edges there are.  0 when there is no sharp step.
     """
-    I = _offset_log(log_image)
-    L = I.mean(axis=-1)
-    C = I - L[..., None]
-    sharp_steps = chromatic_steps = 0
-    for dy, dx in ((0, 1), (1, 0)):
-        h, w = L.shape[1] - dy, L.shape[2] - dx
-        dL = np.abs(L[:, :h, :w] - L[:, dy:, dx:])
-        dC = np.abs(C[:, :h, :w] - C[:, dy:, dx:]).max(axis=-1)
-        chromatic = dC > tau_chroma
-        sharp_steps += int(np.count_nonzero(chromatic | (dL > tau)))
-        chromatic_steps += int(np.count_nonzero(chromatic))
-    return chromatic_steps / sharp_steps if sharp_steps else 0.0
+    return _share(*_luminance_chroma(log_image), tau, tau_chroma)
 
 
 def step_evidence(log_image: np.ndarray, tau: float, tau_chroma: float) -> np.ndarray:
     """Evidence in [0, 1) that a pixel lies on a sharp grey step, (T, h, w) float32.
 
-    log_image : (T, h, w, 3) float, ``I = log i``.
+    log_image : (T, h, w, 3) float, ``I = log i`` (read as ``log(i + DARK_OFFSET)``).
     tau : > 0, the log-luminance step at which a step counts ``1 - 1/e``.
     tau_chroma : > 0, the change of log chromaticity at which a step counts
         ``1/e`` as grey; ``inf``: chromaticity is not looked at.
     Border pixels compare with the neighbours they have.
     """
-    I = _offset_log(log_image)
-    L = I.mean(axis=-1)
-    C = I - L[..., None]
-    T, h, w = L.shape
-    out = np.zeros((T, h, w), np.float32)
-    for dy, dx in NEIGHBOURS_8:
-        ys, yn = slice(max(0, -dy), h - max(0, dy)), slice(max(0, dy), h + min(0, dy))
-        xs, xn = slice(max(0, -dx), w - max(0, dx)), slice(max(0, dx), w + min(0, dx))
-        dL = L[:, ys, xs] - L[:, yn, xn]
-        ev = 1.0 - np.exp(-(dL / np.float32(tau)) ** 2)
-        if np.isfinite(tau_chroma):
-            dC = np.abs(C[:, ys, xs] - C[:, yn, xn]).max(axis=-1)
-            ev *= np.exp(-(dC / np.float32(tau_chroma)) ** 2)
-        np.maximum(out[:, ys, xs], ev, out=out[:, ys, xs])
-    return out
+    return _evidence(*_luminance_chroma(log_image), tau, tau_chroma)
 
 
 def step_gate(log_image: np.ndarray, gain: float, tau: float, tau_chroma: float = np.inf) -> np.ndarray:
@@ -99,8 +125,17 @@ def step_gate(log_image: np.ndarray, gain: float, tau: float, tau_chroma: float 
     gain : >= 0, how much more a sharp grey step costs the shading (0: weight 1).
     tau, tau_chroma : see :func:`step_evidence`.
     """
-    for name, value, low_open in (("gain", gain, False), ("tau", tau, True), ("tau_chroma", tau_chroma, True)):
-        bad = not (value > 0 if low_open else value >= 0) or (name != "tau_chroma" and not np.isfinite(value))
-        if bad or np.isnan(value):
-            raise ValueError(f"{name} must be a {'positive' if low_open else 'non-negative'} number, got {value!r}")
+    _check(gain, tau, tau_chroma)
     return (1.0 + gain * step_evidence(log_image, tau, tau_chroma)).astype(np.float32)
+
+
+def grey_step_gate(log_image: np.ndarray, gain: float, tau: float, tau_chroma: float = np.inf) -> np.ndarray:
+    """The weight Eq. 9's local term uses: :func:`step_gate` with the gain scaled
+    by ``(1 - chromatic_share)^2`` (unscaled when ``tau_chroma`` is ``inf``),
+    reading the image once for both; (T, h, w) float32."""
+    _check(gain, tau, tau_chroma)
+    L, C = _luminance_chroma(log_image)
+    if np.isfinite(tau_chroma):
+        # trust a grey step as albedo as much as the scene's albedo edges are grey
+        gain *= (1.0 - _share(L, C, tau, tau_chroma)) ** 2
+    return (1.0 + gain * _evidence(L, C, tau, tau_chroma)).astype(np.float32)
