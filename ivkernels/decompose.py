@@ -41,8 +41,9 @@ DEFAULT_FLOW_PASSES = 2
 #: Frame pairs given to the flow method per call (bounds its working memory).
 FLOW_PAIRS_PER_CALL = 7
 #: Estimate the next window's first-pass flow on a second thread while this
-#: window is solved, with the Warp backend on the CPU (its launches release the
-#: GIL); the results are the same.
+#: window is solved, on a backend whose launches from two Python threads run at
+#: once (``Backend.overlaps_python_threads``: Warp on the CPU); the results are
+#: the same.
 FLOW_AHEAD = True
 
 
@@ -293,7 +294,7 @@ class _Decomposer:
         carried = None
         ahead = pool = None
         if FLOW_AHEAD and len(ranges) > 1 and self.flow is None and self.flow_method is not None \
-                and be.name == "warp" and be.device == "cpu":
+                and be.overlaps_python_threads:
             pool = ThreadPoolExecutor(1, thread_name_prefix="ivkernels-flow-ahead")
         try:
             for index, (start, stop, n_carried) in enumerate(ranges):

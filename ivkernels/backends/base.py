@@ -24,6 +24,11 @@ class Backend:
     def __init__(self, device: str = "cpu"):
         self.device = device
 
+    #: Whether host functions called from two Python threads run at the same
+    #: time on the CPU (their launches release the GIL): the solver then
+    #: estimates the next window's flow on a second thread while it solves.
+    overlaps_python_threads = False
+
     def use_threads(self, threads: int) -> None:
         """Make the next launches run on ``threads`` CPU threads.
 

@@ -59,6 +59,11 @@ class WarpBackend(Backend):
         super().__init__(device)
         self._wp = start_warp()
 
+    @property
+    def overlaps_python_threads(self) -> bool:
+        """Warp's CPU launches release the GIL; CUDA launches are left to the stream."""
+        return self.device == "cpu"
+
     def asarray(self, a: np.ndarray):
         """Backend array holding ``a`` (a zero-copy view on the CPU when possible)."""
         wp = self._wp
