@@ -188,6 +188,26 @@ def test_sigterm_inside_an_output_folder_removes_it(tmp_path):
     assert signal.getsignal(signal.SIGTERM) == before
 
 
+@pytest.mark.parametrize("signum, expected", [(signal.SIGTERM, Interrupted), (signal.SIGINT, KeyboardInterrupt)])
+def test_a_swallowed_signal_still_stops_the_commit(tmp_path, signum, expected):
+    """Python drops an exception raised inside some hooks (an at-fork handler, a
+    finaliser); the signal must still keep the output from being published."""
+    out = tmp_path / "out"
+    folder = OutputFolder(out)
+    folder.check()
+    with pytest.raises(expected):
+        with folder as partial:
+            (partial / "a.txt").write_text("x")
+            try:
+                os.kill(os.getpid(), signum)
+                time.sleep(0.1)
+            except (Interrupted, KeyboardInterrupt):
+                pass                    # what the swallowing hook does
+            folder.commit()
+    assert not out.exists()
+    assert not list(tmp_path.glob("out.*.partial"))
+
+
 def test_stale_partial_of_a_dead_run_is_named_and_removed(image_folder, tmp_path, capsys, monkeypatch):
     stale = tmp_path / f"out.{DEAD_PID}.partial"
     _fake_output(stale)

@@ -91,6 +91,7 @@ class OutputFolder:
         self.notes: list[str] = []
         self.partial: Path | None = None
         self._old_handlers: dict = {}
+        self._signal: int | None = None     # the signal received while open, if any
         self._committed = False
         self._lock: Path | None = None
 
@@ -230,6 +231,7 @@ class OutputFolder:
 
     def commit(self) -> Path:
         """Move the partial folder to the output name (replacing a checked old output)."""
+        self._raise_if_signalled()
         out = self.out
         old = None
         if out.exists() or out.is_symlink():
@@ -273,16 +275,31 @@ class OutputFolder:
             self._restore_handlers()
 
     def _install_handlers(self) -> None:
+        # The signal is also recorded: Python swallows an exception raised while it runs
+        # certain hooks (an at-fork handler, a finaliser), and the run must then still
+        # stop at commit() rather than publish an output the user asked it to abandon.
         def handler(signum, frame):
+            self._signal = signum
+            if signum == signal.SIGINT:
+                raise KeyboardInterrupt
             raise Interrupted(signum)
 
-        for signum in (signal.SIGTERM, getattr(signal, "SIGHUP", None)):
+        signums = [signal.SIGTERM, getattr(signal, "SIGHUP", None)]
+        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            signums.append(signal.SIGINT)
+        for signum in signums:
             if signum is None:
                 continue
             try:
                 self._old_handlers[signum] = signal.signal(signum, handler)
             except ValueError:          # not the main thread: signals stay as they were
                 break
+
+    def _raise_if_signalled(self) -> None:
+        if self._signal == signal.SIGINT:
+            raise KeyboardInterrupt
+        if self._signal is not None:
+            raise Interrupted(self._signal)
 
     def _restore_handlers(self) -> None:
         for signum, old in self._old_handlers.items():
