@@ -33,7 +33,7 @@ import argparse
 import numpy as np
 
 import ivkernels as iv
-from common import parse_grid
+from common import EVAL_SEED, parse_grid
 from ivkernels.evaluation import baselines, datasets, metrics, synthetic
 from ivkernels.backends.registry import get_backend
 from ivkernels.priors import load_albedo_prior
@@ -42,7 +42,6 @@ from ivkernels.solver.independent_shadings import independent_shadings, with_alb
 from ivkernels.solver.motion_maps import motion_maps
 from ivkernels.solver.window_solver import log_and_weight
 
-EVAL_SEED = 0
 TERMS = ConstrainedEnergy.TERMS
 
 
@@ -83,14 +82,14 @@ def sequences(args):
         if seed == EVAL_SEED:
             raise SystemExit("seed 0 is kept for reporting; measure on training seeds only")
         for kind in args.kinds:
-            seq = synthetic.render_sequence(kind, args.frames, tuple(args.size), seed=seed)
+            seq = synthetic.render_kind(kind, n_frames=args.frames, size=tuple(args.size), seed=seed)
             yield f"{kind}/{seed}", seq.frames, seq.flow, seq.albedo, seq.shading, None
     if args.mit:
         for name in args.mit_objects or datasets.available_mit_objects():
-            obj = datasets.load_mit_object(name, scale=args.mit_scale)
+            obj = datasets.load_mit_object(name, scale=args.mit_scale, achromatic=args.mit_achromatic)
             t, h, w, _ = obj.frames.shape
             shading = np.where(obj.mask, obj.frame_shading, 1.0).astype(np.float32)
-            yield (f"MIT {name}", obj.frames, np.zeros((t - 1, h, w, 2), np.float32),
+            yield (f"MIT {name}{' (grey)' if args.mit_achromatic else ''}", obj.frames, np.zeros((t - 1, h, w, 2), np.float32),
                    np.broadcast_to(obj.albedo, obj.frames.shape), shading, obj.mask)
 
 
@@ -99,13 +98,21 @@ def main(argv=None) -> int:
     parser.add_argument("--seeds", type=int, nargs="*", default=[12])
     parser.add_argument("--frames", type=int, default=6)
     parser.add_argument("--size", type=int, nargs=2, default=(120, 160), metavar=("H", "W"))
-    parser.add_argument("--kinds", nargs="*", default=list(synthetic.KINDS))
+    parser.add_argument("--kinds", nargs="*", default=None, choices=list(synthetic.SCENE_KINDS), metavar="KIND",
+                        help="names of synthetic.SCENE_KINDS (default: the suite's); none for MIT only")
+    parser.add_argument("--suite", default="classic",
+                        choices=("classic", "new", "all", "static", "achromatic", "hard"),
+                        help="the kinds when --kinds is not given (synthetic.scene_kinds; default classic)")
     parser.add_argument("--mit", action="store_true", help="also the MIT-Berkeley training objects")
     parser.add_argument("--mit-scale", type=float, default=0.5)
     parser.add_argument("--mit-objects", nargs="+", metavar="NAME")
+    parser.add_argument("--mit-achromatic", action="store_true",
+                        help="the MIT objects as greyscale footage (luminance in, luminance reflectance as truth)")
     parser.add_argument("--set", nargs="*", default=[], metavar="NAME=VALUE", help="Params fields")
     parser.add_argument("--backend", default="warp")
     args = parser.parse_args(argv)
+    if args.kinds is None:
+        args.kinds = synthetic.scene_kinds(args.suite)
 
     fields = parse_grid(args.set)[0]
     be = get_backend(args.backend)
