@@ -88,6 +88,12 @@ class Params:
         balance of Eq. 9 and Eq. 11.  Chosen on training data (synthetic seed
         1 as colour and as grey video, the MIT training objects in colour and
         luminance; perf/RESULTS.md, "Grey albedo steps"). Gain 0: off.
+    shading_step_share_radius
+        Where ``s`` is read: over a square window of half-side this fraction
+        of the frame's shorter side around each pixel
+        (:func:`ivkernels.solver.step_evidence.local_chromatic_share`), so a
+        grey floor beside coloured objects keeps its own low share; 0: one
+        share for the whole video.
     shading_gate_chroma
         With the gate on and this > 0, a contrast change where the input's
         log chromaticity changes by about this much is not taken for a
@@ -193,6 +199,7 @@ class Params:
     shading_step_tau: float = 0.1
     shading_step_chroma: float = 0.05
     shading_step_stability: float = 0.3
+    shading_step_share_radius: float = 0.0
     shading_gate_chroma: float = 0.0
     lam_shading_nonlocal: float = 10000.0
     lam_coupling: float = 10.0
@@ -291,5 +298,7 @@ _RULES = {
     "shading_step_tau": Range(float, 0.0, low_open=True, why="a log step"),
     "shading_step_stability": Range(float, 0.0, why="a change of log contrast; 0: not looked at"),
     "shading_step_chroma": Range(float, 0.0, why="a change of log chromaticity; 0: chromaticity not looked at"),
+    "shading_step_share_radius": Range(float, 0.0, 1.0, why="a fraction of the frame's shorter side; "
+                                       "0: the share of the whole video"),
     "shading_gate_chroma": Range(float, 0.0, why="a log-chromaticity change; 0: the gate ignores colour"),
 }

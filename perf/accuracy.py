@@ -25,7 +25,9 @@ to the Weiss median on static-scene moving-light kinds and MIT, worst first,
 with issue 33's targets; and the greyscale-footage check (``--footage``: the
 Middlebury frames and the real clip in grey, ``datasets.load_grey_footage``):
 ``metrics.dark_ratio`` and ``metrics.albedo_drift`` of every method, worst
-first.
+first; and the drift check (``--drift-kinds``): constant-light kinds rendered
+long (``--drift-frames``, several windows), where IV's albedo level must hold
+against the truth to 0.5% per 100 frames.
 
 Evaluation uses seed 0 of every kind, never used for choices; ``--seed``
 evaluates a training seed with the same script.  All IV rows go through
@@ -34,7 +36,7 @@ evaluates a training seed with the same script.  All IV rows go through
 
     python perf/accuracy.py [--suite all] [--frames 8] [--size 240 320] [--seed 0] [--methods IV LRET ...]
                             [--kinds ...] [--no-mit] [--mit-modes colour achromatic] [--mit-scale 0.5]
-                            [--no-footage] [--footage-frames 24] [--large] [--backend warp] [--save ROWS.json]
+                            [--no-footage] [--footage-frames 24] [--drift-kinds ...] [--drift-frames 40] [--large] [--backend warp] [--save ROWS.json]
     python perf/accuracy.py --load ROWS.json [MORE.json ...]     # merge runs split in parts, print the tables
 """
 from __future__ import annotations
@@ -53,6 +55,9 @@ SUITES = ("classic", "new", "all", "static", "achromatic", "hard")
 #: issue 33's targets: IV / best per-frame baseline per kind and on the mean, IV / Weiss
 TARGET_PER_KIND, TARGET_MEAN, TARGET_DARK_RATIO, TARGET_DRIFT = 0.9, 0.7, 0.4, 0.5
 DRIFT_MIN_FRAMES = 8
+#: Kinds whose light does not change (fixed lamps; camera and objects move): rendered
+#: long, the albedo's level must hold against the truth (``metrics.albedo_drift``).
+DRIFT_KINDS = ("objects_camera", "mixed_two_lights_orbit_hard")
 
 
 def evaluate_mit(name: str, scale: float, methods, args, achromatic: bool = False) -> tuple[dict, tuple]:
@@ -246,6 +251,10 @@ def main(argv=None) -> int:
                         help="a field of ivkernels.Params for every IV row (repeatable)")
     parser.add_argument("--iv-option", action="append", metavar="NAME=VALUE",
                         help="a keyword argument of decompose for every IV row (repeatable)")
+    parser.add_argument("--drift-kinds", nargs="*", default=list(DRIFT_KINDS), metavar="KIND",
+                        help="constant-light kinds rendered long for the drift check (none: skip it)")
+    parser.add_argument("--drift-frames", type=int, default=40, help="frames of the drift check's sequences")
+    parser.add_argument("--drift-size", type=int, nargs=2, default=(120, 160), metavar=("H", "W"))
     parser.add_argument("--save", metavar="JSON", help="write every row to this file")
     parser.add_argument("--load", nargs="+", metavar="JSON",
                         help="print the tables of rows saved by --save (merged; nothing is run)")
@@ -264,16 +273,17 @@ def main(argv=None) -> int:
     if args.load:
         saved = load_rows(args.load)
         per_kind, mit_by_mode, footage, sizes = saved["kinds"], saved["mit"], saved["footage"], saved["sizes"]
+        drift = saved["drift"]
         for kind, rows in per_kind.items():
             print_table(f"{kind} (from {', '.join(args.load)})", rows)
         for mode, per_obj in mit_by_mode.items():
             for name, rows in per_obj.items():
                 print_table(f"MIT {name} ({mode})", rows)
     else:
-        per_kind, mit_by_mode, footage, sizes = evaluate_all(parser, args, kinds, methods)
+        per_kind, mit_by_mode, footage, sizes, drift = evaluate_all(parser, args, kinds, methods)
     if args.save:
         print(f"\nrows saved to {args.save}")
-    report(per_kind, mit_by_mode, footage, sizes)
+    report(per_kind, mit_by_mode, footage, sizes, drift)
     if args.large and kinds and not args.load:
         kind = kinds[0]
         rows = evaluate_kind(kind, args.frames, (480, 640), args.seed, methods, args)
@@ -285,13 +295,14 @@ def evaluate_all(parser, args, kinds, methods):
     """Run every method on the kinds, the MIT objects and the footage asked for,
     printing each item's table as it is done (and writing every row so far to
     ``args.save``, so a long run stopped early keeps what finished); returns
-    ``(per_kind, mit_by_mode, footage, sizes)``."""
-    per_kind, mit_by_mode, footage, sizes = {}, {}, {}, {}
+    ``(per_kind, mit_by_mode, footage, sizes, drift)``."""
+    per_kind, mit_by_mode, footage, sizes, drift = {}, {}, {}, {}, {}
 
     def checkpoint():
         if args.save:
             with open(args.save, "w") as f:
-                json.dump(dict(kinds=per_kind, mit=mit_by_mode, footage=footage, sizes=sizes), f, indent=1)
+                json.dump(dict(kinds=per_kind, mit=mit_by_mode, footage=footage, sizes=sizes, drift=drift),
+                          f, indent=1)
 
     for kind in kinds:
         per_kind[kind] = evaluate_kind(kind, args.frames, args.size, args.seed, methods, args)
@@ -336,13 +347,26 @@ def evaluate_all(parser, args, kinds, methods):
                 f"{m} dark {r['dark_ratio']:.3f} drift {r['drift']:+.2f}% ({r['seconds']:.1f} s)"
                 for m, r in footage[name].items()), flush=True)
             checkpoint()
-    return per_kind, mit_by_mode, footage, sizes
+    for kind in args.drift_kinds:
+        seq = synthetic.render_kind(kind, n_frames=args.drift_frames, size=tuple(args.drift_size), seed=args.seed)
+        rows = {}
+        for name in [m for m in methods if m in ("IV", "IV-noflow", "IV-gtflow")]:
+            t0 = time.perf_counter()
+            albedo, _ = run_method(name, seq.frames, dict(flow=seq.flow), args)
+            rows[name] = dict(drift=metrics.albedo_drift(albedo, reference=seq.albedo),
+                              seconds=time.perf_counter() - t0)
+        drift[kind] = dict(rows=rows, size=(args.drift_frames, args.drift_size[1], args.drift_size[0]))
+        print(f"drift {kind} ({args.drift_frames} frames at {args.drift_size[1]}x{args.drift_size[0]}): "
+              + ", ".join(f"{m} {r['drift']:+.2f}% per 100 frames ({r['seconds']:.0f} s)" for m, r in rows.items()),
+              flush=True)
+        checkpoint()
+    return per_kind, mit_by_mode, footage, sizes, drift
 
 
 def load_rows(paths) -> dict:
     """The rows of one or more ``--save`` files, merged: an item in several files
     gets the methods of all of them (a later file's row of the same method wins)."""
-    out = dict(kinds={}, mit={}, footage={}, sizes={})
+    out = dict(kinds={}, mit={}, footage={}, sizes={}, drift={})
     for path in paths:
         with open(path) as f:
             data = json.load(f)
@@ -353,10 +377,26 @@ def load_rows(paths) -> dict:
             for item, rows in per_obj.items():
                 out["mit"].setdefault(mode, {}).setdefault(item, {}).update(rows)
         out["sizes"].update({k: tuple(v) for k, v in data["sizes"].items()})
+        for kind, item in data.get("drift", {}).items():
+            out["drift"].setdefault(kind, dict(rows={}, size=item["size"]))["rows"].update(item["rows"])
     return out
 
 
-def report(per_kind: dict, mit_by_mode: dict, footage: dict, sizes: dict) -> None:
+def print_drift(drift: dict) -> None:
+    """The albedo's drift against the truth on the long constant-light sequences."""
+    if not drift:
+        return
+    print(f"\nconstant light, long sequences: albedo drift against the truth (% per 100 frames, "
+          f"metrics.albedo_drift with reference; required |drift| <= {TARGET_DRIFT} for IV)")
+    for kind, item in drift.items():
+        t, w, h = item["size"]
+        for method, row in item["rows"].items():
+            verdict = "" if method != "IV" else (
+                "  met" if abs(row["drift"]) <= TARGET_DRIFT else f"  missed by {abs(row['drift']) - TARGET_DRIFT:+.2f}")
+            print(f"  {kind:<32} {t}x{w}x{h}  {method:<10} {row['drift']:+7.2f}{verdict}")
+
+
+def report(per_kind: dict, mit_by_mode: dict, footage: dict, sizes: dict, drift: dict | None = None) -> None:
     """The means, issue 10's summary and issue 33's ratio tables."""
     mean = {}
     if per_kind:
@@ -372,6 +412,7 @@ def report(per_kind: dict, mit_by_mode: dict, footage: dict, sizes: dict) -> Non
     print_ratios("issue 33: MIT objects, IV / best per-frame baseline and IV / Weiss (albedo LMSE in the mask; "
                  "required <= 1), worst first", ratio_rows(mit_items, "albedo", set(mit_items)), 1.0, False)
     print_footage(footage, sizes)
+    print_drift(drift or {})
 
 if __name__ == "__main__":
     raise SystemExit(main())

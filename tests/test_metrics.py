@@ -397,3 +397,20 @@ def test_albedo_drift_on_a_known_ramp():
     mask = np.zeros((17, 23), bool)
     mask[:, :12] = True
     assert albedo_drift(mixed, mask=mask) == pytest.approx(0.0, abs=1e-9)
+
+
+def test_albedo_drift_against_a_reference_ignores_content_that_enters_the_view():
+    rng = np.random.default_rng(4)
+    t = 30
+    # a pan over a bright-to-dark gradient: the true albedo's level falls frame by frame
+    truth = np.stack([rng.uniform(0.2, 0.9, (9, 11, 3)) * np.exp(-0.01 * k) for k in range(t)])
+    assert albedo_drift(truth) < -80                 # about -100, the content's own change
+    # a method that gets the albedo right up to a fixed scale does not drift
+    assert albedo_drift(0.7 * truth, reference=truth) == pytest.approx(0.0, abs=1e-9)
+    # one whose scale falls 0.02% a frame drifts -2% per 100 frames
+    drifting = truth * np.exp(-0.0002 * np.arange(t))[:, None, None, None]
+    assert albedo_drift(drifting, reference=truth) == pytest.approx(-2.0, rel=1e-6)
+    # grey stacks work the same
+    assert albedo_drift(drifting[:, :, :, 0], reference=truth[:, :, :, 0]) == pytest.approx(-2.0, rel=1e-6)
+    with pytest.raises(ValueError, match="positive"):
+        albedo_drift(truth, reference=truth * 0)

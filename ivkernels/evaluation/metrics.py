@@ -530,7 +530,7 @@ def dark_ratio(albedo, frames, fraction: float = 0.1, mask=None) -> float:
     return float(np.median(a[dark])) / overall
 
 
-def albedo_drift(albedo, mask=None) -> float:
+def albedo_drift(albedo, mask=None, reference=None) -> float:
     """Drift of the albedo's level, in percent per 100 frames.
 
     The level of frame ``t`` is the median albedo luminance ``m_t`` (inside
@@ -540,10 +540,15 @@ def albedo_drift(albedo, mask=None) -> float:
     level (``|drift| <= 0.5``); an albedo that brightens 1% a frame drifts
     about 100% per 100 frames.
 
+    With a ``reference`` (the true albedo) the level of a frame is the median
+    of ``lum(albedo) / lum(reference)`` instead: the method's own drift, free
+    of what enters and leaves the view.
+
     Parameters
     ----------
     albedo : ``(T, H, W, 3)`` linear RGB or ``(T, H, W)`` grey, ``T >= 2``.
     mask : bool ``(H, W)`` or ``(T, H, W)``, or None.
+    reference : the same shape as ``albedo`` (or broadcastable to it), positive, or None.
 
     Examples
     --------
@@ -553,6 +558,11 @@ def albedo_drift(albedo, mask=None) -> float:
     10.0
     """
     a = _luminance_stack(albedo, "albedo_drift: albedo")
+    if reference is not None:
+        ref = _luminance_stack(np.broadcast_to(reference, np.shape(albedo)), "albedo_drift: reference")
+        if np.any(~(ref > 0)):
+            raise ValueError("albedo_drift: the reference albedo must be positive everywhere")
+        a = a / ref
     t = a.shape[0]
     if t < 2:
         raise ValueError(f"albedo_drift: needs at least 2 frames, got {t}")

@@ -131,7 +131,7 @@ class WindowEnergy:
         if params.shading_step_gain > 0:
             tau_chroma = params.shading_step_chroma if params.shading_step_chroma > 0 else np.inf
             steps = grey_step_gate(be.numpy(self.I), params.shading_step_gain, params.shading_step_tau,
-                                   tau_chroma)
+                                   tau_chroma, params.shading_step_share_radius)
             if self.temporal and params.shading_step_stability > 0:
                 steps = 1.0 + (steps - 1.0) * self._step_stability(params.shading_step_stability)
             gate = be.asarray(steps) if gate is None else be.asarray(be.numpy(gate) * steps)

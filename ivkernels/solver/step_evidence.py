@@ -27,7 +27,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["chromatic_share", "grey_step_gate", "step_evidence", "step_gate", "DARK_OFFSET"]
+__all__ = ["chromatic_share", "local_chromatic_share", "grey_step_gate", "step_evidence", "step_gate",
+           "DARK_OFFSET", "SHARE_PRIOR_STEPS"]
 
 #: Half of the eight neighbour offsets: with them every pair of neighbours is
 #: seen once, and a pair's evidence, which does not depend on its order, goes
@@ -58,6 +59,11 @@ def _pair_slices(shape, dy: int, dx: int):
     return (slice(None), slice(0, h - dy), xs), (slice(None), slice(dy, h), xn)
 
 
+#: Weight of the whole video's chromatic share in a window's (:func:`local_chromatic_share`),
+#: in steps: a window with few sharp steps of its own leans on the video's share.
+SHARE_PRIOR_STEPS = 4.0
+
+
 def _chroma_change(C, a, b) -> np.ndarray:
     return np.abs(C[a] - C[b]).max(axis=-1)
 
@@ -70,6 +76,37 @@ def _share(L, C, tau: float, tau_chroma: float) -> float:
         sharp_steps += int(np.count_nonzero(chromatic | (np.abs(L[a] - L[b]) > tau)))
         chromatic_steps += int(np.count_nonzero(chromatic))
     return chromatic_steps / sharp_steps if sharp_steps else 0.0
+
+
+def _step_counts(L, C, tau: float, tau_chroma: float):
+    """Per pixel, its sharp and its chromatic steps to the right and below, (T, h, w) each."""
+    sharp = np.zeros(L.shape, np.float64)
+    chromatic = np.zeros(L.shape, np.float64)
+    for dy, dx in AXIS_NEIGHBOURS:
+        a, b = _pair_slices(L.shape, dy, dx)
+        is_chromatic = _chroma_change(C, a, b) > tau_chroma
+        sharp[a] += is_chromatic | (np.abs(L[a] - L[b]) > tau)
+        chromatic[a] += is_chromatic
+    return sharp, chromatic
+
+
+def _box_sum(x: np.ndarray, r: int) -> np.ndarray:
+    """Sum of each frame of ``x`` (T, h, w) over the (2r+1)^2 window at every pixel, cut at the borders."""
+    _, h, w = x.shape
+    c = np.zeros((x.shape[0], h + 1, w + 1), np.float64)
+    c[:, 1:, 1:] = x.cumsum(1).cumsum(2)
+    y0, y1 = np.clip(np.arange(h) - r, 0, h), np.clip(np.arange(h) + r + 1, 0, h)
+    x0, x1 = np.clip(np.arange(w) - r, 0, w), np.clip(np.arange(w) + r + 1, 0, w)
+    return (c[:, y1][:, :, x1] - c[:, y0][:, :, x1] - c[:, y1][:, :, x0] + c[:, y0][:, :, x0])
+
+
+def _local_share(L, C, tau: float, tau_chroma: float, radius: float) -> np.ndarray:
+    sharp, chromatic = _step_counts(L, C, tau, tau_chroma)
+    total = sharp.sum()
+    whole = chromatic.sum() / total if total else 0.0
+    r = max(1, int(round(radius * min(L.shape[1:]))))
+    return ((_box_sum(chromatic, r) + SHARE_PRIOR_STEPS * whole)
+            / (_box_sum(sharp, r) + SHARE_PRIOR_STEPS)).astype(np.float32)
 
 
 def _evidence(L, C, tau: float, tau_chroma: float) -> np.ndarray:
@@ -107,6 +144,19 @@ def chromatic_share(log_image: np.ndarray, tau: float, tau_chroma: float) -> flo
     return _share(*_luminance_chroma(log_image), tau, tau_chroma)
 
 
+def local_chromatic_share(log_image: np.ndarray, tau: float, tau_chroma: float, radius: float) -> np.ndarray:
+    """:func:`chromatic_share` read around each pixel, (T, h, w) float32 in [0, 1].
+
+    The share of the sharp steps inside a square window of half-side
+    ``radius * min(h, w)`` pixels (at least 1) of the pixel's frame that change
+    colour, with :data:`SHARE_PRIOR_STEPS` steps of the whole video's share
+    added, so that a window with few steps of its own leans on the video's.
+    A grey floor beside coloured walls and objects keeps a low share where
+    the floor is, which one number for the whole scene would not.
+    """
+    return _local_share(*_luminance_chroma(log_image), tau, tau_chroma, radius)
+
+
 def step_evidence(log_image: np.ndarray, tau: float, tau_chroma: float) -> np.ndarray:
     """Evidence in [0, 1) that a pixel lies on a sharp grey step, (T, h, w) float32.
 
@@ -129,13 +179,22 @@ def step_gate(log_image: np.ndarray, gain: float, tau: float, tau_chroma: float 
     return (1.0 + gain * step_evidence(log_image, tau, tau_chroma)).astype(np.float32)
 
 
-def grey_step_gate(log_image: np.ndarray, gain: float, tau: float, tau_chroma: float = np.inf) -> np.ndarray:
+def grey_step_gate(log_image: np.ndarray, gain: float, tau: float, tau_chroma: float = np.inf,
+                   share_radius: float = 0.0) -> np.ndarray:
     """The weight Eq. 9's local term uses: :func:`step_gate` with the gain scaled
-    by ``(1 - chromatic_share)^2`` (unscaled when ``tau_chroma`` is ``inf``),
-    reading the image once for both; (T, h, w) float32."""
+    by ``(1 - share)^2`` (unscaled when ``tau_chroma`` is ``inf``), reading the
+    image once for both; (T, h, w) float32.  The share is
+    :func:`local_chromatic_share` with ``share_radius`` > 0, else the whole
+    video's :func:`chromatic_share`."""
     _check(gain, tau, tau_chroma)
+    if not (np.isfinite(share_radius) and share_radius >= 0):
+        raise ValueError(f"share_radius must be a non-negative number, got {share_radius!r}")
     L, C = _luminance_chroma(log_image)
-    if np.isfinite(tau_chroma):
-        # trust a grey step as albedo as much as the scene's albedo edges are grey
-        gain *= (1.0 - _share(L, C, tau, tau_chroma)) ** 2
-    return (1.0 + gain * _evidence(L, C, tau, tau_chroma)).astype(np.float32)
+    evidence = _evidence(L, C, tau, tau_chroma)
+    if not np.isfinite(tau_chroma):
+        return (1.0 + gain * evidence).astype(np.float32)
+    # trust a grey step as albedo as much as the albedo edges around it are grey
+    if share_radius > 0:
+        return (1.0 + gain * (1.0 - _local_share(L, C, tau, tau_chroma, share_radius)) ** 2
+                * evidence).astype(np.float32)
+    return (1.0 + gain * (1.0 - _share(L, C, tau, tau_chroma)) ** 2 * evidence).astype(np.float32)
