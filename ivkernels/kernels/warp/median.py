@@ -2,24 +2,33 @@
 Classic+NL's flow and of the shading coupling variable (Eq. 9, 10, 13).
 
 Weighted medians are computed per pixel inside the kernel: one kernel thread
-owns one image row and, for each pixel, copies the window's (value, weight)
-pairs into its own slice of a *scratch* buffer (one row of floats per image
-row), then selects the minimiser from there in expected linear time
-(:func:`l1_quadratic_select`, a weighted quickselect).  The 225 weights of a
-15x15 window are never stored per pixel (the spatial factor of the shading
-weights is one shared (2r+1)^2 table).  The 5x5 median runs a branch-free
-compare-exchange network (:func:`median_network`) written out as straight-line
-code on 25 scalars (:func:`median25`).
+owns one image row and, for each pixel, writes the window's entries into its
+own row of a *scratch* buffer, seen as vectors (the shading's (value, weight)
+pairs as ``vec2``, the flow's (u, v, weight) triples as ``vec3``), then
+selects the minimiser from there in expected linear time
+(:func:`l1_quadratic_select`, a weighted quickselect whose passes are free of
+data-dependent branches, starting from the previous pixel's answer).  The
+225 weights of a 15x15 window are never stored per pixel: the spatial factor
+is one shared (2r+1)^2 table (the shading's ``exp(-d^2 / 2 sigma^2)``, the
+flow's exponent ``d^2 / 2 sigma^2``, so that its weights come out bit for bit
+as if computed per pixel).  The shading median's 2-means runs on a copy of
+the window's flow vectors and is skipped where their bounding box is too small
+to split.  The 5x5 median runs a branch-free compare-exchange network
+(:func:`median_network`) written out as straight-line code on 25 scalars
+(:func:`median25`).
 
 Scratch convention: the weighted medians take ``workspace=None``, a
 :class:`ivkernels.kernels.workspace.Workspace` that keeps their float32
 scratch (:func:`shading_scratch_shape`, :func:`flow_scratch_shape`) between
-calls; without one the buffer is allocated for the call.  The shading
-median's spatial weight table depends on (radius, sigma) only and is shared
-through the bounded table cache of :mod:`ivkernels.kernels.cache`.
+calls; without one the buffer is allocated for the call.  The spatial tables
+depend on (radius, sigma) only and are shared through the bounded table cache
+of :mod:`ivkernels.kernels.cache`.
 """
 from __future__ import annotations
 
+from typing import Any
+
+import numpy as np
 import warp as wp
 
 from ivkernels.kernels.cache import cached
@@ -40,60 +49,97 @@ wp.set_module_options({"enable_backward": False})
 # ----------------------------------------------------------------------------
 
 @wp.func
-def move_entry(buf: wp.array2d(dtype=float), row: int, base: int, i: int, j: int, v: float, w: float):
-    """Swap the (value, weight) pairs ``i`` and ``j`` of ``buf[row, base:]``, given
-    ``(v, w)``, the pair now at ``i``: entry ``j`` moves to ``i`` and ``(v, w)`` to ``j``."""
-    buf[row, base + 2 * i] = buf[row, base + 2 * j]
-    buf[row, base + 2 * i + 1] = buf[row, base + 2 * j + 1]
-    buf[row, base + 2 * j] = v
-    buf[row, base + 2 * j + 1] = w
+def keep_side(buf: wp.array2d(dtype=Any), row: int, n: int, vc: int, pivot: float, above: int, whole: int):
+    """Move the entries ``buf[row, i]``, ``i < n``, whose component ``vc`` lies above
+    ``pivot`` (``above = 1``) or below it (``above = 0``) to the front and return how
+    many there are.  Branch-free: each entry is written at the next free slot, which
+    only advances when the entry is kept.  ``whole = 0`` overwrites the others;
+    ``whole = 1`` swaps instead (a Lomuto partition), so all ``n`` entries remain."""
+    kept = int(0)
+    for i in range(n):
+        e = buf[row, i]
+        if whole == 1:
+            buf[row, i] = buf[row, kept]
+        buf[row, kept] = e
+        if above == 1:
+            kept += wp.where(e[vc] > pivot, 1, 0)
+        else:
+            kept += wp.where(e[vc] < pivot, 1, 0)
+    return kept
 
 
 @wp.func
-def l1_quadratic_select(buf: wp.array2d(dtype=float), row: int, base: int, n: int, s: float, lam: float):
-    """``argmin_u sum_i w_i |u - v_i| + lam (u - s)^2`` over the ``n`` pairs
-    ``(v_i, w_i) = buf[row, base + 2i], buf[row, base + 2i + 1]`` (all ``w_i > 0``).
+def l1_quadratic_select(buf: wp.array2d(dtype=Any), row: int, n: int, vc: int, wc: int, whole: int,
+                        s: float, lam: float, guess: float, use_guess: int):
+    """``argmin_u sum_i w_i |u - v_i| + lam (u - s)^2`` over the ``n`` entries ``e_i = buf[row, i]``,
+    value ``v_i = e_i[vc]``, weight ``w_i = e_i[wc] > 0`` (``buf`` of vectors: (value, weight)
+    pairs, or (u, v, weight) triples of a flow).
 
     Weighted quickselect on the subgradient ``g(u) = 2 lam (u - s) + W(< u) - W(> u)``,
-    which is non-decreasing in ``u``: three-way partition the active entries
-    around a pivot value ``p``; if ``g(p-) < 0 <= g(p+)`` the answer is ``p``,
-    else keep the side holding the zero crossing.  When no entry remains the
-    minimiser lies strictly between two values, where ``g`` is linear:
-    ``u = s + (W_above - W_below) / (2 lam)`` (Li & Osher's median formula
-    gives the same point).  ``lam = 0`` returns the lower weighted median
-    (smallest ``v`` with ``W(<= v) >= W / 2``); ``n = 0`` returns ``s``.
-    The pairs are reordered in place.
+    which is non-decreasing in ``u``.  Each round takes a pivot ``p`` (``guess`` in
+    the first round if ``use_guess = 1``, e.g. the answer at the previous pixel,
+    else the median of the first, middle and last active values) and sums the
+    active weights below, at and above ``p`` (one branch-free pass, no data
+    moved); if ``g(p-) < 0 <= g(p+)`` the answer is ``p``, else only the active
+    entries on the side holding the zero crossing stay active
+    (:func:`keep_side`), the others' weight joins the weight known to lie below
+    or above.  When no entry remains the minimiser lies strictly between two
+    values, where ``g`` is linear: ``u = s + (W_above - W_below) / (2 lam)``
+    (Li & Osher's median formula gives the same point).  ``lam = 0`` returns the
+    lower weighted median (smallest ``v`` with ``W(<= v) >= W / 2``); ``n = 0``
+    returns ``s``.  The entries are reordered and, unless ``whole = 1``, partly
+    overwritten.
+
+    The answer depends only on the multiset of pairs (not on their order, the
+    guess or the pivots) up to the rounding of the float32 weight sums.
     """
-    lo = int(0)
     hi = int(n)
     w_below = float(0.0)
     w_above = float(0.0)
     result = float(s)
     found = int(0)
-    while lo < hi and found == 0:
-        pivot = buf[row, base + 2 * ((lo + hi) // 2)]
-        lt = int(lo)
-        i = int(lo)
-        gt = int(hi)
+    first = use_guess
+    while hi > 0 and found == 0:
+        a = buf[row, 0][vc]
+        b = buf[row, hi // 2][vc]
+        c = buf[row, hi - 1][vc]
+        pivot = wp.max(wp.min(a, b), wp.min(wp.max(a, b), c))
+        if first == 1:
+            pivot = guess
+            first = 0
+        # the active weights below, at and above the pivot, two entries a step
+        # (two sets of sums, so consecutive additions do not wait on each other)
         w_lt = float(0.0)
         w_eq = float(0.0)
         w_gt = float(0.0)
-        while i < gt:
-            v = buf[row, base + 2 * i]
-            w = buf[row, base + 2 * i + 1]
-            if v < pivot:
-                if lt != i:                       # an entry equal to the pivot sits at lt
-                    move_entry(buf, row, base, i, lt, v, w)
-                w_lt += w
-                lt += 1
-                i += 1
-            elif v > pivot:
-                gt -= 1
-                move_entry(buf, row, base, i, gt, v, w)
-                w_gt += w
-            else:
-                w_eq += w
-                i += 1
+        w_lt2 = float(0.0)
+        w_eq2 = float(0.0)
+        w_gt2 = float(0.0)
+        i = int(0)
+        while i + 1 < hi:
+            e = buf[row, i]
+            v = e[vc]
+            w = e[wc]
+            w_lt += wp.where(v < pivot, w, 0.0)
+            w_eq += wp.where(v == pivot, w, 0.0)
+            w_gt += wp.where(v > pivot, w, 0.0)
+            e2 = buf[row, i + 1]
+            v2 = e2[vc]
+            w2 = e2[wc]
+            w_lt2 += wp.where(v2 < pivot, w2, 0.0)
+            w_eq2 += wp.where(v2 == pivot, w2, 0.0)
+            w_gt2 += wp.where(v2 > pivot, w2, 0.0)
+            i += 2
+        if i < hi:
+            e = buf[row, i]
+            v = e[vc]
+            w = e[wc]
+            w_lt += wp.where(v < pivot, w, 0.0)
+            w_eq += wp.where(v == pivot, w, 0.0)
+            w_gt += wp.where(v > pivot, w, 0.0)
+        w_lt += w_lt2
+        w_eq += w_eq2
+        w_gt += w_gt2
         below = w_below + w_lt
         above = w_above + w_gt
         g_lo = 2.0 * lam * (pivot - s) + below - above - w_eq
@@ -103,10 +149,10 @@ def l1_quadratic_select(buf: wp.array2d(dtype=float), row: int, base: int, n: in
             found = 1
         elif g_hi < 0.0:
             w_below = below + w_eq
-            lo = gt
+            hi = keep_side(buf, row, hi, vc, pivot, 1, whole)
         else:
             w_above = above + w_eq
-            hi = lt
+            hi = keep_side(buf, row, hi, vc, pivot, 0, whole)
     if found == 0 and lam > 0.0 and n > 0:
         result = s + (w_above - w_below) / (2.0 * lam)
     return result
@@ -280,7 +326,7 @@ def median5x5_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array4d
 @wp.kernel
 def weighted_median_shading_rows(row_begin: int, S: wp.array3d(dtype=float), flow: wp.array4d(dtype=float),
                                  w_bnd: wp.array3d(dtype=float), out: wp.array3d(dtype=float),
-                                 scratch: wp.array2d(dtype=float), spatial: wp.array(dtype=float), radius: int,
+                                 scratch: wp.array2d(dtype=wp.vec2), spatial: wp.array(dtype=float), radius: int,
                                  lam: float, iterations: int, min_separation: float):
     r = row_begin + wp.tid()
     height = S.shape[1]
@@ -288,132 +334,138 @@ def weighted_median_shading_rows(row_begin: int, S: wp.array3d(dtype=float), flo
     t = r // height
     y = r - t * height
     side = 2 * radius + 1
+    last = float(0.0)   # the answer at the previous pixel when it had one (has_last = 1):
+    has_last = int(0)   # the first pivot tried, as neighbouring windows share most pixels
     for x in range(width):
         s = S[t, y, x]
         out[t, y, x] = s
         if t >= flow.shape[0]:
             continue
         if w_bnd[t, y, x] < 0.5:
+            has_last = 0
             continue
         y_lo = wp.max(y - radius, 0)
         y_hi = wp.min(y + radius + 1, height)
         x_lo = wp.max(x - radius, 0)
         x_hi = wp.min(x + radius + 1, width)
-        # surf (Eq. 10): 2-means of the window's flow vectors
-        c0x = flow[t, y, x, 0]
-        c0y = flow[t, y, x, 1]
-        c1x = c0x
-        c1y = c0y
+        # surf (Eq. 10): 2-means of the window's flow vectors, copied (row-major)
+        # into scratch[r, :m]; centre 1 starts at the vector farthest from flow(x)
+        c0 = wp.vec2(flow[t, y, x, 0], flow[t, y, x, 1])
+        c1 = c0
         far = float(-1.0)
+        lo = c0
+        hi = c0
+        m = int(0)
         for yy in range(y_lo, y_hi):
             for xx in range(x_lo, x_hi):
-                dx = flow[t, yy, xx, 0] - c0x
-                dy = flow[t, yy, xx, 1] - c0y
+                f = wp.vec2(flow[t, yy, xx, 0], flow[t, yy, xx, 1])
+                scratch[r, m] = f
+                m += 1
+                dx = f[0] - c0[0]
+                dy = f[1] - c0[1]
                 d = dx * dx + dy * dy
                 if d > far:
                     far = d
-                    c1x = flow[t, yy, xx, 0]
-                    c1y = flow[t, yy, xx, 1]
-        for it in range(iterations):
-            s0x = float(0.0)
-            s0y = float(0.0)
-            s1x = float(0.0)
-            s1y = float(0.0)
-            n0 = int(0)
-            n1 = int(0)
-            for yy in range(y_lo, y_hi):
-                for xx in range(x_lo, x_hi):
-                    fx = flow[t, yy, xx, 0]
-                    fy = flow[t, yy, xx, 1]
-                    if nearer_second(fx, fy, c0x, c0y, c1x, c1y):
-                        s1x += fx
-                        s1y += fy
-                        n1 += 1
-                    else:
-                        s0x += fx
-                        s0y += fy
-                        n0 += 1
-            m0x = c0x
-            m0y = c0y
-            m1x = c1x
-            m1y = c1y
-            if n0 > 0:
-                m0x = s0x / float(n0)
-                m0y = s0y / float(n0)
-            if n1 > 0:
-                m1x = s1x / float(n1)
-                m1y = s1y / float(n1)
-            moved = m0x != c0x or m0y != c0y or m1x != c1x or m1y != c1y
-            c0x = m0x
-            c0y = m0y
-            c1x = m1x
-            c1y = m1y
-            if not moved:
-                break
-        split = (c0x - c1x) * (c0x - c1x) + (c0y - c1y) * (c0y - c1y) >= min_separation * min_separation
-        own = nearer_second(flow[t, y, x, 0], flow[t, y, x, 1], c0x, c0y, c1x, c1y)
-        # window pairs (value, weight) of x's surface, Eq. 10
+                    c1 = f
+                lo = wp.min(lo, f)
+                hi = wp.max(hi, f)
+        # Both centres stay inside the vectors' bounding box, so a box whose
+        # diagonal is under min_separation (with a margin far above the rounding
+        # of the means) cannot end split: the Lloyd passes are skipped.
+        box = hi - lo
+        split = False
+        if box[0] * box[0] + box[1] * box[1] > 0.8 * min_separation * min_separation:
+            for it in range(iterations):
+                s0 = wp.vec2(0.0, 0.0)
+                s1 = wp.vec2(0.0, 0.0)
+                n1 = int(0)
+                for i in range(m):
+                    f = scratch[r, i]
+                    near = nearer_second(f[0], f[1], c0[0], c0[1], c1[0], c1[1])
+                    s1 += wp.where(near, f, wp.vec2(0.0, 0.0))
+                    s0 += wp.where(near, wp.vec2(0.0, 0.0), f)
+                    n1 += wp.where(near, 1, 0)
+                n0 = m - n1
+                m0 = c0
+                m1 = c1
+                if n0 > 0:
+                    m0 = s0 / float(n0)
+                if n1 > 0:
+                    m1 = s1 / float(n1)
+                moved = m0[0] != c0[0] or m0[1] != c0[1] or m1[0] != c1[0] or m1[1] != c1[1]
+                c0 = m0
+                c1 = m1
+                if not moved:
+                    break
+            split = wp.length_sq(c0 - c1) >= min_separation * min_separation
+        own = nearer_second(flow[t, y, x, 0], flow[t, y, x, 1], c0[0], c0[1], c1[0], c1[1])
+        # window pairs (value, weight) of x's surface, Eq. 10, written over the vectors
         n = int(0)
+        i = int(0)
         for yy in range(y_lo, y_hi):
+            k = (yy - y + radius) * side + x_lo - x + radius
             for xx in range(x_lo, x_hi):
                 keep = True
                 if split:
-                    keep = nearer_second(flow[t, yy, xx, 0], flow[t, yy, xx, 1], c0x, c0y, c1x, c1y) == own
-                if keep:
-                    scratch[r, 2 * n] = S[t, yy, xx]
-                    scratch[r, 2 * n + 1] = spatial[(yy - y + radius) * side + xx - x + radius]
-                    n += 1
-        out[t, y, x] = l1_quadratic_select(scratch, r, 0, n, s, lam)
+                    f = scratch[r, i]
+                    keep = nearer_second(f[0], f[1], c0[0], c0[1], c1[0], c1[1]) == own
+                scratch[r, n] = wp.vec2(S[t, yy, xx], spatial[k])
+                n += wp.where(keep, 1, 0)
+                i += 1
+                k += 1
+        last = l1_quadratic_select(scratch, r, n, 0, 1, 0, s, lam, last, has_last)
+        has_last = 1
+        out[t, y, x] = last
 
 
 @wp.kernel
 def weighted_median_flow_rows(row_begin: int, flow: wp.array4d(dtype=float), lab: wp.array4d(dtype=float),
                               occ: wp.array3d(dtype=float), mask: wp.array3d(dtype=float),
-                              out: wp.array4d(dtype=float), scratch: wp.array2d(dtype=float),
-                              radius: int, sigma_x: float, sigma_i: float):
+                              out: wp.array4d(dtype=float), scratch: wp.array2d(dtype=wp.vec3),
+                              spatial: wp.array(dtype=float), radius: int, sigma_i: float):
     r = row_begin + wp.tid()
     height = flow.shape[1]
     width = flow.shape[2]
     t = r // height
     y = r - t * height
     side = 2 * radius + 1
-    base = side * side  # scratch[r, :base] holds the window's weights, then the pairs
-    inv_x = 1.0 / (2.0 * sigma_x * sigma_x)
     inv_i = 1.0 / (2.0 * sigma_i * sigma_i)
+    last_u = float(0.0)   # the answers at the previous pixel when it had them (has_last = 1):
+    last_v = float(0.0)   # the first pivots tried, as neighbouring windows share most pixels
+    has_last = int(0)
     for x in range(width):
-        out[t, y, x, 0] = flow[t, y, x, 0]
-        out[t, y, x, 1] = flow[t, y, x, 1]
+        u0 = flow[t, y, x, 0]
+        v0 = flow[t, y, x, 1]
+        out[t, y, x, 0] = u0
+        out[t, y, x, 1] = v0
         if mask[t, y, x] < 0.5:
+            has_last = 0
             continue
         l0 = lab[t, y, x, 0]
         l1 = lab[t, y, x, 1]
         l2 = lab[t, y, x, 2]
-        k = int(0)
-        for yy in range(y - radius, y + radius + 1):
-            for xx in range(x - radius, x + radius + 1):
-                w = float(0.0)
-                if yy >= 0 and yy < height and xx >= 0 and xx < width:
-                    ddx = float(xx - x)
-                    ddy = float(yy - y)
-                    e0 = lab[t, yy, xx, 0] - l0
-                    e1 = lab[t, yy, xx, 1] - l1
-                    e2 = lab[t, yy, xx, 2] - l2
-                    w = wp.exp(-(ddx * ddx + ddy * ddy) * inv_x - (e0 * e0 + e1 * e1 + e2 * e2) * inv_i)
-                    w = w * occ[t, yy, xx]
-                scratch[r, k] = w
+        y_lo = wp.max(y - radius, 0)
+        y_hi = wp.min(y + radius + 1, height)
+        x_lo = wp.max(x - radius, 0)
+        x_hi = wp.min(x + radius + 1, width)
+        n = int(0)
+        for yy in range(y_lo, y_hi):
+            k = (yy - y + radius) * side + x_lo - x + radius
+            for xx in range(x_lo, x_hi):
+                e0 = lab[t, yy, xx, 0] - l0
+                e1 = lab[t, yy, xx, 1] - l1
+                e2 = lab[t, yy, xx, 2] - l2
+                w = wp.exp(-spatial[k] - (e0 * e0 + e1 * e1 + e2 * e2) * inv_i)
+                w = w * occ[t, yy, xx]
+                scratch[r, n] = wp.vec3(flow[t, yy, xx, 0], flow[t, yy, xx, 1], w)
+                n += wp.where(w > 0.0, 1, 0)
                 k += 1
-        for c in range(2):
-            n = int(0)
-            k = int(0)
-            for yy in range(y - radius, y + radius + 1):
-                for xx in range(x - radius, x + radius + 1):
-                    w = scratch[r, k]
-                    if w > 0.0:
-                        scratch[r, base + 2 * n] = flow[t, yy, xx, c]
-                        scratch[r, base + 2 * n + 1] = w
-                        n += 1
-                    k += 1
-            out[t, y, x, c] = l1_quadratic_select(scratch, r, base, n, flow[t, y, x, c], 0.0)
+        # u first, keeping every (u, v, w) triple for v
+        last_u = l1_quadratic_select(scratch, r, n, 0, 2, 1, u0, 0.0, last_u, has_last)
+        last_v = l1_quadratic_select(scratch, r, n, 1, 2, 0, v0, 0.0, last_v, has_last)
+        has_last = 1
+        out[t, y, x, 0] = last_u
+        out[t, y, x, 1] = last_v
 
 
 # ----------------------------------------------------------------------------
@@ -424,6 +476,25 @@ def _cached_table(key: tuple, make, dtype, device):
     """A small read-only table (``make()`` as a NumPy array) kept per key and device in the
     bounded table cache (:mod:`ivkernels.kernels.cache`)."""
     return cached((__name__, *key, str(device)), lambda: wp.array(make(), dtype=dtype, device=device))
+
+
+def spatial_exponent(radius: int, sigma: float) -> np.ndarray:
+    """``|d|^2 / (2 sigma^2)`` over the (2r+1)^2 window offsets ``d``, row-major, float32
+    ``((2r+1)^2,)``: the spatial part of the flow median's exponent, computed in float32
+    in the order a kernel would (``|d|^2`` exactly, times ``1 / (2 sigma sigma)``), so
+    the weights come out bit for bit as if it were computed per pixel."""
+    d = np.arange(-radius, radius + 1, dtype=np.float32)
+    sigma = np.float32(sigma)
+    inv = np.float32(1.0) / (np.float32(2.0) * sigma * sigma)
+    return ((d[:, None] * d[:, None] + d[None, :] * d[None, :]) * inv).astype(np.float32).ravel()
+
+
+def _as_vectors(buf, vector):
+    """The float32 scratch ``buf`` (rows, k * m) seen as ``(rows, m)`` vectors of length k
+    (no copy; ``buf`` must outlive the view)."""
+    rows, width = buf.shape
+    return wp.array(ptr=buf.ptr, dtype=vector, shape=(rows, width // vector._length_), device=buf.device,
+                    capacity=buf.capacity)
 
 
 def _scratch(workspace, name: str, shape: tuple, device):
@@ -489,10 +560,11 @@ def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float
     """
     t, h, w = S.shape
     buf = _scratch(workspace, "shading_window", shading_scratch_shape(S.shape, radius), S.device)
+    pairs = _as_vectors(buf, wp.vec2)
     spatial = _cached_table(("spatial", radius, sigma_s), lambda: spatial_weights(radius, sigma_s),
                             wp.float32, S.device)
     launch_rows(weighted_median_shading_rows, t * h,
-                [S, flow, w_bnd, out, buf, spatial, radius, lam, KMEANS_ITERATIONS, MIN_SEPARATION],
+                [S, flow, w_bnd, out, pairs, spatial, radius, lam, KMEANS_ITERATIONS, MIN_SEPARATION],
                 device=S.device, balance=True)
 
 
@@ -520,5 +592,8 @@ def weighted_median_flow(flow, lab, occ, mask, out, radius: int = 7, sigma_x: fl
     """
     t, h, w, _ = flow.shape
     buf = _scratch(workspace, "flow_window", flow_scratch_shape(flow.shape, radius), flow.device)
+    triples = _as_vectors(buf, wp.vec3)
+    spatial = _cached_table(("spatial_exponent", radius, sigma_x), lambda: spatial_exponent(radius, sigma_x),
+                            wp.float32, flow.device)
     launch_rows(weighted_median_flow_rows, t * h,
-                [flow, lab, occ, mask, out, buf, radius, sigma_x, sigma_i], device=flow.device, balance=True)
+                [flow, lab, occ, mask, out, triples, spatial, radius, sigma_i], device=flow.device, balance=True)
