@@ -1,7 +1,9 @@
 """Median filters: the generic contract from the case table (5x5 median, Classic+NL's weighted
 flow median and the shading S~ update of Eq. 9, 10, 13 against brute-force NumPy), plus the
-sorting network, Li & Osher's formula vs a grid search, surf at a motion boundary, untouched
-pixels, a workspace reused across shapes, bad input."""
+sorting network, Li & Osher's formula vs a grid search, continuous values with every pixel
+masked (each selection starts from the previous pixel's answer), 2-means around the size at
+which it is skipped, surf at a motion boundary, untouched pixels, a workspace reused across
+shapes, bad input."""
 import numpy as np
 import pytest
 
@@ -130,6 +132,44 @@ def test_shading_only_centre_weight_keeps_value(kernel_backend, rng, lam):
     S, flow, _ = shading_inputs(rng, 2, 9, 11, 2)
     out = wmedian_shading(kernel_backend, S, flow, np.ones((2, 9, 11), np.float32), radius=4, sigma_s=1e-3, lam=lam)
     np.testing.assert_array_equal(out, S)
+
+
+@pytest.mark.parametrize("radius", [1, 3, 7])
+def test_weighted_medians_continuous_values_every_pixel(kernel_backend, rng, radius):
+    """No ties and every pixel masked: each selection starts from the previous pixel's answer,
+    rarely an answer again; the results are the reference's."""
+    h, w = 13, 17
+    flow, _ = two_region_flow(rng, 2, h, w, noise=0.3, radius=4.5)
+    lab = rng.uniform(0, 30, (2, h, w, 3)).astype(np.float32)
+    occ = rng.uniform(0.2, 1.0, (2, h, w)).astype(np.float32)
+    ones = np.ones((2, h, w), np.float32)
+    got = wmedian_flow(kernel_backend, flow, lab, occ, ones, radius=radius, sigma_i=10.0)
+    np.testing.assert_array_equal(got, ref.weighted_median_flow(flow, lab, occ, ones, radius=radius,
+                                                                sigma_i=10.0).astype(np.float32))
+    S = rng.normal(0.0, 1.0, (3, h, w)).astype(np.float32)
+    for lam in (0.0, 0.001, 2.0):
+        got = wmedian_shading(kernel_backend, S, flow, ones, radius=radius, lam=lam)
+        want = ref.weighted_median_shading(S, flow, ones, radius=radius, lam=lam)
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-5)
+
+
+@pytest.mark.parametrize("step", [0.3, 0.44, 0.47, 0.5, 0.53, 0.7])
+def test_shading_two_means_near_the_skipped_size(kernel_backend, rng, step):
+    """A stripe two pixels wide moving by (step, step / 2) over a static background, every
+    pixel masked: the 2-means is skipped where the window's flow vectors span less than
+    sqrt(0.8) * 0.5 px, run above, and splits from min_separation = 0.5 px on.  Every pixel
+    is the reference's; the stripe keeps its value exactly when the windows split."""
+    h, w = 15, 19
+    stripe = (np.arange(w) >= 8) & (np.arange(w) < 10)
+    flow = np.zeros((1, h, w, 2), np.float32)
+    flow[0, :, stripe] = (step, step / 2)
+    flow += rng.normal(0.0, 0.002, flow.shape).astype(np.float32)
+    S = np.broadcast_to(stripe.astype(np.float32), (1, h, w)) + rng.normal(0.0, 0.01, (1, h, w)).astype(np.float32)
+    ones = np.ones((1, h, w), np.float32)
+    got = wmedian_shading(kernel_backend, S, flow, ones, radius=3, lam=0.0)
+    np.testing.assert_allclose(got, ref.weighted_median_shading(S, flow, ones, radius=3, lam=0.0), rtol=0, atol=1e-6)
+    splits = np.hypot(step, step / 2) > 0.51
+    assert ((got[0][:, stripe] > 0.5) == splits).all()
 
 
 def test_shading_surf_stops_at_motion_boundary(kernel_backend, rng):
