@@ -213,8 +213,9 @@ def weighted_median_shading_rows(S: nd3, flow: nd4, w_bnd: nd3, out: nd3, scratc
                         lo_y = ti.min(lo_y, fy)
                         hi_x = ti.max(hi_x, fx)
                         hi_y = ti.max(hi_y, fy)
-                # both centres stay inside the vectors' bounding box: a box too small
-                # to end split skips the Lloyd passes
+                # both centres are means of window vectors, inside their bounding box:
+                # a box whose diagonal is under sqrt(0.8) min_separation cannot end
+                # split and skips the Lloyd passes (see the Warp kernel)
                 split = 0
                 box2 = (hi_x - lo_x) * (hi_x - lo_x) + (hi_y - lo_y) * (hi_y - lo_y)
                 if box2 > 0.8 * min_separation * min_separation:

@@ -369,9 +369,10 @@ def weighted_median_shading_rows(row_begin: int, S: wp.array3d(dtype=float), flo
                     c1 = f
                 lo = wp.min(lo, f)
                 hi = wp.max(hi, f)
-        # Both centres stay inside the vectors' bounding box, so a box whose
-        # diagonal is under min_separation (with a margin far above the rounding
-        # of the means) cannot end split: the Lloyd passes are skipped.
+        # Both centres are means of window vectors, inside their bounding box,
+        # so a box whose diagonal is under sqrt(0.8) min_separation cannot end
+        # split (the margin, 0.053 px, is beyond the float32 rounding of the
+        # means of flows under 1000 px): the Lloyd passes are skipped.
         box = hi - lo
         split = False
         if box[0] * box[0] + box[1] * box[1] > 0.8 * min_separation * min_separation:
