@@ -45,7 +45,7 @@ MOVES = {
     "shading_step_gain": (0.0, {}, "truth"),
     "shading_step_tau": (0.02, {}, "truth"),
     "shading_step_chroma": (0.0, {}, "truth"),
-    "shading_step_share_radius": (0.1, {}, "truth"),
+    "shading_step_share_radius": (0.0, {}, "truth"),
     # Weiss's cue is read where the scene holds still: a static scene under a moving light
     "shading_step_stability": (0.0, {}, "truth:static_moving_light"),
     "lam_shading_nonlocal": (10.0, {}, "truth"),
