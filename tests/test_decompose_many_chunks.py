@@ -8,6 +8,7 @@ from ivkernels import Params
 from ivkernels.io import write_png_sequence
 from ivkernels.parallel import VideoError, chunk_ranges, iter_decompose_many, stitch
 from ivkernels.parallel.chunks import fit_offsets
+from ivkernels.parallel.engines import task_cpus
 
 SMALL = Params().replace(window=4, overlap=1)
 
@@ -34,20 +35,54 @@ def _chunks_of(albedo, shading, flow, ranges, seed=5):
     return chunks
 
 
+def _owned(ranges):
+    """Frames each chunk adds: from the previous chunk's stop to its own."""
+    stops = [0] + [b for _, b in ranges]
+    return [b - a for a, b in zip(stops[:-1], stops[1:])]
+
+
+def _check_plan(ranges, T, n, overlap):
+    assert ranges[0][0] == 0 and ranges[-1][1] == T
+    owned = _owned(ranges)
+    assert sum(owned) == T and min(owned) >= 1 and max(owned) <= n      # chunk_frames is an upper bound
+    for (a0, b0), (a1, b1) in zip(ranges, ranges[1:]):
+        assert a1 == max(0, b0 - overlap) and a1 >= a0 and b1 > b0
+
+
 @pytest.mark.parametrize("T, n, overlap", [(36, 12, 2), (37, 12, 2), (10, 3, 1), (5, 12, 2), (12, 4, 3)])
 def test_chunk_ranges_cover_the_video_sharing_overlap_frames(T, n, overlap):
     ranges = chunk_ranges(T, n, overlap)
-    assert len(ranges) == max(1, round(T / n))
-    assert ranges[0][0] == 0 and ranges[-1][1] == T
-    owned = [b - (a + (overlap if i else 0)) for i, (a, b) in enumerate(ranges)]
-    assert sum(owned) == T and max(owned) - min(owned) <= 1
-    for (a0, b0), (a1, b1) in zip(ranges, ranges[1:]):
-        assert b0 - a1 == overlap and a1 > a0 and b1 > b0
+    assert len(ranges) == -(-T // n)
+    _check_plan(ranges, T, n, overlap)
+    owned = _owned(ranges)
+    assert max(owned) - min(owned) <= 1
 
 
 def test_chunk_ranges_without_chunks_is_the_whole_video():
     assert chunk_ranges(7, None, 2) == [(0, 7)]
     assert chunk_ranges(36, 12, 2) == [(0, 12), (10, 24), (22, 36)]
+
+
+def test_chunk_frames_is_an_upper_bound_on_the_frames_a_chunk_owns():
+    assert chunk_ranges(37, 12, 2) == [(0, 9), (7, 18), (16, 28), (26, 37)]
+    for T in range(1, 61):
+        for n in range(2, 17):
+            for overlap in range(1, n):
+                ranges = chunk_ranges(T, n, overlap)
+                assert len(ranges) == -(-T // n), (T, n, overlap)
+                _check_plan(ranges, T, n, overlap)
+
+
+@pytest.mark.parametrize("n_tasks, cpus, node_cpus, expected", [
+    (4, 2, 2, 1), (5, 2, 2, 1), (2, 2, 2, 1), (3, 2, 2, 0.6666), (7, 4, 4, 0.5714), (5, 3, 1, 0.6),
+    (1, 2, 2, 2), (1, 8, 4, 4), (3, 8, 8, 2), (0, 2, 2, 1)])
+def test_task_cpus_keeps_every_cpu_busy_to_the_end(n_tasks, cpus, node_cpus, expected):
+    share = task_cpus(n_tasks, cpus, node_cpus)
+    assert share == expected
+    if cpus < n_tasks < 2 * cpus:       # all at once, on Ray's 1e-4 grid, without a CPU to spare
+        assert n_tasks * share <= cpus < n_tasks * (share + 1e-4)
+    if n_tasks < cpus:                  # whole CPUs, as many as one node has
+        assert share == int(share) and n_tasks * share <= cpus and share <= node_cpus
 
 
 def test_fit_offsets_recovers_known_gains_despite_outliers():

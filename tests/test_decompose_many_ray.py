@@ -40,6 +40,16 @@ def test_whole_videos_on_ray_equal_decompose_one_by_one(cluster):
         assert np.abs(a.shading - b.shading).max() <= 1e-4 * max(1.0, float(a.shading.max()))
         assert np.abs(a.flow - b.flow).max() <= 1e-4
         assert b.albedo.flags.writeable and b.diagnostics["task"]["pid"] != os.getpid()
+        # three tasks on 2 CPUs run at once, sharing them; the kernels on one thread each
+        assert b.diagnostics["task"]["cpus"] == 0.6666 and b.diagnostics["task"]["threads"] == 1
+
+
+def test_one_video_on_two_cpus_holds_both_with_the_kernels_on_two_threads(cluster):
+    seq = _clip(8, T=3, kind="static_moving_light")
+    alone = iv.decompose_many([seq.frames], engine="ray", flow=[seq.flow], params=SMALL)[0]
+    assert alone.diagnostics["task"]["cpus"] == 2 and alone.diagnostics["task"]["threads"] == 2
+    serial = iv.decompose(seq.frames, flow=seq.flow, params=SMALL, threads=1)
+    assert np.abs(alone.albedo - serial.albedo).max() <= 1e-4
 
 
 def test_chunks_on_ray_equal_chunks_in_this_process(cluster):

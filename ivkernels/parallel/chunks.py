@@ -1,6 +1,6 @@
 """Long videos in parallel chunks: where to cut, and how to stitch the pieces.
 
-A long video is cut into chunks of about ``chunk_frames`` frames of its own;
+A long video is cut into chunks of at most ``chunk_frames`` frames of its own;
 each chunk after the first also solves the ``overlap`` frames before it, so
 neighbouring chunks share ``overlap`` frames.  Chunks are solved
 independently (in parallel); inside a chunk the windows stay sequential and
@@ -43,9 +43,9 @@ _LOG_FLOOR = 1e-6
 def chunk_ranges(n_frames: int, chunk_frames: int | None, overlap: int) -> list[tuple[int, int]]:
     """``(start, stop)`` of the frames each chunk solves.
 
-    The video's ``n_frames`` frames are split into ``max(1, round(n_frames /
-    chunk_frames))`` runs of equal length (up to one frame), so every chunk
-    owns about ``chunk_frames`` frames; each chunk after the first starts
+    The video's ``n_frames`` frames are split into ``ceil(n_frames /
+    chunk_frames)`` runs of equal length (up to one frame), so no chunk owns
+    more than ``chunk_frames`` frames; each chunk after the first starts
     ``overlap`` frames before its own, the frames it shares with the chunk
     before.  ``chunk_frames=None`` (or one chunk) gives the whole video.
 
@@ -54,7 +54,7 @@ def chunk_ranges(n_frames: int, chunk_frames: int | None, overlap: int) -> list[
     """
     if chunk_frames is None:
         return [(0, n_frames)]
-    n_chunks = max(1, int(np.floor(n_frames / chunk_frames + 0.5)))
+    n_chunks = max(1, -(-n_frames // chunk_frames))
     bounds = [round(i * n_frames / n_chunks) for i in range(n_chunks + 1)]
     return [(max(0, a - overlap) if i else a, b)
             for i, (a, b) in enumerate(zip(bounds[:-1], bounds[1:]))]

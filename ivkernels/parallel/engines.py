@@ -7,13 +7,15 @@ is an :class:`ivkernels.IntrinsicVideo` or the exception the task raised.
 * :class:`LocalEngine` runs each task in this process when it is asked for
   the next finished one, in submission order.
 * :class:`RayEngine` runs each task as a Ray task holding one CPU, with the
-  kernels on one thread to match.  Frames go into Ray's object store once
-  (``ray.put``; a worker on the same node reads them without a copy, NumPy
-  arrays being stored out of band) and results come back through it.  A
-  task whose worker dies (killed, out of memory, node lost) is run again,
-  up to ``max_retries`` times; an exception raised by the task itself is
-  not retried (it would fail again).  Before the first task, each node runs
-  :func:`ivkernels.parallel.tasks.warm_up` once (once per process and cluster).
+  kernels on one thread to match, unless the call has too few tasks to keep
+  every CPU busy to its end (:func:`task_cpus`).  Frames go into Ray's
+  object store once (``ray.put``; a worker on the same node reads them
+  without a copy, NumPy arrays being stored out of band) and results come
+  back through it.  A task whose worker dies (killed, out of memory, node
+  lost) is run again, up to ``max_retries`` times; an exception raised by
+  the task itself is not retried (it would fail again).  Before the first
+  task, each node runs :func:`ivkernels.parallel.tasks.warm_up` once (once
+  per process and cluster).
 
 Ray is an optional dependency (``pip install ivkernels[ray]``), imported
 only here and only when a :class:`RayEngine` is made.
@@ -54,6 +56,39 @@ LOCAL_CLUSTER = dict(address="local", include_dashboard=False, logging_level=log
 _warmed: set = set()
 
 
+def task_cpus(n_tasks: int, cpus: int, node_cpus: int) -> float:
+    """The CPUs each task of a call holds (its Ray ``num_cpus``), so that no CPU idles
+    while the call's last tasks finish; the kernels run on ``max(1, int(share))`` threads.
+
+    Parameters
+    ----------
+    n_tasks : the call's tasks (videos and chunks).
+    cpus : the cluster's CPUs; ``node_cpus``: those of its largest node.
+
+    Returns
+    -------
+    * ``1`` with at least twice as many tasks as CPUs (each CPU takes the next
+      task as it finishes one; the last round is a small part of the call)
+      or exactly as many;
+    * ``cpus / n_tasks`` (rounded down to Ray's 1e-4 resolution) with more
+      tasks than CPUs but fewer than twice as many: all of them run at once
+      and the operating system shares the CPUs among them, instead of a
+      last round that leaves CPUs idle (three chunks on 2 CPUs: the time of
+      1.5 chunks instead of 2; perf/RESULTS.md, "Chunks on Ray: where the
+      time goes");
+    * ``cpus // n_tasks`` (at most ``node_cpus``) with fewer tasks than CPUs,
+      the kernels on as many threads.
+
+    >>> task_cpus(4, 2, 2), task_cpus(3, 2, 2), task_cpus(1, 2, 2), task_cpus(1, 8, 4)
+    (1, 0.6666, 2, 4)
+    """
+    if n_tasks >= 2 * cpus or n_tasks == cpus or n_tasks < 1:
+        return 1
+    if n_tasks > cpus:
+        return int(cpus / n_tasks * 1e4) / 1e4
+    return max(1, min(cpus // n_tasks, node_cpus))
+
+
 class LocalEngine:
     """Runs the tasks in this process, one after another, with the caller's options."""
 
@@ -66,6 +101,9 @@ class LocalEngine:
     def capacity(self) -> int:
         """Tasks worth having submitted at once (one: each runs when asked for)."""
         return 1
+
+    def expect(self, n_tasks: int) -> None:
+        """Nothing to set: each task runs with the caller's options."""
 
     def in_flight(self) -> int:
         return len(self._queue)
@@ -102,7 +140,8 @@ class RayEngine:
     Parameters
     ----------
     options : keyword arguments of :func:`ivkernels.decompose` for every
-        task; ``threads`` is set to 1 (one CPU per task).
+        task; ``threads`` is set to 1 (one CPU per task), or to the CPUs a
+        task holds after :meth:`expect`.
     address : a running cluster to join (``"auto"``, ``"ray://host:port"``
         or ``"host:port"``).  ``None``: the Ray connection this process
         already has, else the cluster named by the ``RAY_ADDRESS``
@@ -126,6 +165,7 @@ class RayEngine:
                 ray.init(address=address, logging_level=logging.WARNING)
             self._started = True
         self._refs: dict = {}
+        self.task_cpus = 1
         try:
             self._solve = ray.remote(num_cpus=1, max_retries=max_retries,
                                      retry_exceptions=False)(tasks.solve_in_worker)
@@ -157,7 +197,23 @@ class RayEngine:
     def capacity(self) -> int:
         """Tasks kept submitted at once: twice the cluster's CPUs, so every CPU has its next
         task waiting while the object store holds the frames of a bounded number of tasks."""
-        return max(2, 2 * int(self.ray.cluster_resources().get("CPU", 1)))
+        return max(2, 2 * self.cpus())
+
+    def cpus(self) -> int:
+        """The cluster's CPUs."""
+        return max(1, int(self.ray.cluster_resources().get("CPU", 1)))
+
+    def expect(self, n_tasks: int) -> None:
+        """Size the tasks submitted from now on for a call of ``n_tasks`` tasks: each holds
+        :func:`task_cpus` CPUs, with the kernels on as many threads (at least one)."""
+        node_cpus = max((int(n.get("Resources", {}).get("CPU", 0)) for n in self.ray.nodes()
+                         if n.get("Alive")), default=1)
+        self.task_cpus = task_cpus(n_tasks, self.cpus(), max(1, node_cpus))
+        threads = max(1, int(self.task_cpus))
+        self._solve = self._solve.options(num_cpus=self.task_cpus)
+        if threads != self.options["threads"]:
+            self.options = dict(self.options, threads=threads)
+            self._options_ref = self.ray.put(self.options)
 
     def in_flight(self) -> int:
         return len(self._refs)

@@ -261,6 +261,7 @@ def _run(failed: list, ready: deque, options: dict, overlap: int, engine_name: s
     bar = tqdm(total=n_tasks, desc=f"decompose_many ({engine.name})", unit="task", disable=not progress)
     active: dict = {}
     try:
+        engine.expect(n_tasks)
         while ready or engine.in_flight():
             while ready and engine.in_flight() < engine.capacity():
                 video = ready.popleft()
@@ -319,6 +320,10 @@ def decompose_many(videos: Sequence, *, engine: str = "ray", address: str | None
     a task holds one CPU and runs :func:`ivkernels.decompose` with the
     kernels on one thread, so a machine with N cores solves N tasks at
     once (whole videos give exactly the result of :func:`ivkernels.decompose`).
+    A call with fewer tasks than twice the CPUs shares them so that none
+    idles while the last tasks finish
+    (:func:`ivkernels.parallel.engines.task_cpus`): more tasks than CPUs all
+    run at once, fewer get several CPUs each and as many kernel threads.
 
     Parameters
     ----------
@@ -335,10 +340,10 @@ def decompose_many(videos: Sequence, *, engine: str = "ray", address: str | None
         this call (all of this machine's cores) and shut down at its end.
         Each node of a joined cluster needs ivkernels installed; the files
         need not be there (paths are read in this process).
-    chunk_frames : cut each video into chunks of about this many frames
-        (``round(T / chunk_frames)`` chunks of equal length), solved in
-        parallel and stitched (:mod:`ivkernels.parallel.chunks`); ``None``
-        (default): one task per video.
+    chunk_frames : cut each video into chunks of at most this many frames
+        of their own (``ceil(T / chunk_frames)`` chunks of equal length),
+        solved in parallel and stitched (:mod:`ivkernels.parallel.chunks`);
+        ``None`` (default): one task per video.
     chunk_overlap : frames each chunk shares with the one before (>= 1);
         default ``Params.overlap``, the frames consecutive windows share
         in the sequential solve (perf/RESULTS.md, "Many videos and long
@@ -354,7 +359,8 @@ def decompose_many(videos: Sequence, *, engine: str = "ray", address: str | None
         array).
     **kwargs : the other arguments of :func:`ivkernels.decompose`
         (``temporal``, ``backend``, ``device``, ``params``, ``flow_passes``,
-        ``threads``; on Ray ``threads`` is 1).
+        ``threads``; on Ray ``threads`` is the CPUs a task holds, at
+        least 1).
 
     Returns
     -------

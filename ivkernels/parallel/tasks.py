@@ -7,8 +7,8 @@ as Ray tasks.  They are module-level so Ray ships them by reference (a worker
 imports this module) rather than by value.
 
 Per process, once (:func:`prepare_process`): the kernel launch thread count
-is set to the task's ``threads`` (1 on a Ray worker: a task holds one CPU)
-and, for the Taichi backend, Taichi is initialised with it (Taichi's
+is set to the task's ``threads`` (on a Ray worker the CPUs the task holds,
+at least one) and, for the Taichi backend, Taichi is initialised with it (Taichi's
 runtime is process-wide and must not be forked after ``ti.init``; Ray
 starts its workers as fresh processes, so each initialises its own).
 Per node, once (:func:`warm_up`): a tiny decomposition with the same
@@ -61,24 +61,29 @@ def solve(frames: np.ndarray, flow, options: dict) -> IntrinsicVideo:
     Returns
     -------
     IntrinsicVideo; ``diagnostics["task"]`` adds the process id, the
-    seconds the task took in it and the CPU seconds its process used
-    meanwhile (and, on Ray, the node id).
+    seconds the task took in it, the CPU seconds its process used
+    meanwhile, when it started and finished (``time.time()``, seconds since
+    the epoch, for a timeline across processes) and, on Ray, the node id.
     """
-    t0, c0 = time.perf_counter(), time.process_time()
+    started, t0, c0 = time.time(), time.perf_counter(), time.process_time()
     video = decompose(frames, flow=flow, **options)
     video.diagnostics["task"] = {"pid": os.getpid(), "seconds": time.perf_counter() - t0,
-                                 "cpu_seconds": time.process_time() - c0}
+                                 "cpu_seconds": time.process_time() - c0,
+                                 "started": started, "finished": time.time()}
     return video
 
 
 def solve_in_worker(frames: np.ndarray, flow, options: dict) -> IntrinsicVideo:
     """:func:`solve` in a worker process of its own, prepared once by :func:`prepare_process`
-    (never in the caller's process: it sets the process's thread count)."""
+    (never in the caller's process: it sets the process's thread count);
+    ``diagnostics["task"]`` adds the node id, the kernel threads and the CPUs the task held."""
     import ray
 
     prepare_process(options.get("backend", "warp"), options["threads"])
     video = solve(frames, flow, options)
-    video.diagnostics["task"]["node"] = ray.get_runtime_context().get_node_id()
+    context = ray.get_runtime_context()
+    video.diagnostics["task"].update(node=context.get_node_id(), threads=options["threads"],
+                                     cpus=context.get_assigned_resources().get("CPU"))
     return video
 
 
