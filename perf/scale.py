@@ -1,6 +1,6 @@
 """Many videos and long videos on Ray: overheads, throughput, and a projection past one machine.
 
-Three parts, each printing its table (``--parts``):
+Four parts, each printing its table (``--parts``):
 
 ``overheads``
     On a local Ray cluster of 1 and of 2 CPUs: starting the cluster, the
@@ -19,27 +19,40 @@ Three parts, each printing its table (``--parts``):
     (``|exp(g_T - g_1) - 1|``, ``g_t`` the median over pixels and channels of
     ``log(estimate / truth)`` of frame t: how far the global albedo scale
     wanders), and albedo flicker (:func:`ivkernels.metrics.albedo_flicker`
-    along the true flow) on the frame pairs at the seams and elsewhere.
+    along the true flow) on the frame pairs at the seams and elsewhere;
+    each chunked call twice, its tasks sharing the CPUs
+    (:func:`ivkernels.parallel.engines.task_cpus`) and on one CPU each (as
+    before it), side by side, ``--repeats`` times.
+``phases``
+    Where the seconds of one chunked call go: what a fresh worker process
+    pays (imports, ``warp.init``, kernel loads), then, beside the
+    sequential solve, a ``decompose_many`` call that starts its own local
+    cluster, timed phase by phase (start, warm-up, puts, each chunk's solve
+    in its worker, stitch, shutdown) with the CPU seconds of the chunks,
+    before and after ``task_cpus``.
 
 The projection (printed after ``overheads``) takes the measured per-task
 figures and assumes the rest; see perf/RESULTS.md, "Many videos and long
 videos on Ray".  Clips come from the project's renderer, training seeds
 only (seed 0 is refused).
 
-    python perf/scale.py                                   # all parts, ~8 minutes on 2 cores
+    python perf/scale.py                          # overheads, many, chunks: ~8 minutes on 2 cores
+    python perf/scale.py --parts phases --repeats 2
     python perf/scale.py --parts chunks --kinds objects_camera --overlaps 2 4
 """
 from __future__ import annotations
 
 import argparse
 import os
+import subprocess
+import sys
 import time
 
 import numpy as np
 
 import ivkernels as iv
 from ivkernels.evaluation import metrics, synthetic
-from ivkernels.parallel.chunks import chunk_ranges
+from ivkernels.parallel import engines
 from ivkernels.parallel.engines import LOCAL_CLUSTER, RayEngine
 
 NODES = (1, 10, 100, 1000)
@@ -181,41 +194,181 @@ def _pair_flicker(albedo, seq, pairs) -> float:
 def measure_chunks(args) -> None:
     import ray
 
-    print("\n| kind | seed | overlap | sequential s | chunked s | ratio | LMSE seq | LMSE chunked | "
-          "LMSE ratio | drift seq | drift chunked | flicker at seams seq / chunked | flicker elsewhere "
-          "seq / chunked |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("\n| kind | seed | overlap | repeat | tasks hold | chunks | sequential s | chunked s | ratio | LMSE seq | "
+          "LMSE chunked | LMSE ratio | drift seq | drift chunked | flicker at seams seq / chunked | "
+          "flicker elsewhere seq / chunked |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    # each task on one CPU (as before engines.task_cpus), against the CPUs shared by the call's tasks
+    shares = {"1 CPU (before)": lambda n_tasks, cpus, node_cpus: 1, "task_cpus": engines.task_cpus}
     for kind in args.kinds:
         seq = synthetic.render_sequence(kind, args.long_frames, size=tuple(args.size), seed=args.seed)
         frames = seq.frames
-        t0 = time.perf_counter()
-        ref = iv.decompose(frames)
-        t_seq = time.perf_counter() - t0
-        ray.init(**LOCAL_CLUSTER)
-        iv.decompose_many([frames[:3]], engine="ray")        # cluster up and workers warm, not timed
-        for overlap in args.overlaps:
+        for repeat in range(args.repeats):
             t0 = time.perf_counter()
-            out = iv.decompose_many([frames], engine="ray", chunk_frames=args.chunk_frames,
-                                    chunk_overlap=overlap)[0]
-            t_ch = time.perf_counter() - t0
-            ranges = chunk_ranges(args.long_frames, args.chunk_frames, overlap)
-            seam_pairs = sorted({t for (start, _), (_, prev_stop) in zip(ranges[1:], ranges[:-1])
-                                 for t in range(max(start - 1, 0), min(prev_stop, args.long_frames - 1))})
-            other = [t for t in range(args.long_frames - 1) if t not in seam_pairs]
-            l_seq, l_ch = metrics.lmse(ref.albedo, seq.albedo), metrics.lmse(out.albedo, seq.albedo)
-            print(f"| {kind} | {args.seed} | {overlap} | {t_seq:.1f} | {t_ch:.1f} | {t_ch / t_seq:.2f} | "
-                  f"{l_seq:.4f} | {l_ch:.4f} | {l_ch / l_seq:.3f} | {_drift(ref.albedo, seq.albedo):.4f} | "
-                  f"{_drift(out.albedo, seq.albedo):.4f} | {_pair_flicker(ref.albedo, seq, seam_pairs):.4f} / "
-                  f"{_pair_flicker(out.albedo, seq, seam_pairs):.4f} | "
-                  f"{_pair_flicker(ref.albedo, seq, other):.4f} / {_pair_flicker(out.albedo, seq, other):.4f} |",
-                  flush=True)
-        ray.shutdown()
+            ref = iv.decompose(frames)
+            t_seq = time.perf_counter() - t0
+            ray.init(**LOCAL_CLUSTER)
+            iv.decompose_many([frames[:3]], engine="ray")        # cluster up and workers warm, not timed
+            for overlap in args.overlaps:
+                for name in (list(shares) if repeat % 2 == 0 else list(shares)[::-1]):
+                    saved, engines.task_cpus = engines.task_cpus, shares[name]
+                    try:
+                        t0 = time.perf_counter()
+                        out = iv.decompose_many([frames], engine="ray", chunk_frames=args.chunk_frames,
+                                                chunk_overlap=overlap)[0]
+                        t_ch = time.perf_counter() - t0
+                    finally:
+                        engines.task_cpus = saved
+                    ranges = out.diagnostics["chunks"]
+                    seam_pairs = sorted({t for (start, _), (_, prev_stop) in zip(ranges[1:], ranges[:-1])
+                                         for t in range(max(start - 1, 0),
+                                                        min(prev_stop, args.long_frames - 1))})
+                    other = [t for t in range(args.long_frames - 1) if t not in seam_pairs]
+                    l_seq, l_ch = metrics.lmse(ref.albedo, seq.albedo), metrics.lmse(out.albedo, seq.albedo)
+                    print(f"| {kind} | {args.seed} | {overlap} | {repeat + 1} | {name} | "
+                          f"{' '.join(f'{a}-{b}' for a, b in ranges)} | {t_seq:.1f} | {t_ch:.1f} | "
+                          f"{t_ch / t_seq:.2f} | {l_seq:.4f} | {l_ch:.4f} | {l_ch / l_seq:.3f} | "
+                          f"{_drift(ref.albedo, seq.albedo):.4f} | {_drift(out.albedo, seq.albedo):.4f} | "
+                          f"{_pair_flicker(ref.albedo, seq, seam_pairs):.4f} / "
+                          f"{_pair_flicker(out.albedo, seq, seam_pairs):.4f} | "
+                          f"{_pair_flicker(ref.albedo, seq, other):.4f} / "
+                          f"{_pair_flicker(out.albedo, seq, other):.4f} |", flush=True)
+            ray.shutdown()
+        print(f"load average at the end {os.getloadavg()[0]:.2f}")
+
+
+#: What a fresh worker process pays before its first task's solve, measured in a fresh
+#: interpreter: the imports, Warp's initialisation, and the first tiny solve (Warp loads
+#: every kernel module from its on-disk cache) against the second.
+_FRESH_PROCESS = """
+import time
+t0 = time.perf_counter()
+import ivkernels.parallel.tasks as tasks
+t1 = time.perf_counter()
+import warp
+warp.config.quiet = True
+warp.init()
+t2 = time.perf_counter()
+tasks.prepare_process("warp", 1)
+import numpy as np
+frames = np.random.default_rng(1).uniform(0.2, 0.8, (3, 48, 64, 3)).astype(np.float32)
+t3 = time.perf_counter()
+tasks.solve(frames, None, {"threads": 1})
+t4 = time.perf_counter()
+tasks.solve(frames, None, {"threads": 1})
+t5 = time.perf_counter()
+print(t1 - t0, t2 - t1, t4 - t3, t5 - t4)
+"""
+
+
+def measure_phases(args) -> None:
+    """Where a chunked call's seconds go: a timeline of one ``decompose_many`` call that starts
+    its own local cluster, before and after this round's changes, beside the sequential solve
+    of the same video (same run)."""
+    out = subprocess.run([sys.executable, "-c", _FRESH_PROCESS], capture_output=True, text=True,
+                         check=True, env=dict(os.environ, PYTHONWARNINGS="ignore"))
+    imp, warp_init, first, second = map(float, out.stdout.split()[-4:])
+    print(f"\na fresh process (as a Ray worker): import ivkernels {imp:.2f} s, warp.init {warp_init:.2f} s, "
+          f"first 3-frame 48x64 solve {first:.2f} s, second {second:.2f} s (kernel loads "
+          f"{first - second:.2f} s)")
+
+    seq = synthetic.render_sequence(args.kinds[0], args.long_frames, size=tuple(args.size), seed=args.seed)
+    frames = seq.frames
+    for repeat in range(args.repeats):
+        t0, c0 = time.perf_counter(), time.process_time()
+        ref = iv.decompose(frames)
+        t_seq, c_seq = time.perf_counter() - t0, time.process_time() - c0
+        print(f"\nrepeat {repeat + 1}, load average {os.getloadavg()[0]:.2f}: sequential {t_seq:.1f} s "
+              f"({c_seq:.1f} CPU-s of this process); LMSE {metrics.lmse(ref.albedo, seq.albedo):.4f}, "
+              f"drift {_drift(ref.albedo, seq.albedo):.4f}")
+        for before in ((True, False) if repeat % 2 == 0 else (False, True)):
+            t_ch, out, events, pids, t0 = _timeline_call(frames, args.chunk_frames, before)
+            print(f"\n{'before' if before else 'after'} (load average {os.getloadavg()[0]:.2f}): chunked "
+                  f"{t_ch:.1f} s, ratio {t_ch / t_seq:.2f}; LMSE {metrics.lmse(out.albedo, seq.albedo):.4f}, "
+                  f"drift {_drift(out.albedo, seq.albedo):.4f}; chunks {out.diagnostics.get('chunks')}")
+            _print_timeline(t_ch, out, events, pids, t0)
+
+
+def _timeline_call(frames, chunk_frames, before: bool):
+    """One ``decompose_many`` call that starts its own local cluster, its phases timed;
+    ``before``: each task on one CPU (as before :func:`engines.task_cpus`)."""
+    import psutil
+    import ray
+
+    from ivkernels.parallel import many
+
+    events = []                                   # (label, start, stop), time.time()
+    pids = {}
+
+    def timed(label, fn):
+        def wrapper(*a, **k):
+            s = time.time()
+            try:
+                return fn(*a, **k)
+            finally:
+                events.append((label, s, time.time()))
+        return wrapper
+
+    def next_done(self, _fn=engines.RayEngine.next_done):
+        key, result = timed("next_done (wait, get)", _fn)(self)
+        if not isinstance(result, BaseException):
+            pids[key] = psutil.Process(result.diagnostics["task"]["pid"]).create_time()
+        return key, result
+
+    patches = [(ray, "init", timed("ray.init", ray.init)),
+               (ray, "shutdown", timed("ray.shutdown", ray.shutdown)),
+               (engines.RayEngine, "_warm_up", timed("warm-up tasks", engines.RayEngine._warm_up)),
+               (engines.RayEngine, "submit", timed("submit (put frames)", engines.RayEngine.submit)),
+               (engines.RayEngine, "next_done", next_done), (many, "stitch", timed("stitch", many.stitch))]
+    if before:
+        patches += [(engines, "task_cpus", lambda n_tasks, cpus, node_cpus: 1)]
+    saved = [(obj, name, getattr(obj, name)) for obj, name, _ in patches]
+    for obj, name, value in patches:
+        setattr(obj, name, value)
+    engines._warmed.clear()
+    try:
+        t0 = time.time()
+        out = iv.decompose_many([frames], engine="ray", chunk_frames=chunk_frames)[0]
+        t_ch = time.time() - t0
+    finally:
+        for obj, name, value in saved:
+            setattr(obj, name, value)
+    return t_ch, out, [(label, s - t0, e - t0) for label, s, e in events], \
+        {key: created - t0 for key, created in pids.items()}, t0
+
+
+def _print_timeline(t_ch, out, events, pids, t0) -> None:
+    """The phases of one call (seconds from its start), and how busy the CPUs were while
+    the chunks were solved (their CPU seconds, flow-ahead threads included)."""
+    rows = list(events)
+    chunk_tasks = [d["task"] for d in out.diagnostics.get("chunk_diagnostics", [out.diagnostics])]
+    for c, task in enumerate(chunk_tasks):
+        rows.append((f"chunk {c} solve (pid {task['pid']}, holds {task['cpus']} CPU, "
+                     f"{task['threads']} thread, {task['cpu_seconds']:.1f} CPU-s)",
+                     task["started"] - t0, task["finished"] - t0))
+    for key, created in sorted(pids.items()):
+        rows.append((f"worker of chunk {key[1]} started", created, created))
+    merged: dict = {}
+    for label, s, e in rows:                      # repeated phases: first start, last end, summed
+        m = merged.setdefault(label, [s, e, 0.0])
+        m[0], m[1], m[2] = min(m[0], s), max(m[1], e), m[2] + e - s
+    print("\n| phase | from s | to s | seconds |\n| --- | --- | --- | --- |")
+    for label, (s, e, total) in sorted(merged.items(), key=lambda kv: kv[1][0]):
+        print(f"| {label} | {s:.2f} | {e:.2f} | {total:.2f} |")
+    first = min(t["started"] for t in chunk_tasks) - t0
+    last = max(t["finished"] for t in chunk_tasks) - t0
+    cpu = sum(t["cpu_seconds"] for t in chunk_tasks)
+    cpus = os.cpu_count()
+    print(f"\nchunks solved from {first:.2f} to {last:.2f} s: {cpu:.1f} CPU-s of {cpus} CPUs x "
+          f"{last - first:.1f} s ({cpu / (cpus * (last - first)):.0%} busy with them); before the first "
+          f"solve {first:.2f} s, after the last {t_ch - last:.2f} s")
 
 
 def main(argv=None) -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--parts", nargs="+", default=["overheads", "many", "chunks"],
-                   choices=["overheads", "many", "chunks"])
+                   choices=["overheads", "many", "chunks", "phases"])
+    p.add_argument("--repeats", type=int, default=1, help="repeats of 'chunks' and 'phases'")
     p.add_argument("--videos", type=int, default=4, help="clips in 'overheads' and 'many'")
     p.add_argument("--frames", type=int, default=8, help="frames per clip")
     p.add_argument("--size", type=int, nargs=2, default=(120, 160), metavar=("H", "W"))
@@ -235,6 +388,8 @@ def main(argv=None) -> None:
         measure_many(args)
     if "chunks" in args.parts:
         measure_chunks(args)
+    if "phases" in args.parts:
+        measure_phases(args)
 
 
 if __name__ == "__main__":
