@@ -130,7 +130,7 @@ def _parser() -> argparse.ArgumentParser:
                    help="Ray cluster to join (with --engine ray; default: RAY_ADDRESS, else a local "
                         "cluster for this run)")
     d.add_argument("--chunk-frames", type=int, default=None, metavar="N",
-                   help="solve each input in parallel chunks of about N frames, stitched")
+                   help="solve each input in parallel chunks of at most N frames, stitched")
     return parser
 
 
