@@ -75,6 +75,6 @@ bands never write the same memory (Warp's CPU atomics are plain read-modify-writ
 #: (backends, protocols, case table, benchmarks) reads this one.
 FAMILIES = (
     "colour", "sampling", "derivatives", "maps", "pyramid", "vecops", "median",
-    "energy_data", "energy_temporal", "energy_shading", "energy_albedo_gsm",
+    "energy_data", "energy_temporal", "energy_shading", "step_evidence", "energy_albedo_gsm",
     "energy_albedo_entropy", "flow_classic", "coarse_basis",
 )

@@ -14,7 +14,8 @@ temporal albedo            Eq. 4-5      ``energy_temporal.temporal_terms``, both
 temporal shading           Eq. 8        once (``temporal_term`` on A or S alone)
 local shading smoothness   Eq. 9        ``energy_shading.shading_smoothness`` (``_gated``
                                         with the cut at flow jumps, ``motion_maps.
-                                        shading_cut_gate``, and ``maps.shading_gate``)
+                                        shading_cut_gate``, ``maps.shading_gate`` and
+                                        the step evidence, ``step_evidence.step_gate``)
 coupling to S~             Eq. 13       ``energy_shading.coupling_term``
 albedo GSM smoothness      Eq. 11       ``energy_albedo_gsm.gsm_smoothness``
 albedo global sparsity     Eq. 12       ``energy_albedo_entropy.entropy_term``
@@ -40,11 +41,7 @@ from ivkernels.kernels.workspace import Workspace
 from ivkernels.params import Params
 from ivkernels.priors import entropy_blur_weights
 from ivkernels.solver.motion_maps import shading_cut_gate
-from ivkernels.solver.step_evidence import grey_step_gate
-
-
-#: Flow (pixels) below which a pixel counts as holding still for Weiss's cue.
-STATIC_FLOW = 0.25
+from ivkernels.solver.step_evidence import multiply_step_gate
 
 
 class WindowEnergy:
@@ -115,8 +112,10 @@ class WindowEnergy:
         (``Params.shading_cut_threshold``, :func:`ivkernels.solver.motion_maps.
         shading_cut_gate`) and the input's temporal gate
         (``Params.shading_gate_tau``, ``maps.shading_gate``), both needing the
-        flow, and of the per-frame step evidence (``Params.shading_step_gain``,
-        :func:`ivkernels.solver.step_evidence.step_gate`), each where it is on.
+        flow, and of the step evidence (``Params.shading_step_gain``,
+        :func:`ivkernels.solver.step_evidence.multiply_step_gate`: kernels of the
+        ``step_evidence`` family multiply it into the gate on the backend's
+        arrays), each where it is on.
         """
         be, params, flow = self.be, self.params, self.flow
         T, h, w = self.shape
@@ -129,34 +128,14 @@ class WindowEnergy:
                                  tau_chroma=params.shading_gate_chroma)
             gate = edge_gate if gate is None else be.asarray(be.numpy(gate) * be.numpy(edge_gate))
         if params.shading_step_gain > 0:
-            tau_chroma = params.shading_step_chroma if params.shading_step_chroma > 0 else np.inf
-            steps = grey_step_gate(be.numpy(self.I), params.shading_step_gain, params.shading_step_tau,
-                                   tau_chroma, params.shading_step_share_radius)
-            if self.temporal and params.shading_step_stability > 0:
-                steps = 1.0 + (steps - 1.0) * self._step_stability(params.shading_step_stability)
-            gate = be.asarray(steps) if gate is None else be.asarray(be.numpy(gate) * steps)
+            if gate is None:
+                gate = be.empty((T, h, w))
+                be.vecops.fill(gate.reshape((T * h * w,)), 1.0)
+            multiply_step_gate(be, self.I, gate, params.shading_step_gain, params.shading_step_tau,
+                               params.shading_step_chroma, flow=flow if self.temporal else None,
+                               stability=params.shading_step_stability,
+                               share_radius=params.shading_step_share_radius)
         return gate
-
-    def _step_stability(self, tau: float) -> np.ndarray:
-        """Weiss's cue on the step evidence, (T, h, w) in (0, 1]: a step whose
-        contrast changes from frame to frame is light, not albedo.
-
-        ``maps.shading_gate`` (``exp(-(e / tau)^2)``, ``e`` the change of the
-        log contrast to a neighbour from one frame to the next), read only
-        where the scene holds still (flow under :data:`STATIC_FLOW` pixels in
-        the frame's pairs): where it moves, a bilinear warp of a sharp step
-        changes its contrast by itself, and the cue would mistake every moving
-        albedo edge for light.  1 elsewhere.
-        """
-        be, flow = self.be, self.flow
-        T, h, w = self.shape
-        stable = be.empty((T, h, w))
-        be.maps.shading_gate(self.I, flow, stable, tau)
-        speed = np.sqrt((be.numpy(flow) ** 2).sum(axis=-1))            # (T-1, h, w)
-        moving = np.zeros((T, h, w), bool)
-        moving[:-1] |= speed >= STATIC_FLOW
-        moving[1:] |= speed >= STATIC_FLOW
-        return np.where(moving, 1.0, be.numpy(stable)).astype(np.float32)
 
     # ------------------------------------------------------------------ terms
     def _add_terms(self, rows, terms=None) -> None:

@@ -19,44 +19,32 @@ pixel the largest, over its eight neighbours ``y``, of
 ``dL = |L(x) - L(y)|`` the step of the log luminance (a sharp step of ``d``
 gives ``d``, a ramp of the same change over ``k`` pixels ``d / k``) and
 ``dC`` the change of the log chromaticity ``log I_c - mean_c log I`` (its
-largest channel).  Coloured steps keep the calibrated balance of Eq. 9 and
-Eq. 11; a sharp grey step costs the shading up to ``1 + gain`` times more,
-and goes to the albedo unless the data or the temporal terms say otherwise.
+largest channel), both read on ``log(i + DARK_OFFSET)``.  Coloured steps keep
+the calibrated balance of Eq. 9 and Eq. 11; a sharp grey step costs the
+shading up to ``1 + gain`` times more, and goes to the albedo unless the data
+or the temporal terms say otherwise.  The energy (:func:`multiply_step_gate`)
+scales the gain by ``(1 - chromatic_share)^2`` and, where the scene holds
+still, the evidence by Weiss's stability cue.
+
+The formula is computed by the kernels of the ``step_evidence`` family on
+the backend's arrays (:mod:`ivkernels.kernels.warp.step_evidence`, the
+Taichi mirror, and the NumPy reference
+:mod:`ivkernels.kernels.reference.step_evidence`, which holds the constants);
+:func:`chromatic_share`, :func:`step_evidence`, :func:`step_gate` and
+:func:`grey_step_gate` are that reference on host NumPy arrays.
 """
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["chromatic_share", "local_chromatic_share", "grey_step_gate", "step_evidence", "step_gate",
-           "DARK_OFFSET", "SHARE_PRIOR_STEPS"]
+from ivkernels.kernels.reference import step_evidence as ref
+from ivkernels.kernels.reference.step_evidence import AXIS_NEIGHBOURS, DARK_OFFSET, HALF_NEIGHBOURS  # noqa: F401
 
-#: Half of the eight neighbour offsets: with them every pair of neighbours is
-#: seen once, and a pair's evidence, which does not depend on its order, goes
-#: to both of its pixels.
-HALF_NEIGHBOURS = ((0, 1), (1, 0), (1, 1), (1, -1))
+__all__ = ["chromatic_share", "local_chromatic_share", "grey_step_gate", "multiply_step_gate", "step_evidence",
+           "step_gate", "DARK_OFFSET", "SHARE_PRIOR_STEPS", "STATIC_FLOW"]
 
-#: The horizontal and vertical pairs, over which :func:`chromatic_share` counts.
-AXIS_NEIGHBOURS = ((0, 1), (1, 0))
-
-#: Linear offset added before the log when reading steps: ``log(i + DARK_OFFSET)``.
-#: In the darkest pixels a log step says little (sensor noise and compression
-#: there are large relative changes, and chromaticity is noise); the offset
-#: damps them, as Retinex implementations do.
-DARK_OFFSET = 0.02
-
-
-def _luminance_chroma(log_image: np.ndarray):
-    """``L`` (T, h, w) and ``C`` (T, h, w, 3): mean and chromaticity of ``log(i + DARK_OFFSET)``."""
-    I = np.log(np.exp(np.asarray(log_image, np.float32)) + np.float32(DARK_OFFSET))
-    L = I.mean(axis=-1)
-    return L, I - L[..., None]
-
-
-def _pair_slices(shape, dy: int, dx: int):
-    """Index tuples of the pixels ``x`` and of their neighbours ``x + (dy, dx)`` (``dy >= 0``)."""
-    _, h, w = shape
-    xs, xn = slice(max(0, -dx), w - max(0, dx)), slice(max(0, dx), w + min(0, dx))
-    return (slice(None), slice(0, h - dy), xs), (slice(None), slice(dy, h), xn)
+#: Flow (pixels) below which a pixel counts as holding still for Weiss's cue.
+STATIC_FLOW = 0.25
 
 
 #: Weight of the whole video's chromatic share in a window's (:func:`local_chromatic_share`),
@@ -64,27 +52,42 @@ def _pair_slices(shape, dy: int, dx: int):
 SHARE_PRIOR_STEPS = 4.0
 
 
-def _chroma_change(C, a, b) -> np.ndarray:
-    return np.abs(C[a] - C[b]).max(axis=-1)
+def _check(gain: float, tau: float, tau_chroma: float) -> None:
+    if not (np.isfinite(gain) and gain >= 0):
+        raise ValueError(f"gain must be a non-negative number, got {gain!r}")
+    if not (np.isfinite(tau) and tau > 0):
+        raise ValueError(f"tau must be a positive number, got {tau!r}")
+    if not tau_chroma > 0:
+        raise ValueError(f"tau_chroma must be a positive number, got {tau_chroma!r}")
 
 
-def _share(L, C, tau: float, tau_chroma: float) -> float:
-    sharp_steps = chromatic_steps = 0
+def _offset(log_image) -> np.ndarray:
+    return ref.offset_log(log_image, DARK_OFFSET)
+
+
+def chromatic_share(log_image: np.ndarray, tau: float, tau_chroma: float) -> float:
+    """Share of the input's sharp steps whose chromaticity changes, in [0, 1].
+
+    Over the horizontal and vertical neighbour pairs, a step is sharp when
+    its log-luminance change exceeds ``tau`` or its log-chromaticity change
+    ``tau_chroma``; it is chromatic in the second case.  A greyscale video
+    gives 0; the coloured training scenes 0.6-0.9.  It says how much a grey
+    step can be trusted to be shading: where the albedo changes colour at
+    most of its edges, a grey step is mostly light; where it never does, a
+    grey step is all the albedo edges there are.  0 when there is no sharp step.
+    """
+    return ref.share(ref.step_counts(_offset(log_image), tau, tau_chroma))
+
+
+def _pixel_counts(I, tau: float, tau_chroma: float):
+    """Per pixel of ``I`` (the offset log image), its sharp and its chromatic steps to the right and
+    below, (T, h, w) float64 each."""
+    L, C = ref.luminance_chroma(I)
+    sharp = np.zeros(L.shape)
+    chromatic = np.zeros(L.shape)
     for dy, dx in AXIS_NEIGHBOURS:
-        a, b = _pair_slices(L.shape, dy, dx)
-        chromatic = _chroma_change(C, a, b) > tau_chroma
-        sharp_steps += int(np.count_nonzero(chromatic | (np.abs(L[a] - L[b]) > tau)))
-        chromatic_steps += int(np.count_nonzero(chromatic))
-    return chromatic_steps / sharp_steps if sharp_steps else 0.0
-
-
-def _step_counts(L, C, tau: float, tau_chroma: float):
-    """Per pixel, its sharp and its chromatic steps to the right and below, (T, h, w) each."""
-    sharp = np.zeros(L.shape, np.float64)
-    chromatic = np.zeros(L.shape, np.float64)
-    for dy, dx in AXIS_NEIGHBOURS:
-        a, b = _pair_slices(L.shape, dy, dx)
-        is_chromatic = _chroma_change(C, a, b) > tau_chroma
+        a, b = ref.pair_slices(L.shape, dy, dx)
+        is_chromatic = np.abs(C[a] - C[b]).max(axis=-1) > tau_chroma
         sharp[a] += is_chromatic | (np.abs(L[a] - L[b]) > tau)
         chromatic[a] += is_chromatic
     return sharp, chromatic
@@ -100,50 +103,6 @@ def _box_sum(x: np.ndarray, r: int) -> np.ndarray:
     return (c[:, y1][:, :, x1] - c[:, y0][:, :, x1] - c[:, y1][:, :, x0] + c[:, y0][:, :, x0])
 
 
-def _local_share(L, C, tau: float, tau_chroma: float, radius: float) -> np.ndarray:
-    sharp, chromatic = _step_counts(L, C, tau, tau_chroma)
-    total = sharp.sum()
-    whole = chromatic.sum() / total if total else 0.0
-    r = max(1, int(round(radius * min(L.shape[1:]))))
-    return ((_box_sum(chromatic, r) + SHARE_PRIOR_STEPS * whole)
-            / (_box_sum(sharp, r) + SHARE_PRIOR_STEPS)).astype(np.float32)
-
-
-def _evidence(L, C, tau: float, tau_chroma: float) -> np.ndarray:
-    out = np.zeros(L.shape, np.float32)
-    for dy, dx in HALF_NEIGHBOURS:
-        a, b = _pair_slices(L.shape, dy, dx)
-        ev = 1.0 - np.exp(-((L[a] - L[b]) / np.float32(tau)) ** 2)
-        if np.isfinite(tau_chroma):
-            ev *= np.exp(-(_chroma_change(C, a, b) / np.float32(tau_chroma)) ** 2)
-        np.maximum(out[a], ev, out=out[a])
-        np.maximum(out[b], ev, out=out[b])
-    return out
-
-
-def _check(gain: float, tau: float, tau_chroma: float) -> None:
-    if not (np.isfinite(gain) and gain >= 0):
-        raise ValueError(f"gain must be a non-negative number, got {gain!r}")
-    if not (np.isfinite(tau) and tau > 0):
-        raise ValueError(f"tau must be a positive number, got {tau!r}")
-    if not tau_chroma > 0:
-        raise ValueError(f"tau_chroma must be a positive number, got {tau_chroma!r}")
-
-
-def chromatic_share(log_image: np.ndarray, tau: float, tau_chroma: float) -> float:
-    """Share of the input's sharp steps whose chromaticity changes, in [0, 1].
-
-    Over the horizontal and vertical neighbour pairs, a step is sharp when
-    its log-luminance change exceeds ``tau`` or its log-chromaticity change
-    ``tau_chroma``; it is chromatic in the second case.  A greyscale video
-    gives 0; the coloured training scenes 0.6-0.9.  It says how much a grey
-    step can be trusted to be shading: where the albedo changes colour at
-    most of its edges, a grey step is mostly light; where it never does, a
-    grey step is all the albedo edges there are.  0 when there is no sharp step.
-    """
-    return _share(*_luminance_chroma(log_image), tau, tau_chroma)
-
-
 def local_chromatic_share(log_image: np.ndarray, tau: float, tau_chroma: float, radius: float) -> np.ndarray:
     """:func:`chromatic_share` read around each pixel, (T, h, w) float32 in [0, 1].
 
@@ -154,7 +113,12 @@ def local_chromatic_share(log_image: np.ndarray, tau: float, tau_chroma: float, 
     A grey floor beside coloured walls and objects keeps a low share where
     the floor is, which one number for the whole scene would not.
     """
-    return _local_share(*_luminance_chroma(log_image), tau, tau_chroma, radius)
+    sharp, chromatic = _pixel_counts(_offset(log_image), tau, tau_chroma)
+    total = sharp.sum()
+    whole = chromatic.sum() / total if total else 0.0
+    r = max(1, int(round(radius * min(sharp.shape[1:]))))
+    return ((_box_sum(chromatic, r) + SHARE_PRIOR_STEPS * whole)
+            / (_box_sum(sharp, r) + SHARE_PRIOR_STEPS)).astype(np.float32)
 
 
 def step_evidence(log_image: np.ndarray, tau: float, tau_chroma: float) -> np.ndarray:
@@ -166,7 +130,7 @@ def step_evidence(log_image: np.ndarray, tau: float, tau_chroma: float) -> np.nd
         ``1/e`` as grey; ``inf``: chromaticity is not looked at.
     Border pixels compare with the neighbours they have.
     """
-    return _evidence(*_luminance_chroma(log_image), tau, tau_chroma)
+    return ref.evidence(_offset(log_image), tau, tau_chroma).astype(np.float32)
 
 
 def step_gate(log_image: np.ndarray, gain: float, tau: float, tau_chroma: float = np.inf) -> np.ndarray:
@@ -176,25 +140,69 @@ def step_gate(log_image: np.ndarray, gain: float, tau: float, tau_chroma: float 
     tau, tau_chroma : see :func:`step_evidence`.
     """
     _check(gain, tau, tau_chroma)
-    return (1.0 + gain * step_evidence(log_image, tau, tau_chroma)).astype(np.float32)
+    return (1.0 + gain * ref.evidence(_offset(log_image), tau, tau_chroma)).astype(np.float32)
 
 
 def grey_step_gate(log_image: np.ndarray, gain: float, tau: float, tau_chroma: float = np.inf,
                    share_radius: float = 0.0) -> np.ndarray:
-    """The weight Eq. 9's local term uses: :func:`step_gate` with the gain scaled
-    by ``(1 - share)^2`` (unscaled when ``tau_chroma`` is ``inf``), reading the
-    image once for both; (T, h, w) float32.  The share is
-    :func:`local_chromatic_share` with ``share_radius`` > 0, else the whole
-    video's :func:`chromatic_share`."""
+    """The step weight without Weiss's cue: :func:`step_gate` with the gain scaled by
+    ``(1 - share)^2`` (unscaled when ``tau_chroma`` is ``inf``), (T, h, w) float32; the share is
+    :func:`local_chromatic_share` with ``share_radius`` > 0, else the whole video's
+    :func:`chromatic_share`.  Host NumPy (the energy's is :func:`multiply_step_gate` on the backend)."""
     _check(gain, tau, tau_chroma)
     if not (np.isfinite(share_radius) and share_radius >= 0):
         raise ValueError(f"share_radius must be a non-negative number, got {share_radius!r}")
-    L, C = _luminance_chroma(log_image)
-    evidence = _evidence(L, C, tau, tau_chroma)
+    evidence = step_evidence(log_image, tau, tau_chroma)
     if not np.isfinite(tau_chroma):
         return (1.0 + gain * evidence).astype(np.float32)
     # trust a grey step as albedo as much as the albedo edges around it are grey
     if share_radius > 0:
-        return (1.0 + gain * (1.0 - _local_share(L, C, tau, tau_chroma, share_radius)) ** 2
+        return (1.0 + gain * (1.0 - local_chromatic_share(log_image, tau, tau_chroma, share_radius)) ** 2
                 * evidence).astype(np.float32)
-    return (1.0 + gain * (1.0 - _share(L, C, tau, tau_chroma)) ** 2 * evidence).astype(np.float32)
+    return (1.0 + gain * (1.0 - chromatic_share(log_image, tau, tau_chroma)) ** 2 * evidence).astype(np.float32)
+
+
+def multiply_step_gate(be, log_image, gate, gain: float, tau: float, tau_chroma: float = 0.0, flow=None,
+                       stability: float = 0.0, static_flow: float = STATIC_FLOW, share_radius: float = 0.0) -> None:
+    """Multiply the step weight of Eq. 9's local term into ``gate``, on the backend's arrays.
+
+    ``gate *= 1 + gain (1 - s)^2 w evidence``: ``s`` the chromatic share
+    (:func:`chromatic_share`), ``evidence`` that of :func:`step_evidence`, and
+    ``w`` Weiss's cue where the scene holds still: ``maps.shading_gate`` with
+    ``tau = stability`` (a step whose contrast changes from frame to frame is
+    light, not albedo), read only where the flow of the frame's pairs is
+    under ``static_flow`` pixels (where it moves, a bilinear warp of a sharp
+    step changes its contrast by itself, and the cue would mistake every
+    moving albedo edge for light); ``w = 1`` elsewhere, and everywhere
+    without a flow or with ``stability = 0``.  Every step is a kernel of the
+    ``step_evidence`` family (or ``maps``); nothing is read back to the host.
+
+    be : backend.
+    log_image : (T, h, w, 3) backend array, ``I = log i``.
+    gate : (T, h, w) backend array, updated (all ones for the step weight alone).
+    gain : >= 0; tau : > 0; tau_chroma : >= 0 (0: chromaticity not looked at), log units.
+    flow : (T-1, h, w, 2) backend array, or ``None``.
+    stability : >= 0, log-contrast change of Weiss's cue (0: not looked at).
+    static_flow : > 0, pixels.
+    share_radius : >= 0; > 0 (with ``tau_chroma > 0``): the share is read around each
+        pixel (:func:`local_chromatic_share`), on the host: the one step that reads
+        the input back and writes ``(1 - s)^2`` into ``w`` (``Params.shading_step_share_radius``,
+        off by default).
+    """
+    T, h, w, _ = log_image.shape
+    kernels = be.step_evidence
+    offset = be.empty((T, h, w, 3))
+    kernels.offset_log(log_image, offset, DARK_OFFSET)
+    counts = be.empty((T * h, 2), np.int32)
+    kernels.step_counts(offset, counts, tau, tau_chroma)
+    weight = be.empty((T, h, w))
+    if flow is not None and T > 1 and stability > 0:
+        be.maps.shading_gate(log_image, flow, weight, stability)
+        kernels.stability_where_still(flow, weight, static_flow)
+    elif weight.size:
+        be.vecops.fill(weight.reshape((T * h * w,)), 1.0)
+    if share_radius > 0 and tau_chroma > 0:
+        keep = (1.0 - local_chromatic_share(be.numpy(log_image), tau, tau_chroma, share_radius)) ** 2
+        weight = be.asarray(be.numpy(weight) * keep)
+        counts = be.zeros((T * h, 2), np.int32)                 # the share is in the weight now
+    kernels.step_gate(offset, counts, weight, gate, gain, tau, tau_chroma)

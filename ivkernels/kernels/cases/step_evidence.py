@@ -1,0 +1,123 @@
+"""Cases of :mod:`ivkernels.kernels.warp.step_evidence` (the offset log, the step counts of the
+chromatic share, the step gate of Eq. 9's local term, the stability cue where the scene holds still)."""
+from __future__ import annotations
+
+import numpy as np
+
+from ivkernels.kernels.cases import EXACT, Case, Tol
+from ivkernels.kernels.cases.inputs import F32, nans, normal, pairs, uniform
+from ivkernels.kernels.reference import step_evidence as ref
+
+#: Width of the band around a threshold (log units, pixels) where float32 and float64 may
+#: decide a comparison differently: pairs there are not compared.
+TIE = 1e-5
+
+
+def steps_image(rng, T: int, H: int, W: int) -> np.ndarray:
+    """An offset log image (T, H, W, 3) with every kind of step: grey blocks (sharp grey steps),
+    a coloured band (chromatic steps), a ramp (soft steps), sensor noise, and dark pixels."""
+    yy, xx = np.mgrid[0:H, 0:W]
+    grey = np.where(((yy // 3) + (xx // 4)) % 2 == 0, -0.4, -1.2)
+    ramp = -0.02 * xx
+    img = np.repeat((grey + ramp)[None, :, :, None], 3, axis=-1).repeat(T, axis=0)
+    img[:, H // 3: 2 * H // 3 + 1] += np.log(np.array([1.0, 0.6, 0.8]))       # a coloured band
+    img = img + normal(rng, (T, H, W, 3), 0.0, 0.03) + normal(rng, (T, 1, 1, 1), 0.0, 0.1)
+    img[:, ::5, ::3] = np.log(ref.DARK_OFFSET)                                   # the darkest pixels
+    return img.astype(F32)
+
+
+def _pair_ties(log_image, tau, tau_chroma):
+    """Per row (T*H,): whether a horizontal or vertical pair the row counts lies within :data:`TIE`
+    of ``tau`` or ``tau_chroma``."""
+    L, C = ref.luminance_chroma(log_image)
+    t, h, _ = L.shape
+    tied = np.zeros((t, h), bool)
+    for dy, dx in ref.AXIS_NEIGHBOURS:
+        a, b = ref.pair_slices(L.shape, dy, dx)
+        near = np.abs(np.abs(L[a] - L[b]) - tau) < TIE
+        if tau_chroma > 0:
+            near |= np.abs(np.abs(C[a] - C[b]).max(axis=-1) - tau_chroma) < TIE
+        tied[:, : h - dy] |= near.any(axis=-1)
+    return tied.reshape(t * h)
+
+
+def _offset_log(offset):
+    def make(rng, T, H, W):
+        img = np.log(uniform(rng, (T, H, W, 3), 1e-6, 1.0)).astype(F32)      # down to the darkest pixels
+        return {"log_image": img, "out": nans((T, H, W, 3)), "offset": offset}
+
+    return Case("step_evidence", "offset_log", make, ("log_image", "out", "offset"), ("out",),
+                lambda v: {"out": ref.offset_log(v["log_image"], v["offset"])}, variant=f"offset={offset:g}",
+                tol=Tol(1e-6, 1e-6), in_place=(("log_image", "out"),))
+
+
+def _counts(tau, tau_chroma):
+    def make(rng, T, H, W):
+        return {"log_image": steps_image(rng, T, H, W), "counts": np.full((T * H, 2), -1, np.int32),
+                "tau": tau, "tau_chroma": tau_chroma}
+
+    def tied(v):
+        return {"counts": np.repeat(_pair_ties(v["log_image"], v["tau"], v["tau_chroma"])[:, None], 2, axis=1)}
+
+    return Case("step_evidence", "step_counts", make, ("log_image", "counts", "tau", "tau_chroma"), ("counts",),
+                lambda v: {"counts": ref.step_counts(v["log_image"], v["tau"], v["tau_chroma"])},
+                variant=f"tau={tau:g},tau_chroma={tau_chroma:g}", tol=EXACT, ignore=tied)
+
+
+def _gate(tau, tau_chroma, counts):
+    """``counts``: "image" (those of the image, as the solver passes them), "random", or "none"
+    (no sharp step: the gain is not scaled)."""
+    def make(rng, T, H, W):
+        img = steps_image(rng, T, H, W)
+        if counts == "image":
+            c = ref.step_counts(img, tau, tau_chroma)
+        elif counts == "random":
+            sharp = rng.integers(0, 2 * W + 1, (T * H, 1))
+            c = np.concatenate([sharp, rng.integers(0, sharp + 1)], axis=1).astype(np.int32)
+        else:
+            c = np.zeros((T * H, 2), np.int32)
+        return {"log_image": img, "counts": c, "weight": uniform(rng, (T, H, W), 0.0, 1.0),
+                "gate": uniform(rng, (T, H, W), 0.0, 1.0), "gain": 8.0, "tau": tau, "tau_chroma": tau_chroma}
+
+    def reference(v):
+        return {"gate": ref.step_gate(v["log_image"], v["counts"], v["weight"], v["gate"], v["gain"], v["tau"],
+                                      v["tau_chroma"])}
+
+    # float32 steps of log values up to 5 in size: the evidence to about 4e-6, the gate to 8 times that
+    return Case("step_evidence", "step_gate", make,
+                ("log_image", "counts", "weight", "gate", "gain", "tau", "tau_chroma"), ("gate",), reference,
+                variant=f"tau={tau:g},tau_chroma={tau_chroma:g},{counts}", updates=("gate",),
+                tol=Tol(1e-5, 4e-5), in_place=(("weight", "gate"),))
+
+
+def _still(static_flow):
+    def make(rng, T, H, W):
+        P = pairs(T)
+        f = normal(rng, (P, H, W, 2), 0.0, 0.3)                  # around the threshold
+        f[:, : H // 2] *= 10.0                                    # and a moving half
+        return {"flow": f, "stable": uniform(rng, (T, H, W), 0.0, 1.0), "static_flow": static_flow}
+
+    def tied(v):
+        speed = np.sqrt((np.asarray(v["flow"], np.float64) ** 2).sum(axis=-1))
+        near = np.abs(speed - v["static_flow"]) < TIE
+        out = np.zeros(np.shape(v["stable"]), bool)
+        out[:-1] |= near
+        out[1:] |= near
+        return {"stable": out}
+
+    return Case("step_evidence", "stability_where_still", make, ("flow", "stable", "static_flow"), ("stable",),
+                lambda v: {"stable": ref.stability_where_still(v["flow"], v["stable"], v["static_flow"])},
+                variant=f"static_flow={static_flow:g}", updates=("stable",), tol=EXACT, ignore=tied)
+
+
+CASES = (
+    _offset_log(ref.DARK_OFFSET),
+    _offset_log(0.5),
+    _counts(0.1, 0.05),
+    _counts(0.3, 0.0),
+    _gate(0.1, 0.05, "image"),
+    _gate(0.1, 0.05, "random"),
+    _gate(0.25, 0.0, "none"),
+    _still(0.25),
+    _still(1.0),
+)

@@ -1,0 +1,163 @@
+"""``step_evidence``: the declared contract of its host functions, and the NumPy references (float64).
+
+The per-pixel weight on Eq. 9's local shading pair terms, ``1 + gain' *
+weight * evidence``: Retinex's cue (a sharp grey step of the log luminance is
+an albedo edge) times Weiss's cue on still pixels (a step whose contrast
+holds from frame to frame).  Why and how the weight is used:
+:mod:`ivkernels.solver.step_evidence`, which composes these functions on a
+backend.  The steps read ``I' = log(i + offset)`` (:func:`offset_log` of the
+log input ``log i``): in the darkest pixels a log step says little.
+
+Per pair of neighbours ``x, y`` with ``d = I'(x) - I'(y)`` (3 channels):
+
+* ``dL = |mean_c d|``, the step of the log luminance ``L = mean_c I'``;
+* ``dC = max_c |d_c - mean_c d|``, the change of the log chromaticity
+  ``C = I' - L`` (its largest channel);
+* a step is *sharp* when ``dL > tau`` or it is *chromatic*, ``dC > tau_chroma``
+  (never with ``tau_chroma = 0``);
+* its evidence is ``(1 - exp(-(dL / tau)^2)) * exp(-(dC / tau_chroma)^2)``
+  (the second factor 1 with ``tau_chroma = 0``).
+
+A pixel's evidence is the largest over its 8 neighbours inside the image.
+The share ``s`` of chromatic steps among the sharp ones, over the
+horizontal and vertical pairs of the whole window (:func:`step_counts` per
+row, :func:`share` of the counts), scales the gain: ``gain' = gain (1 - s)^2``.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ivkernels.kernels.contract import Array, Family, FinitePositive, NonNegative, Out, Positive, Rule
+
+FAMILY = Family("step_evidence", "Retinex's sharp grey steps and Weiss's still steps on Eq. 9's local term.")
+
+#: Linear offset added before the log when reading steps: ``log(i + DARK_OFFSET)``.
+#: In the darkest pixels a log step says little (sensor noise and compression
+#: there are large relative changes, and chromaticity is noise); the offset
+#: damps them, as Retinex implementations do.
+DARK_OFFSET = 0.02
+
+#: Half of the eight neighbour offsets: with them every pair of neighbours is
+#: seen once, and a pair's evidence, which does not depend on its order, goes
+#: to both of its pixels.
+HALF_NEIGHBOURS = ((0, 1), (1, 0), (1, 1), (1, -1))
+
+#: The horizontal and vertical pairs, over which the chromatic share is counted;
+#: a pair is counted in the row of its first pixel (the left or upper one).
+AXIS_NEIGHBOURS = ((0, 1), (1, 0))
+
+
+def _finite_gain(sizes, args):
+    if not math.isfinite(args["gain"]):
+        raise ValueError(f"gain must be a finite number >= 0, got {args['gain']!r}")
+
+
+FAMILY.declare("offset_log(log_image, out, offset)",
+               "``out = log(exp(log_image) + offset)``: the log image read with a linear offset; ``offset > 0``.",
+               log_image="T H W 3", out=Out("T H W 3"), offset=FinitePositive)
+FAMILY.declare("step_counts(log_image, counts, tau, tau_chroma=0.0)",
+               "Per row, the sharp and the chromatic steps of the horizontal and vertical pairs it starts.",
+               log_image="T H W 3", counts=Out("T*H 2", "int32", layout="(T*H, 2)"), tau=FinitePositive,
+               tau_chroma=NonNegative)
+FAMILY.declare("step_gate(log_image, counts, weight, gate, gain, tau, tau_chroma=0.0)",
+               "``gate *= 1 + gain (1 - s)^2 weight evidence``, ``s`` the chromatic share of ``counts``.",
+               log_image="T H W 3", counts=Array("T*H 2", "int32", layout="(T*H, 2)"), weight="T H W",
+               gate=Out("T H W"), gain=NonNegative, tau=FinitePositive, tau_chroma=NonNegative,
+               rules=(Rule(_finite_gain),),
+               separate=(("gate", "log_image", "the gate is written while the neighbours' log_image is read"),))
+FAMILY.declare("stability_where_still(flow, stable, static_flow)",
+               "``stable = 1`` where the flow of a pair touching the frame moves ``static_flow`` px or more.",
+               flow=Array("T-1 H W 2", layout="(T-1, H, W, 2)"), stable=Out("T H W"), static_flow=Positive,
+               separate=(("stable", "flow", "stable is written while flow is read"),))
+
+
+# ----------------------------------------------------------------------------- the references
+
+def offset_log(log_image, offset: float) -> np.ndarray:
+    """``log(exp(log_image) + offset)`` (T, H, W, 3), float64."""
+    return np.log(np.exp(np.asarray(log_image, np.float64)) + offset)
+
+
+def luminance_chroma(log_image):
+    """``L`` (T, H, W) and ``C`` (T, H, W, 3): the mean over channels of ``log_image`` and the rest."""
+    I = np.asarray(log_image, np.float64)
+    L = I.mean(axis=-1)
+    return L, I - L[..., None]
+
+
+def pair_slices(shape, dy: int, dx: int):
+    """Index tuples of the pixels ``x`` and of their neighbours ``x + (dy, dx)`` (``dy >= 0``)
+    of a (T, H, W) array."""
+    _, h, w = shape
+    xs, xn = slice(max(0, -dx), w - max(0, dx)), slice(max(0, dx), w + min(0, dx))
+    return (slice(None), slice(0, h - dy), xs), (slice(None), slice(dy, h), xn)
+
+
+def _chroma_change(C, a, b) -> np.ndarray:
+    return np.abs(C[a] - C[b]).max(axis=-1)
+
+
+def step_counts(log_image, tau: float, tau_chroma: float = 0.0) -> np.ndarray:
+    """(T*H, 2) int32: per row ``t * H + y``, the sharp steps (column 0) and the chromatic ones
+    (column 1) among the pairs ``(x, x + (0, 1))`` and ``(x, x + (1, 0))`` of its pixels ``x``.
+
+    log_image : (T, H, W, 3), ``I'`` (:func:`offset_log`).
+    tau_chroma : 0: no step is chromatic.
+    """
+    L, C = luminance_chroma(log_image)
+    t, h, _ = L.shape
+    counts = np.zeros((t, h, 2), np.int64)
+    for dy, dx in AXIS_NEIGHBOURS:
+        a, b = pair_slices(L.shape, dy, dx)
+        chromatic = _chroma_change(C, a, b) > tau_chroma if tau_chroma > 0 else np.zeros(L[a].shape, bool)
+        sharp = chromatic | (np.abs(L[a] - L[b]) > tau)
+        counts[:, : h - dy, 0] += sharp.sum(axis=-1)
+        counts[:, : h - dy, 1] += chromatic.sum(axis=-1)
+    return counts.reshape(t * h, 2).astype(np.int32)
+
+
+def share(counts) -> float:
+    """The chromatic share ``sum counts[:, 1] / sum counts[:, 0]`` of :func:`step_counts`; 0 without sharp steps."""
+    counts = np.asarray(counts, np.int64)
+    sharp, chromatic = int(counts[:, 0].sum()), int(counts[:, 1].sum())
+    return chromatic / sharp if sharp else 0.0
+
+
+def evidence(log_image, tau: float, tau_chroma: float = 0.0) -> np.ndarray:
+    """(T, H, W) float64 in [0, 1): the largest pair evidence over a pixel's 8 neighbours
+    (0 for a pixel without any); ``log_image`` is ``I'``, ``tau_chroma = 0``: colour is not looked at."""
+    L, C = luminance_chroma(log_image)
+    out = np.zeros(L.shape)
+    for dy, dx in HALF_NEIGHBOURS:
+        a, b = pair_slices(L.shape, dy, dx)
+        ev = 1.0 - np.exp(-((L[a] - L[b]) / tau) ** 2)
+        if tau_chroma > 0:
+            ev *= np.exp(-(_chroma_change(C, a, b) / tau_chroma) ** 2)
+        np.maximum(out[a], ev, out=out[a])
+        np.maximum(out[b], ev, out=out[b])
+    return out
+
+
+def step_gate(log_image, counts, weight, gate, gain: float, tau: float, tau_chroma: float = 0.0) -> np.ndarray:
+    """``gate * (1 + gain (1 - share(counts))^2 weight evidence)`` (T, H, W), float64."""
+    scaled = gain * (1.0 - share(counts)) ** 2
+    return np.asarray(gate, np.float64) * (1.0 + scaled * np.asarray(weight, np.float64)
+                                           * evidence(log_image, tau, tau_chroma))
+
+
+def moving(flow, n_frames: int, static_flow: float) -> np.ndarray:
+    """(T, H, W) bool: the flow of a pair that starts or ends on the frame moves ``static_flow`` px or more."""
+    flow = np.asarray(flow, np.float64)
+    fast = np.sqrt((flow ** 2).sum(axis=-1)) >= static_flow
+    out = np.zeros((n_frames, *flow.shape[1:3]), bool)
+    out[:-1] |= fast
+    out[1:] |= fast
+    return out
+
+
+def stability_where_still(flow, stable, static_flow: float) -> np.ndarray:
+    """``stable`` (T, H, W) with 1 where :func:`moving`, float64."""
+    stable = np.asarray(stable, np.float64)
+    return np.where(moving(flow, stable.shape[0], static_flow), 1.0, stable)

@@ -1,0 +1,208 @@
+"""Taichi mirror of :mod:`ivkernels.kernels.warp.step_evidence` (the step evidence on Eq. 9's
+local term): same host functions and signatures, NumPy arrays passed as ``ti.types.ndarray()``.
+The outermost loop runs over rows in parallel.  The arrays live on the host, so the chromatic
+share is summed there from the kernel's per-row counts (in int64, exactly).
+"""
+import numpy as np
+import taichi as ti
+
+from ivkernels.kernels.contract import implements
+from ivkernels.kernels.ndarray_checks import FRONT
+from ivkernels.kernels.reference.step_evidence import FAMILY, share
+
+host = implements(FAMILY, FRONT)
+
+nd2_i32 = ti.types.ndarray(dtype=ti.i32, ndim=2)
+nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
+nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
+
+#: Below this argument ``exp(-a)`` and ``1 - exp(-a)`` are read from their series (see the Warp module).
+SERIES_BELOW = 1.0e-3
+
+
+@ti.func
+def exp_neg(a):
+    """``exp(-a)`` for ``a >= 0``, by its series below ``SERIES_BELOW`` (see the Warp module)."""
+    out = 0.0
+    if a < SERIES_BELOW:
+        out = 1.0 - a * (1.0 - a * (0.5 - a * (1.0 / 6.0)))
+    else:
+        out = ti.exp(-a)
+    return out
+
+
+@ti.func
+def one_minus_exp_neg(a):
+    """``1 - exp(-a)`` for ``a >= 0``, by its series below ``SERIES_BELOW`` (see the Warp module)."""
+    out = 0.0
+    if a < SERIES_BELOW:
+        out = a * (1.0 - a * (0.5 - a * (1.0 / 6.0)))
+    else:
+        out = 1.0 - ti.exp(-a)
+    return out
+
+
+@ti.func
+def pair_step(img: ti.template(), t, y, x, yy, xx):
+    """``(dL, dC)`` of the pixels ``(y, x)`` and ``(yy, xx)`` of frame ``t`` (see the Warp module)."""
+    d0 = img[t, y, x, 0] - img[t, yy, xx, 0]
+    d1 = img[t, y, x, 1] - img[t, yy, xx, 1]
+    d2 = img[t, y, x, 2] - img[t, yy, xx, 2]
+    m = (d0 + d1 + d2) / 3.0
+    return ti.abs(m), ti.max(ti.max(ti.abs(d0 - m), ti.abs(d1 - m)), ti.abs(d2 - m))
+
+
+@ti.func
+def pair_counts(img: ti.template(), t, y, x, yy, xx, tau, tau_chroma):
+    """``(sharp, chromatic)``, each 0 or 1, of one pair of neighbours."""
+    dl, dc = pair_step(img, t, y, x, yy, xx)
+    chromatic = 0
+    if tau_chroma > 0.0 and dc > tau_chroma:
+        chromatic = 1
+    sharp = chromatic
+    if dl > tau:
+        sharp = 1
+    return sharp, chromatic
+
+
+@ti.func
+def pair_evidence(img: ti.template(), t, y, x, yy, xx, tau, tau_chroma):
+    """``(1 - exp(-(dL / tau)^2)) * exp(-(dC / tau_chroma)^2)`` (the second factor 1 for ``tau_chroma = 0``)."""
+    dl, dc = pair_step(img, t, y, x, yy, xx)
+    q = dl / tau
+    ev = one_minus_exp_neg(q * q)
+    if tau_chroma > 0.0:
+        qc = dc / tau_chroma
+        ev = ev * exp_neg(qc * qc)
+    return ev
+
+
+@ti.kernel
+def offset_log_rows(img: nd4, out: nd4, offset: ti.f32):
+    height = img.shape[1]
+    for r in range(img.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for x in range(img.shape[2]):
+            for c in ti.static(range(3)):
+                out[t, y, x, c] = ti.log(ti.exp(img[t, y, x, c]) + offset)
+
+
+@ti.kernel
+def step_counts_rows(img: nd4, counts: nd2_i32, tau: ti.f32, tau_chroma: ti.f32):
+    height = img.shape[1]
+    width = img.shape[2]
+    for r in range(img.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        sharp = 0
+        chromatic = 0
+        for x in range(width):
+            if x + 1 < width:
+                s, c = pair_counts(img, t, y, x, y, x + 1, tau, tau_chroma)
+                sharp += s
+                chromatic += c
+            if y + 1 < height:
+                s, c = pair_counts(img, t, y, x, y + 1, x, tau, tau_chroma)
+                sharp += s
+                chromatic += c
+        counts[r, 0] = sharp
+        counts[r, 1] = chromatic
+
+
+@ti.kernel
+def half_pair_evidence_rows(img: nd4, pairs: nd4, tau: ti.f32, tau_chroma: ti.f32):
+    """``pairs[t, y, x, k]``: the evidence of the pair of ``(y, x)`` with ``(y, x) + HALF_NEIGHBOURS[k]``."""
+    height = img.shape[1]
+    width = img.shape[2]
+    for r in range(img.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for x in range(width):
+            e0 = 0.0
+            e1 = 0.0
+            e2 = 0.0
+            e3 = 0.0
+            if x + 1 < width:
+                e0 = pair_evidence(img, t, y, x, y, x + 1, tau, tau_chroma)
+            if y + 1 < height:
+                e1 = pair_evidence(img, t, y, x, y + 1, x, tau, tau_chroma)
+                if x + 1 < width:
+                    e2 = pair_evidence(img, t, y, x, y + 1, x + 1, tau, tau_chroma)
+                if x >= 1:
+                    e3 = pair_evidence(img, t, y, x, y + 1, x - 1, tau, tau_chroma)
+            pairs[t, y, x, 0] = e0
+            pairs[t, y, x, 1] = e1
+            pairs[t, y, x, 2] = e2
+            pairs[t, y, x, 3] = e3
+
+
+@ti.kernel
+def step_gate_rows(pairs: nd4, weight: nd3, gate: nd3, gain: ti.f32):
+    """``gate *= 1 + gain weight ev``, ``ev`` the largest of the pixel's 8 pairs (see the Warp module)."""
+    height = pairs.shape[1]
+    width = pairs.shape[2]
+    for r in range(pairs.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for x in range(width):
+            ev = ti.max(ti.max(pairs[t, y, x, 0], pairs[t, y, x, 1]), ti.max(pairs[t, y, x, 2], pairs[t, y, x, 3]))
+            if x >= 1:
+                ev = ti.max(ev, pairs[t, y, x - 1, 0])
+            if y >= 1:
+                ev = ti.max(ev, pairs[t, y - 1, x, 1])
+                if x >= 1:
+                    ev = ti.max(ev, pairs[t, y - 1, x - 1, 2])
+                if x + 1 < width:
+                    ev = ti.max(ev, pairs[t, y - 1, x + 1, 3])
+            gate[t, y, x] = gate[t, y, x] * (1.0 + gain * weight[t, y, x] * ev)
+
+
+@ti.kernel
+def stability_where_still_rows(flow: nd4, stable: nd3, static_flow: ti.f32):
+    height = stable.shape[1]
+    n_pairs = flow.shape[0]
+    for r in range(stable.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for x in range(stable.shape[2]):
+            moving = 0
+            for k in ti.static(range(2)):
+                p = t - k                   # the pair the frame starts (k = 0) and the one ending on it
+                if 0 <= p < n_pairs:
+                    fx = flow[p, y, x, 0]
+                    fy = flow[p, y, x, 1]
+                    if ti.sqrt(fx * fx + fy * fy) >= static_flow:
+                        moving = 1
+            if moving != 0:
+                stable[t, y, x] = 1.0
+
+
+@host("offset_log")
+def offset_log(log_image, out, offset: float) -> None:
+    """``out = log(exp(log_image) + offset)``; see :func:`ivkernels.kernels.warp.step_evidence.offset_log`."""
+    if out.size:
+        offset_log_rows(log_image, out, offset)
+
+
+@host("step_counts")
+def step_counts(log_image, counts, tau: float, tau_chroma: float = 0.0) -> None:
+    """Per row, the sharp and the chromatic steps; see :func:`ivkernels.kernels.warp.step_evidence.step_counts`."""
+    if counts.size:
+        step_counts_rows(log_image, counts, tau, tau_chroma)
+
+
+@host("step_gate")
+def step_gate(log_image, counts, weight, gate, gain: float, tau: float, tau_chroma: float = 0.0) -> None:
+    """``gate *= 1 + gain (1 - s)^2 weight evidence``; see :func:`ivkernels.kernels.warp.step_evidence.step_gate`."""
+    if gate.size:
+        pairs = np.empty((*gate.shape, 4), np.float32)         # each pair once, then each pixel's largest
+        half_pair_evidence_rows(log_image, pairs, tau, tau_chroma)
+        step_gate_rows(pairs, weight, gate, gain * (1.0 - share(counts)) ** 2)
+
+
+@host("stability_where_still")
+def stability_where_still(flow, stable, static_flow: float) -> None:
+    """``stable = 1`` where the scene moves; see :func:`ivkernels.kernels.warp.step_evidence.stability_where_still`."""
+    if stable.size and flow.size:          # a single frame has no pair, so nothing moves
+        stability_where_still_rows(flow, stable, static_flow)

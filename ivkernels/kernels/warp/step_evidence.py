@@ -1,0 +1,298 @@
+"""The step evidence on Eq. 9's local shading term (Retinex's and Weiss's cues), on the backend's arrays.
+
+* :func:`offset_log`: the log image read with a linear offset, ``log(i + offset)``,
+* :func:`step_counts`: per row, the sharp and the chromatic steps of the
+  horizontal and vertical pairs it starts (the chromatic share's counts),
+* :func:`step_gate`: ``gate *= 1 + gain (1 - s)^2 weight evidence``, the share
+  ``s`` summed from the counts on the device (no host round trip),
+* :func:`stability_where_still`: Weiss's stability cue released to 1 where the
+  scene moves.
+
+The formula, its constants and the NumPy reference:
+:mod:`ivkernels.kernels.reference.step_evidence`; its use in the energy:
+:mod:`ivkernels.solver.step_evidence`.  One thread per row ``t * H + y``.
+"""
+from __future__ import annotations
+
+import warp as wp
+
+from ivkernels.kernels.contract import implements
+from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.reference.step_evidence import FAMILY
+from ivkernels.kernels.warp._checks import FRONT
+
+host = implements(FAMILY, FRONT)
+
+wp.set_module_options({"enable_backward": False})
+
+#: Below this argument ``exp(-a)`` and ``1 - exp(-a)`` are read from their series to ``a^3``:
+#: in a video most neighbours differ little, and an ``exp`` costs about as much as the rest of a pair.
+SERIES_BELOW = wp.constant(1.0e-3)
+
+
+# ----------------------------------------------------------------------------
+# Device helpers
+# ----------------------------------------------------------------------------
+
+@wp.func
+def exp_neg(a: float):
+    """``exp(-a)`` for ``a >= 0``; below :data:`SERIES_BELOW` its series to ``a^3`` (off by
+    under ``a^4 / 24``, 4e-14), the case of most pairs, which skips the ``exp``."""
+    if a < SERIES_BELOW:
+        return 1.0 - a * (1.0 - a * (0.5 - a * (1.0 / 6.0)))
+    return wp.exp(-a)
+
+
+@wp.func
+def one_minus_exp_neg(a: float):
+    """``1 - exp(-a)`` for ``a >= 0``, by its series below :data:`SERIES_BELOW` (as :func:`exp_neg`;
+    more accurate in float32 than the difference, which cancels)."""
+    if a < SERIES_BELOW:
+        return a * (1.0 - a * (0.5 - a * (1.0 / 6.0)))
+    return 1.0 - wp.exp(-a)
+
+
+@wp.func
+def pair_step(img: wp.array4d(dtype=float), t: int, y: int, x: int, yy: int, xx: int):
+    """``(dL, dC)`` of the pixels ``(y, x)`` and ``(yy, xx)`` of frame ``t``: the step of the
+    mean over channels and the largest change of the rest (the log chromaticity)."""
+    d0 = img[t, y, x, 0] - img[t, yy, xx, 0]
+    d1 = img[t, y, x, 1] - img[t, yy, xx, 1]
+    d2 = img[t, y, x, 2] - img[t, yy, xx, 2]
+    m = (d0 + d1 + d2) / 3.0
+    return wp.abs(m), wp.max(wp.max(wp.abs(d0 - m), wp.abs(d1 - m)), wp.abs(d2 - m))
+
+
+@wp.func
+def pair_counts(img: wp.array4d(dtype=float), t: int, y: int, x: int, yy: int, xx: int, tau: float,
+                tau_chroma: float):
+    """``(sharp, chromatic)``, each 0 or 1, of one pair of neighbours."""
+    dl, dc = pair_step(img, t, y, x, yy, xx)
+    chromatic = int(0)
+    if tau_chroma > 0.0:
+        if dc > tau_chroma:
+            chromatic = 1
+    sharp = chromatic
+    if dl > tau:
+        sharp = 1
+    return sharp, chromatic
+
+
+@wp.func
+def pair_evidence(img: wp.array4d(dtype=float), t: int, y: int, x: int, yy: int, xx: int, tau: float,
+                  tau_chroma: float):
+    """``(1 - exp(-(dL / tau)^2)) * exp(-(dC / tau_chroma)^2)`` (the second factor 1 for ``tau_chroma = 0``)."""
+    dl, dc = pair_step(img, t, y, x, yy, xx)
+    q = dl / tau
+    ev = one_minus_exp_neg(q * q)
+    if tau_chroma > 0.0:
+        qc = dc / tau_chroma
+        ev = ev * exp_neg(qc * qc)
+    return ev
+
+
+# ----------------------------------------------------------------------------
+# Kernels
+# ----------------------------------------------------------------------------
+
+@wp.kernel
+def offset_log_rows(row_begin: int, img: wp.array4d(dtype=float), out: wp.array4d(dtype=float), offset: float):
+    r = row_begin + wp.tid()
+    height = img.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(img.shape[2]):
+        for c in range(3):
+            out[t, y, x, c] = wp.log(wp.exp(img[t, y, x, c]) + offset)
+
+
+@wp.kernel
+def step_counts_rows(row_begin: int, img: wp.array4d(dtype=float), counts: wp.array2d(dtype=wp.int32),
+                     tau: float, tau_chroma: float):
+    r = row_begin + wp.tid()
+    height = img.shape[1]
+    width = img.shape[2]
+    t = r // height
+    y = r - t * height
+    sharp = int(0)
+    chromatic = int(0)
+    for x in range(width):
+        if x + 1 < width:
+            s, c = pair_counts(img, t, y, x, y, x + 1, tau, tau_chroma)
+            sharp += s
+            chromatic += c
+        if y + 1 < height:
+            s, c = pair_counts(img, t, y, x, y + 1, x, tau, tau_chroma)
+            sharp += s
+            chromatic += c
+    counts[r, 0] = sharp
+    counts[r, 1] = chromatic
+
+
+@wp.kernel
+def scaled_gain(counts: wp.array2d(dtype=wp.int32), gain: float, out: wp.array(dtype=float)):
+    """One thread: ``out[0] = gain (1 - s)^2``, ``s`` the chromatic share of ``counts`` (0 without sharp steps)."""
+    sharp = wp.int64(0)
+    chromatic = wp.int64(0)
+    for r in range(counts.shape[0]):
+        sharp += wp.int64(counts[r, 0])
+        chromatic += wp.int64(counts[r, 1])
+    s = wp.float64(0.0)
+    if sharp > wp.int64(0):
+        s = wp.float64(chromatic) / wp.float64(sharp)
+    keep = wp.float64(1.0) - s
+    out[0] = float(wp.float64(gain) * keep * keep)
+
+
+@wp.kernel
+def half_pair_evidence_rows(row_begin: int, img: wp.array4d(dtype=float), pairs: wp.array4d(dtype=float),
+                            tau: float, tau_chroma: float):
+    """``pairs[t, y, x, k]``: the evidence of the pair of ``(y, x)`` with its neighbour
+    ``(y, x) + HALF_NEIGHBOURS[k]`` = (0, 1), (1, 0), (1, 1), (1, -1); 0 where it lies outside."""
+    r = row_begin + wp.tid()
+    height = img.shape[1]
+    width = img.shape[2]
+    t = r // height
+    y = r - t * height
+    below = y + 1 < height
+    for x in range(width):
+        right = x + 1 < width
+        e0 = float(0.0)
+        e1 = float(0.0)
+        e2 = float(0.0)
+        e3 = float(0.0)
+        if right:
+            e0 = pair_evidence(img, t, y, x, y, x + 1, tau, tau_chroma)
+        if below:
+            e1 = pair_evidence(img, t, y, x, y + 1, x, tau, tau_chroma)
+            if right:
+                e2 = pair_evidence(img, t, y, x, y + 1, x + 1, tau, tau_chroma)
+            if x >= 1:
+                e3 = pair_evidence(img, t, y, x, y + 1, x - 1, tau, tau_chroma)
+        pairs[t, y, x, 0] = e0
+        pairs[t, y, x, 1] = e1
+        pairs[t, y, x, 2] = e2
+        pairs[t, y, x, 3] = e3
+
+
+@wp.kernel
+def step_gate_rows(row_begin: int, pairs: wp.array4d(dtype=float), weight: wp.array3d(dtype=float),
+                   gate: wp.array3d(dtype=float), gain: wp.array(dtype=float)):
+    """``gate *= 1 + gain[0] weight ev``, ``ev`` the largest evidence of the pixel's 8 pairs:
+    its own four of ``pairs`` and the four its neighbours above and to the left hold."""
+    r = row_begin + wp.tid()
+    height = pairs.shape[1]
+    width = pairs.shape[2]
+    t = r // height
+    y = r - t * height
+    g = gain[0]
+    for x in range(width):
+        ev = wp.max(wp.max(pairs[t, y, x, 0], pairs[t, y, x, 1]), wp.max(pairs[t, y, x, 2], pairs[t, y, x, 3]))
+        if x >= 1:
+            ev = wp.max(ev, pairs[t, y, x - 1, 0])
+        if y >= 1:
+            ev = wp.max(ev, pairs[t, y - 1, x, 1])
+            if x >= 1:
+                ev = wp.max(ev, pairs[t, y - 1, x - 1, 2])
+            if x + 1 < width:
+                ev = wp.max(ev, pairs[t, y - 1, x + 1, 3])
+        gate[t, y, x] = gate[t, y, x] * (1.0 + g * weight[t, y, x] * ev)
+
+
+@wp.kernel
+def stability_where_still_rows(row_begin: int, flow: wp.array4d(dtype=float), stable: wp.array3d(dtype=float),
+                               static_flow: float):
+    r = row_begin + wp.tid()
+    height = stable.shape[1]
+    t = r // height
+    y = r - t * height
+    n_pairs = flow.shape[0]
+    for x in range(stable.shape[2]):
+        moving = int(0)
+        for k in range(2):
+            p = t - k                       # the pair the frame starts (k = 0) and the one ending on it
+            if p >= 0 and p < n_pairs:
+                fx = flow[p, y, x, 0]
+                fy = flow[p, y, x, 1]
+                if wp.sqrt(fx * fx + fy * fy) >= static_flow:
+                    moving = 1
+        if moving != 0:
+            stable[t, y, x] = 1.0
+
+
+# ----------------------------------------------------------------------------
+# Host functions
+# ----------------------------------------------------------------------------
+
+@host("offset_log")
+def offset_log(log_image, out, offset: float) -> None:
+    """``out = log(exp(log_image) + offset)``: ``log(i + offset)`` from ``log i``.
+
+    log_image : wp.array float32 (T, H, W, 3), ``log i``.
+    out : wp.array float32 (T, H, W, 3), written (may be ``log_image``).
+    offset : linear offset added to the intensity, > 0 (``DARK_OFFSET`` for the step evidence).
+    """
+    t, h, _, _ = log_image.shape
+    launch_rows(offset_log_rows, t * h, [log_image, out, offset], device=log_image.device)
+
+
+@host("step_counts")
+def step_counts(log_image, counts, tau: float, tau_chroma: float = 0.0) -> None:
+    """Counts of the steps of the chromatic share.
+
+    For each row ``r = t * H + y``, over the pairs ``(x, x + (0, 1))`` and
+    ``(x, x + (1, 0))`` of its pixels ``x`` (inside the image): ``counts[r, 0]``
+    the sharp steps (log-luminance step ``> tau`` or chromatic),
+    ``counts[r, 1]`` the chromatic ones (log-chromaticity change
+    ``> tau_chroma``; none with ``tau_chroma = 0``).
+
+    log_image : wp.array float32 (T, H, W, 3), the offset log image (:func:`offset_log`).
+    counts : wp.array int32 (T*H, 2), written.
+    tau, tau_chroma : log units.
+    """
+    t, h, _, _ = log_image.shape
+    launch_rows(step_counts_rows, t * h, [log_image, counts, tau, tau_chroma], device=log_image.device)
+
+
+@host("step_gate")
+def step_gate(log_image, counts, weight, gate, gain: float, tau: float, tau_chroma: float = 0.0) -> None:
+    """Multiply the step weight of Eq. 9's local term into ``gate``.
+
+    ``gate *= 1 + gain (1 - s)^2 weight evidence`` with ``s`` the chromatic
+    share ``sum counts[:, 1] / sum counts[:, 0]`` (0 without sharp steps),
+    summed on the device, and ``evidence`` the largest over the pixel's 8
+    neighbours of ``(1 - exp(-(dL / tau)^2)) exp(-(dC / tau_chroma)^2)``
+    (:mod:`ivkernels.kernels.reference.step_evidence`).  Two passes: each pair
+    of neighbours once into a (T, H, W, 4) buffer of this call, then each
+    pixel's largest of its eight.
+
+    log_image : wp.array float32 (T, H, W, 3), the offset log image (:func:`offset_log`).
+    counts : wp.array int32 (T*H, 2), :func:`step_counts` of ``log_image``.
+    weight : wp.array float32 (T, H, W), per pixel factor on the evidence (Weiss's cue, or 1); may be ``gate``.
+    gate : wp.array float32 (T, H, W), updated.
+    gain : >= 0; tau, tau_chroma : log units (``tau_chroma = 0``: colour is not looked at).
+    """
+    t, h, w, _ = log_image.shape
+    dev = log_image.device
+    scaled = wp.empty(1, dtype=float, device=dev)
+    wp.launch(scaled_gain, dim=1, inputs=[counts, gain, scaled], device=dev)
+    # each pair once (a (T, H, W, 4) float32 buffer for this call), then each pixel's largest
+    pairs = wp.empty((t, h, w, 4), dtype=float, device=dev)
+    launch_rows(half_pair_evidence_rows, t * h, [log_image, pairs, tau, tau_chroma], device=dev)
+    launch_rows(step_gate_rows, t * h, [pairs, weight, gate, scaled], device=dev)
+
+
+@host("stability_where_still")
+def stability_where_still(flow, stable, static_flow: float) -> None:
+    """Set ``stable`` to 1 where the scene moves.
+
+    A pixel of frame ``t`` moves when the flow of the pair it starts
+    (``t -> t+1``) or of the one ending on it (``t-1 -> t``) is
+    ``static_flow`` pixels or longer; elsewhere ``stable`` keeps its value.
+
+    flow : wp.array float32 (T-1, H, W, 2), forward flow in pixels.
+    stable : wp.array float32 (T, H, W), updated.
+    static_flow : pixels, > 0.
+    """
+    t, h, _ = stable.shape
+    launch_rows(stability_where_still_rows, t * h, [flow, stable, static_flow], device=stable.device)

@@ -1,0 +1,151 @@
+"""The step evidence of Eq. 9's local term as the energy computes it, on every backend
+(solver.step_evidence.multiply_step_gate and WindowEnergy's gate, through the kernels of the
+``step_evidence`` family), against the host NumPy computation written out pixel by pixel:
+odd sizes, one-pixel-wide images, one and two frames, dark pixels, still and moving pixels."""
+import numpy as np
+import pytest
+
+from ivkernels import Params
+from ivkernels.evaluation import synthetic
+from ivkernels.kernels.reference import maps as ref_maps
+from ivkernels.priors import load_albedo_prior
+from ivkernels.solver.energy import WindowEnergy
+from ivkernels.solver.motion_maps import shading_cut_gate
+from ivkernels.solver.step_evidence import DARK_OFFSET, STATIC_FLOW, chromatic_share, multiply_step_gate
+
+SIZES = {"odd": (3, 9, 13), "two-frames": (2, 7, 11), "one-frame": (1, 5, 7), "one-column": (2, 6, 1),
+         "one-row": (2, 1, 9)}
+
+
+def _pairs_of(I, t, y, x, axes_only=False):
+    """``(d L, d C)`` of pixel ``(t, y, x)`` of ``I`` (T, h, w, 3) with each neighbour inside the image
+    (the 8 neighbours, or only the right and lower ones)."""
+    T, h, w, _ = I.shape
+    offsets = ((0, 1), (1, 0)) if axes_only else \
+        [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if (dy, dx) != (0, 0)]
+    for dy, dx in offsets:
+        yy, xx = y + dy, x + dx
+        if 0 <= yy < h and 0 <= xx < w:
+            a, b = I[t, y, x], I[t, yy, xx]
+            yield abs(a.mean() - b.mean()), np.abs((a - a.mean()) - (b - b.mean())).max()
+
+
+def host_step_weight(log_image, flow, gain, tau, tau_chroma, stability):
+    """``1 + gain (1 - s)^2 w evidence`` (T, h, w), float64, pixel by pixel: the docstring's formula."""
+    I = np.log(np.exp(np.asarray(log_image, np.float64)) + DARK_OFFSET)
+    T, h, w, _ = I.shape
+    sharp = chromatic = 0
+    ev = np.zeros((T, h, w))
+    for t, y, x in np.ndindex(T, h, w):
+        for dl, dc in _pairs_of(I, t, y, x, axes_only=True):
+            chromatic += bool(dc > tau_chroma)
+            sharp += bool(dc > tau_chroma or dl > tau)
+        ev[t, y, x] = max([(1 - np.exp(-(dl / tau) ** 2)) * np.exp(-(dc / tau_chroma) ** 2)
+                           for dl, dc in _pairs_of(I, t, y, x)], default=0.0)
+    s = chromatic / sharp if sharp else 0.0
+    weight = np.ones((T, h, w))
+    if flow is not None and T > 1 and stability > 0:
+        speed = np.sqrt((np.asarray(flow, np.float64) ** 2).sum(-1))
+        moving = np.zeros((T, h, w), bool)
+        moving[:-1] |= speed >= STATIC_FLOW
+        moving[1:] |= speed >= STATIC_FLOW
+        weight = np.where(moving, 1.0, ref_maps.shading_gate(log_image, flow, stability))
+    return 1.0 + gain * (1.0 - s) ** 2 * weight * ev
+
+
+def scene(T, h, w, seed=0):
+    """Log input with grey and coloured blocks, noise and dark pixels, and a flow that is 0 on the
+    left half, 1 pixel on the right (and 0.1 px, still, in a column of the right half)."""
+    rng = np.random.default_rng(seed)
+    yy, xx = np.mgrid[0:h, 0:w]
+    grey = np.where(((yy // 2) + (xx // 3)) % 2 == 0, 0.6, 0.15)
+    colour = np.where(yy >= h // 2, 1.0, 0.0)[..., None] * np.array([0.0, -0.5, -0.2])
+    i = grey[None, ..., None] * np.exp(colour)[None] * rng.uniform(0.9, 1.1, (T, h, w, 3))
+    i[:, ::3, ::4] = 1e-4                                                   # dark pixels
+    flow = np.zeros((max(T - 1, 0), h, w, 2))
+    flow[:, :, w // 2:, 0] = 1.0
+    flow[:, :, w - 1, 0] = 0.1
+    return np.log(i).astype(np.float32), flow.astype(np.float32)
+
+
+@pytest.mark.parametrize("size", SIZES.values(), ids=SIZES.keys())
+@pytest.mark.parametrize("stability", [0.3, 0.0])
+def test_the_backend_gate_is_the_host_formula(any_backend, size, stability):
+    be = any_backend
+    log_image, flow = scene(*size)
+    gain, tau, tau_chroma = 8.0, 0.1, 0.05
+    want = host_step_weight(log_image, flow, gain, tau, tau_chroma, stability)
+    start = np.random.default_rng(1).uniform(0.5, 1.0, size).astype(np.float32)
+    gate = be.asarray(start.copy())
+    multiply_step_gate(be, be.asarray(log_image), gate, gain, tau, tau_chroma, flow=be.asarray(flow),
+                       stability=stability)
+    # float32 log steps of inputs down to log(1e-4): the evidence to ~5e-6, times a gain of 8
+    np.testing.assert_allclose(be.numpy(gate), start * want, rtol=1e-5, atol=5e-5)
+
+
+def test_without_colour_or_flow_the_gain_is_not_scaled(any_backend):
+    be = any_backend
+    log_image, _ = scene(2, 7, 11)
+    want = host_step_weight(log_image, None, 4.0, 0.1, np.inf, 0.0)
+    gate = be.asarray(np.ones((2, 7, 11), np.float32))
+    multiply_step_gate(be, be.asarray(log_image), gate, 4.0, 0.1, 0.0)
+    np.testing.assert_allclose(be.numpy(gate), want, rtol=1e-5, atol=3e-5)
+
+
+@pytest.mark.parametrize("size", [(2, 7, 11), (1, 5, 7)], ids=["two-frames", "one-frame"])
+def test_window_energy_gate_is_the_cut_times_the_host_step_weight(any_backend, size):
+    """The energy's gate with the default Params: the cut at flow jumps (where there is a flow)
+    times the step weight, as the host computed it before the kernels."""
+    be = any_backend
+    T, h, w = size
+    log_image, flow = scene(T, h, w, seed=2)
+    params = Params()
+    temporal = T > 1
+    energy = WindowEnergy(be, be.asarray(log_image), be.asarray(np.exp(log_image).mean(-1) + 1e-3),
+                          be.asarray(flow) if temporal else None,
+                          be.asarray(np.ones((T - 1, h, w), np.float32)) if temporal else None,
+                          be.asarray(np.zeros((T - 1, h, w), np.float32)) if temporal else None,
+                          params, load_albedo_prior())
+    want = host_step_weight(log_image, flow if temporal else None, params.shading_step_gain,
+                            params.shading_step_tau, params.shading_step_chroma, params.shading_step_stability)
+    if temporal:
+        want = want * be.numpy(shading_cut_gate(be, be.asarray(flow), params.shading_cut_threshold, T))
+    np.testing.assert_allclose(be.numpy(energy.gate), want, rtol=1e-5, atol=5e-5)
+
+
+def test_the_step_gate_reads_nothing_back_to_the_host(backend, monkeypatch):
+    """Every step runs on the backend's arrays: no ``be.numpy`` between the launches."""
+    log_image, flow = scene(3, 9, 13)
+    I, F, gate = backend.asarray(log_image), backend.asarray(flow), backend.asarray(np.ones((3, 9, 13), np.float32))
+
+    def refuse(a):
+        raise AssertionError("the step gate read an array back to the host")
+
+    monkeypatch.setattr(backend, "numpy", refuse)
+    multiply_step_gate(backend, I, gate, 8.0, 0.1, 0.05, flow=F, stability=0.3)
+    monkeypatch.undo()
+    assert np.isfinite(backend.numpy(gate)).all() and (backend.numpy(gate) > 1).any()
+
+
+def test_the_chromatic_share_of_the_kernels_counts_is_the_references(any_backend):
+    """The share is a ratio of integer counts of pairs; the kernels decide each pair in float32,
+    so a pair within float32 rounding (1e-5 log units) of ``tau`` or ``tau_chroma`` may be counted
+    either way.  Off those ties the counts are equal and the share is equal to float64 rounding;
+    with them it may move by (tied pairs) / (sharp pairs).  It enters the gain squared."""
+    be = any_backend
+    frames = synthetic.render_sequence("objects_camera", n_frames=2, size=(60, 80), seed=1).frames
+    log_image = np.log(np.maximum(frames, 1e-4)).astype(np.float32)
+    tau, tau_chroma = 0.1, 0.05
+    offset = be.empty((2, 60, 80, 3))
+    be.step_evidence.offset_log(be.asarray(log_image), offset, DARK_OFFSET)
+    counts = be.empty((2 * 60, 2), np.int32)
+    be.step_evidence.step_counts(offset, counts, tau, tau_chroma)
+    c = be.numpy(counts).astype(np.int64).sum(axis=0)
+    I = np.log(np.exp(log_image.astype(np.float64)) + DARK_OFFSET)
+    steps = [p for t, y, x in np.ndindex(2, 60, 80) for p in _pairs_of(I, t, y, x, axes_only=True)]
+    tied = sum(abs(dl - tau) < 1e-5 or abs(dc - tau_chroma) < 1e-5 for dl, dc in steps)
+    sharp = sum(dc > tau_chroma or dl > tau for dl, dc in steps)
+    chromatic = sum(dc > tau_chroma for dl, dc in steps)
+    assert sharp > 100 and 0 < chromatic < sharp
+    assert abs(c[0] - sharp) <= tied and abs(c[1] - chromatic) <= tied
+    assert abs(c[1] / c[0] - chromatic_share(log_image, tau, tau_chroma)) <= 2 * tied / sharp + 1e-12
