@@ -149,3 +149,20 @@ def test_the_chromatic_share_of_the_kernels_counts_is_the_references(any_backend
     assert sharp > 100 and 0 < chromatic < sharp
     assert abs(c[0] - sharp) <= tied and abs(c[1] - chromatic) <= tied
     assert abs(c[1] / c[0] - chromatic_share(log_image, tau, tau_chroma)) <= 2 * tied / sharp + 1e-12
+
+
+def test_still_stability_is_the_maps_shading_gate_bit_for_bit_where_still(backend):
+    """Where nothing moves, Weiss's cue of the step family is ``maps.shading_gate`` (no colour
+    test) to the bit: the same changes along the flow, computed once per pixel instead of once
+    per neighbour, then the same operations."""
+    rng = np.random.default_rng(4)
+    T, h, w = 3, 11, 14
+    log_image = rng.normal(-1.0, 0.5, (T, h, w, 3)).astype(np.float32)
+    flow = rng.uniform(-0.17, 0.17, (T - 1, h, w, 2)).astype(np.float32)     # still: under STATIC_FLOW
+    flow[:, :, :2] = (-0.2, 0.0)                                              # samples leaving the image
+    I, F = backend.asarray(log_image), backend.asarray(flow)
+    weight, gate = backend.empty((T, h, w)), backend.empty((T, h, w))
+    backend.step_evidence.still_stability(I, F, weight, 0.3, STATIC_FLOW)
+    backend.maps.shading_gate(I, F, gate, 0.3)
+    np.testing.assert_array_equal(backend.numpy(weight), backend.numpy(gate))
+    assert (backend.numpy(weight) < 1).mean() > 0.5

@@ -175,7 +175,7 @@ def multiply_step_gate(be, log_image, gate, gain: float, tau: float, tau_chroma:
     step changes its contrast by itself, and the cue would mistake every
     moving albedo edge for light); ``w = 1`` elsewhere, and everywhere
     without a flow or with ``stability = 0``.  Every step is a kernel of the
-    ``step_evidence`` family (or ``maps``); nothing is read back to the host.
+    ``step_evidence`` family; nothing is read back to the host.
 
     be : backend.
     log_image : (T, h, w, 3) backend array, ``I = log i``.
@@ -197,8 +197,7 @@ def multiply_step_gate(be, log_image, gate, gain: float, tau: float, tau_chroma:
     kernels.step_counts(offset, counts, tau, tau_chroma)
     weight = be.empty((T, h, w))
     if flow is not None and T > 1 and stability > 0:
-        be.maps.shading_gate(log_image, flow, weight, stability)
-        kernels.stability_where_still(flow, weight, static_flow)
+        kernels.still_stability(log_image, flow, weight, stability, static_flow)
     elif weight.size:
         be.vecops.fill(weight.reshape((T * h * w,)), 1.0)
     if share_radius > 0 and tau_chroma > 0:

@@ -19,6 +19,8 @@ Per pair of neighbours ``x, y`` with ``d = I'(x) - I'(y)`` (3 channels):
   (the second factor 1 with ``tau_chroma = 0``).
 
 A pixel's evidence is the largest over its 8 neighbours inside the image.
+Weiss's cue, the ``weight`` of the evidence, is ``maps.shading_gate`` of the
+log input (:func:`still_stability`) where the scene holds still, 1 where it moves.
 The share ``s`` of chromatic steps among the sharp ones, over the
 horizontal and vertical pairs of the whole window (:func:`step_counts` per
 row, :func:`share` of the counts), scales the gain: ``gain' = gain (1 - s)^2``.
@@ -30,6 +32,7 @@ import math
 import numpy as np
 
 from ivkernels.kernels.contract import Array, Family, FinitePositive, NonNegative, Out, Positive, Rule
+from ivkernels.kernels.reference import maps as ref_maps
 
 FAMILY = Family("step_evidence", "Retinex's sharp grey steps and Weiss's still steps on Eq. 9's local term.")
 
@@ -67,10 +70,13 @@ FAMILY.declare("step_gate(log_image, counts, weight, gate, gain, tau, tau_chroma
                gate=Out("T H W"), gain=NonNegative, tau=FinitePositive, tau_chroma=NonNegative,
                rules=(Rule(_finite_gain),),
                separate=(("gate", "log_image", "the gate is written while the neighbours' log_image is read"),))
-FAMILY.declare("stability_where_still(flow, stable, static_flow)",
-               "``stable = 1`` where the flow of a pair touching the frame moves ``static_flow`` px or more.",
-               flow=Array("T-1 H W 2", layout="(T-1, H, W, 2)"), stable=Out("T H W"), static_flow=Positive,
-               separate=(("stable", "flow", "stable is written while flow is read"),))
+FAMILY.declare("still_stability(log_image, flow, weight, tau, static_flow)",
+               "Weiss's cue ``maps.shading_gate(log_image, flow, tau)`` where the scene holds still, 1 where "
+               "the flow of a pair touching the frame moves ``static_flow`` px or more.",
+               log_image="T H W 3", flow=Array("T-1 H W 2", layout="(T-1, H, W, 2)"), weight=Out("T H W"),
+               tau=Positive, static_flow=Positive,
+               separate=(("weight", "log_image", "the weight is written while log_image is read"),
+                         ("weight", "flow", "the weight is written while flow is read")))
 
 
 # ----------------------------------------------------------------------------- the references
@@ -157,7 +163,9 @@ def moving(flow, n_frames: int, static_flow: float) -> np.ndarray:
     return out
 
 
-def stability_where_still(flow, stable, static_flow: float) -> np.ndarray:
-    """``stable`` (T, H, W) with 1 where :func:`moving`, float64."""
-    stable = np.asarray(stable, np.float64)
-    return np.where(moving(flow, stable.shape[0], static_flow), 1.0, stable)
+def still_stability(log_image, flow, tau: float, static_flow: float) -> np.ndarray:
+    """(T, H, W) float64: 1 where :func:`moving`, elsewhere Weiss's cue
+    :func:`ivkernels.kernels.reference.maps.shading_gate` ``(log_image, flow, tau)``
+    (a step whose contrast changes from frame to frame is light, not albedo)."""
+    log_image = np.asarray(log_image, np.float64)
+    return np.where(moving(flow, log_image.shape[0], static_flow), 1.0, ref_maps.shading_gate(log_image, flow, tau))

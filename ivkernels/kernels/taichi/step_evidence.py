@@ -8,6 +8,7 @@ import taichi as ti
 
 from ivkernels.kernels.contract import implements
 from ivkernels.kernels.ndarray_checks import FRONT
+from ivkernels.kernels.taichi.maps import log_change_at
 from ivkernels.kernels.reference.step_evidence import FAMILY, share
 
 host = implements(FAMILY, FRONT)
@@ -159,23 +160,54 @@ def step_gate_rows(pairs: nd4, weight: nd3, gate: nd3, gain: ti.f32):
 
 
 @ti.kernel
-def stability_where_still_rows(flow: nd4, stable: nd3, static_flow: ti.f32):
-    height = stable.shape[1]
+def log_change_rows(img: nd4, flow: nd4, change: nd4):
+    """``change[p, y, x] = (D, valid)`` of ``maps.log_change_at`` (see the Warp module)."""
+    height = img.shape[1]
+    for r in range(flow.shape[0] * height):
+        p = r // height
+        y = r - p * height
+        for x in range(img.shape[2]):
+            d, valid = log_change_at(img, flow, p, y, x)
+            change[p, y, x, 0] = d
+            change[p, y, x, 1] = valid
+
+
+@ti.kernel
+def still_stability_rows(flow: nd4, change: nd4, weight: nd3, tau: ti.f32, static_flow: ti.f32):
+    """1 where the scene moves, else ``maps.shading_gate``'s ``exp(-(e / tau)^2)`` (see the Warp module)."""
+    height = weight.shape[1]
+    width = weight.shape[2]
     n_pairs = flow.shape[0]
-    for r in range(stable.shape[0] * height):
+    for r in range(weight.shape[0] * height):
         t = r // height
         y = r - t * height
-        for x in range(stable.shape[2]):
+        p = ti.min(t, n_pairs - 1)      # the frame's pair with the next frame; the last uses the one before
+        for x in range(width):
             moving = 0
             for k in ti.static(range(2)):
-                p = t - k                   # the pair the frame starts (k = 0) and the one ending on it
-                if 0 <= p < n_pairs:
-                    fx = flow[p, y, x, 0]
-                    fy = flow[p, y, x, 1]
+                pk = t - k              # the pair the frame starts (k = 0) and the one ending on it
+                if 0 <= pk < n_pairs:
+                    fx = flow[pk, y, x, 0]
+                    fy = flow[pk, y, x, 1]
                     if ti.sqrt(fx * fx + fy * fy) >= static_flow:
                         moving = 1
             if moving != 0:
-                stable[t, y, x] = 1.0
+                weight[t, y, x] = 1.0
+            else:
+                d = change[p, y, x, 0]
+                e = 0.0
+                if change[p, y, x, 1] > 0.0:
+                    for j in ti.static(range(3)):
+                        yy = y + j - 1
+                        if 0 <= yy < height:
+                            for i in ti.static(range(3)):
+                                xx = x + i - 1
+                                if ti.static(i != 1 or j != 1):
+                                    if 0 <= xx < width:
+                                        if change[p, yy, xx, 1] > 0.0:
+                                            e = ti.max(e, ti.abs(d - change[p, yy, xx, 0]))
+                q = e / tau
+                weight[t, y, x] = ti.exp(-q * q)
 
 
 @host("offset_log")
@@ -201,8 +233,14 @@ def step_gate(log_image, counts, weight, gate, gain: float, tau: float, tau_chro
         step_gate_rows(pairs, weight, gate, gain * (1.0 - share(counts)) ** 2)
 
 
-@host("stability_where_still")
-def stability_where_still(flow, stable, static_flow: float) -> None:
-    """``stable = 1`` where the scene moves; see :func:`ivkernels.kernels.warp.step_evidence.stability_where_still`."""
-    if stable.size and flow.size:          # a single frame has no pair, so nothing moves
-        stability_where_still_rows(flow, stable, static_flow)
+@host("still_stability")
+def still_stability(log_image, flow, weight, tau: float, static_flow: float) -> None:
+    """Weiss's cue where the scene holds still, 1 where it moves; see
+    :func:`ivkernels.kernels.warp.step_evidence.still_stability`."""
+    t, h, w, _ = log_image.shape
+    if t == 1:
+        weight[...] = 1.0
+    elif weight.size:
+        change = np.empty((t - 1, h, w, 2), np.float32)
+        log_change_rows(log_image, flow, change)
+        still_stability_rows(flow, change, weight, tau, static_flow)

@@ -5,8 +5,8 @@
   horizontal and vertical pairs it starts (the chromatic share's counts),
 * :func:`step_gate`: ``gate *= 1 + gain (1 - s)^2 weight evidence``, the share
   ``s`` summed from the counts on the device (no host round trip),
-* :func:`stability_where_still`: Weiss's stability cue released to 1 where the
-  scene moves.
+* :func:`still_stability`: Weiss's stability cue (``maps.shading_gate``) where
+  the scene holds still, 1 where it moves.
 
 The formula, its constants and the NumPy reference:
 :mod:`ivkernels.kernels.reference.step_evidence`; its use in the energy:
@@ -20,6 +20,7 @@ from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows
 from ivkernels.kernels.reference.step_evidence import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.warp.maps import log_change_at
 
 host = implements(FAMILY, FRONT)
 
@@ -200,24 +201,58 @@ def step_gate_rows(row_begin: int, pairs: wp.array4d(dtype=float), weight: wp.ar
 
 
 @wp.kernel
-def stability_where_still_rows(row_begin: int, flow: wp.array4d(dtype=float), stable: wp.array3d(dtype=float),
-                               static_flow: float):
+def log_change_rows(row_begin: int, img: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
+                    change: wp.array4d(dtype=float)):
+    """``change[p, y, x] = (D, valid)`` of ``maps.log_change_at``: the change of the mean log along
+    the flow of pair ``p`` and whether its sample lies inside the image."""
     r = row_begin + wp.tid()
-    height = stable.shape[1]
+    height = img.shape[1]
+    p = r // height
+    y = r - p * height
+    for x in range(img.shape[2]):
+        d, valid = log_change_at(img, flow, p, y, x)
+        change[p, y, x, 0] = d
+        change[p, y, x, 1] = valid
+
+
+@wp.kernel
+def still_stability_rows(row_begin: int, flow: wp.array4d(dtype=float), change: wp.array4d(dtype=float),
+                         weight: wp.array3d(dtype=float), tau: float, static_flow: float):
+    """``weight = 1`` where the flow of a pair touching the frame moves, else ``maps.shading_gate``'s
+    ``exp(-(e / tau)^2)`` (``tau_chroma = 0``) from the changes of ``log_change_rows``, the same
+    operations in the same order."""
+    r = row_begin + wp.tid()
+    height = weight.shape[1]
+    width = weight.shape[2]
     t = r // height
     y = r - t * height
     n_pairs = flow.shape[0]
-    for x in range(stable.shape[2]):
+    p = wp.min(t, n_pairs - 1)              # the frame's pair with the next frame; the last uses the one before
+    for x in range(width):
         moving = int(0)
         for k in range(2):
-            p = t - k                       # the pair the frame starts (k = 0) and the one ending on it
-            if p >= 0 and p < n_pairs:
-                fx = flow[p, y, x, 0]
-                fy = flow[p, y, x, 1]
+            pk = t - k                      # the pair the frame starts (k = 0) and the one ending on it
+            if pk >= 0 and pk < n_pairs:
+                fx = flow[pk, y, x, 0]
+                fy = flow[pk, y, x, 1]
                 if wp.sqrt(fx * fx + fy * fy) >= static_flow:
                     moving = 1
         if moving != 0:
-            stable[t, y, x] = 1.0
+            weight[t, y, x] = 1.0
+        else:
+            d = change[p, y, x, 0]
+            e = float(0.0)
+            if change[p, y, x, 1] > 0.0:
+                for j in range(3):
+                    yy = y + j - 1
+                    if yy >= 0 and yy < height:
+                        for i in range(3):
+                            xx = x + i - 1
+                            if xx >= 0 and xx < width and (i != 1 or j != 1):
+                                if change[p, yy, xx, 1] > 0.0:
+                                    e = wp.max(e, wp.abs(d - change[p, yy, xx, 0]))
+            q = e / tau
+            weight[t, y, x] = wp.exp(-q * q)
 
 
 # ----------------------------------------------------------------------------
@@ -282,17 +317,31 @@ def step_gate(log_image, counts, weight, gate, gain: float, tau: float, tau_chro
     launch_rows(step_gate_rows, t * h, [pairs, weight, gate, scaled], device=dev)
 
 
-@host("stability_where_still")
-def stability_where_still(flow, stable, static_flow: float) -> None:
-    """Set ``stable`` to 1 where the scene moves.
+@host("still_stability")
+def still_stability(log_image, flow, weight, tau: float, static_flow: float) -> None:
+    """Weiss's cue on the step evidence where the scene holds still, 1 where it moves.
 
     A pixel of frame ``t`` moves when the flow of the pair it starts
     (``t -> t+1``) or of the one ending on it (``t-1 -> t``) is
-    ``static_flow`` pixels or longer; elsewhere ``stable`` keeps its value.
+    ``static_flow`` pixels or longer: there ``weight = 1`` (a bilinear warp
+    of a sharp step changes its contrast by itself, and the cue would take
+    every moving albedo edge for light).  Elsewhere ``weight`` is
+    :func:`ivkernels.kernels.warp.maps.shading_gate` with ``tau`` (and no
+    colour test), bit for bit: each pixel's change along the flow is
+    computed once (a (T-1, H, W, 2) buffer of this call), not once per
+    neighbour.  A single frame gets 1.
 
+    log_image : wp.array float32 (T, H, W, 3), ``log i``.
     flow : wp.array float32 (T-1, H, W, 2), forward flow in pixels.
-    stable : wp.array float32 (T, H, W), updated.
+    weight : wp.array float32 (T, H, W), written; in (0, 1].
+    tau : log-contrast change at which the cue falls to 1/e, > 0.
     static_flow : pixels, > 0.
     """
-    t, h, _ = stable.shape
-    launch_rows(stability_where_still_rows, t * h, [flow, stable, static_flow], device=stable.device)
+    t, h, w, _ = log_image.shape
+    dev = log_image.device
+    if t <= 1:
+        weight.fill_(1.0)
+        return
+    change = wp.empty((t - 1, h, w, 2), dtype=float, device=dev)
+    launch_rows(log_change_rows, (t - 1) * h, [log_image, flow, change], device=dev)
+    launch_rows(still_stability_rows, t * h, [flow, change, weight, tau, static_flow], device=dev)
