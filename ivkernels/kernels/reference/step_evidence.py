@@ -69,7 +69,7 @@ FAMILY.declare("step_gate(log_image, counts, weight, gate, gain, tau, tau_chroma
                log_image="T H W 3", counts=Array("T*H 2", "int32", layout="(T*H, 2)"), weight="T H W",
                gate=Out("T H W"), gain=NonNegative, tau=FinitePositive, tau_chroma=NonNegative,
                rules=(Rule(_finite_gain),),
-               separate=(("gate", "log_image", "the gate is written while the neighbours' log_image is read"),))
+               separate=(("gate", "log_image", "the gate is written while log_image is read"),))
 FAMILY.declare("still_stability(log_image, flow, weight, tau, static_flow)",
                "Weiss's cue ``maps.shading_gate(log_image, flow, tau)`` where the scene holds still, 1 where "
                "the flow of a pair touching the frame moves ``static_flow`` px or more.",
