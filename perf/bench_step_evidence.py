@@ -14,6 +14,9 @@ Both start from the same cut gate (built once, outside the timing), are run
 in turn ``--repeat`` times, and the median seconds of each are printed with
 their ratio and the largest difference between the two gates.
 
+With ``--steps`` it then times each kernel of the ``kernels`` way alone, and
+``maps.shading_gate`` (Weiss's cue as the host way computes it), min of ``--repeat``.
+
     python perf/bench_step_evidence.py                          # 8 frames at 640x480, Warp, 2 threads
     python perf/bench_step_evidence.py --backend taichi --size 240 320
 """
@@ -32,7 +35,7 @@ import ivkernels as iv
 from ivkernels.backends import get_backend
 from ivkernels.kernels.launch import threads
 from ivkernels.solver.motion_maps import shading_cut_gate
-from ivkernels.solver.step_evidence import STATIC_FLOW, multiply_step_gate
+from ivkernels.solver.step_evidence import DARK_OFFSET, STATIC_FLOW, multiply_step_gate
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -77,6 +80,7 @@ def main(argv=None) -> None:
     ap.add_argument("--backend", default="warp")
     ap.add_argument("--before", default="eff9bf1", help="commit whose host NumPy code is timed")
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--steps", action="store_true", help="time each kernel of the kernels' way too")
     args = ap.parse_args(argv)
     old = old_module(args.before)
     p = iv.Params()
@@ -102,6 +106,35 @@ def main(argv=None) -> None:
           f"median of {args.repeat}: host ({args.before}) {host:.3f} s, kernels {kern:.3f} s, "
           f"ratio {kern / host:.3f}; gate {gates['host'].min():.3f}..{gates['host'].max():.3f}, "
           f"largest difference {diff.max():.2e}", flush=True)
+    if args.steps:
+        with threads(args.threads):
+            print_steps(be, I, flow, p, args.repeat)
+
+
+def print_steps(be, I, flow, p, repeat: int) -> None:
+    """Seconds of each kernel of :func:`multiply_step_gate` (and of ``maps.shading_gate``), min of ``repeat``."""
+    T, h, w, _ = I.shape
+    k = be.step_evidence
+    offset, counts = be.empty((T, h, w, 3)), be.empty((T * h, 2), np.int32)
+    weight, gate = be.empty((T, h, w)), be.zeros((T, h, w))
+    steps = {
+        "offset_log": lambda: k.offset_log(I, offset, DARK_OFFSET),
+        "step_counts": lambda: k.step_counts(offset, counts, p.shading_step_tau, p.shading_step_chroma),
+        "still_stability": lambda: k.still_stability(I, flow, weight, p.shading_step_stability, STATIC_FLOW),
+        "step_gate": lambda: k.step_gate(offset, counts, weight, gate, p.shading_step_gain, p.shading_step_tau,
+                                         p.shading_step_chroma),
+        "maps.shading_gate": lambda: be.maps.shading_gate(I, flow, weight, p.shading_step_stability),
+    }
+    for name, step in steps.items():
+        step()
+        be.synchronize()
+        seconds = []
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            step()
+            be.synchronize()
+            seconds.append(time.perf_counter() - t0)
+        print(f"  {name}: {min(seconds):.3f} s", flush=True)
 
 
 if __name__ == "__main__":
