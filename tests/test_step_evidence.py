@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 import ivkernels as iv
-from ivkernels.solver.step_evidence import DARK_OFFSET, chromatic_share, step_evidence, step_gate
+from ivkernels.solver.step_evidence import DARK_OFFSET, chromatic_share, grey_step_gate, step_evidence, step_gate
 
 
 def _reference(log_image, tau, tau_chroma):
@@ -73,6 +73,16 @@ def test_gate_is_one_plus_gain_times_evidence_and_checks_its_arguments():
                 dict(gain=1.0, tau=0.1, tau_chroma=0.0)):
         with pytest.raises(ValueError):
             step_gate(log_image, **bad)
+
+
+def test_grey_step_gate_scales_the_gain_by_the_grey_share():
+    rng = np.random.default_rng(5)
+    log_image = rng.normal(-1.0, 0.3, (2, 6, 9, 3)).astype(np.float32)
+    share = chromatic_share(log_image, 0.1, 0.05)
+    assert 0 < share < 1
+    np.testing.assert_allclose(grey_step_gate(log_image, 8.0, 0.1, 0.05),
+                               1 + 8.0 * (1 - share) ** 2 * step_evidence(log_image, 0.1, 0.05), rtol=1e-6)
+    np.testing.assert_allclose(grey_step_gate(log_image, 8.0, 0.1), step_gate(log_image, 8.0, 0.1), rtol=1e-6)
 
 
 def test_params_refuse_bad_step_settings():
