@@ -11,7 +11,8 @@ from ivkernels.kernels.reference import maps as ref_maps
 from ivkernels.priors import load_albedo_prior
 from ivkernels.solver.energy import WindowEnergy
 from ivkernels.solver.motion_maps import shading_cut_gate
-from ivkernels.solver.step_evidence import DARK_OFFSET, STATIC_FLOW, chromatic_share, multiply_step_gate
+from ivkernels.solver.step_evidence import (DARK_OFFSET, STATIC_FLOW, chromatic_share, local_chromatic_share,
+                                            multiply_step_gate)
 
 SIZES = {"odd": (3, 9, 13), "two-frames": (2, 7, 11), "one-frame": (1, 5, 7), "one-column": (2, 6, 1),
          "one-row": (2, 1, 9)}
@@ -32,6 +33,13 @@ def _pairs_of(I, t, y, x, axes_only=False):
 
 def host_step_weight(log_image, flow, gain, tau, tau_chroma, stability):
     """``1 + gain (1 - s)^2 w evidence`` (T, h, w), float64, pixel by pixel: the docstring's formula."""
+    s, weight, ev = host_parts(log_image, flow, tau, tau_chroma, stability)
+    return 1.0 + gain * (1.0 - s) ** 2 * weight * ev
+
+
+def host_parts(log_image, flow, tau, tau_chroma, stability):
+    """``(s, w, evidence)``: the chromatic share, Weiss's cue where still (1 elsewhere) and the
+    evidence (T, h, w), float64, pixel by pixel."""
     I = np.log(np.exp(np.asarray(log_image, np.float64)) + DARK_OFFSET)
     T, h, w, _ = I.shape
     sharp = chromatic = 0
@@ -50,7 +58,7 @@ def host_step_weight(log_image, flow, gain, tau, tau_chroma, stability):
         moving[:-1] |= speed >= STATIC_FLOW
         moving[1:] |= speed >= STATIC_FLOW
         weight = np.where(moving, 1.0, ref_maps.shading_gate(log_image, flow, stability))
-    return 1.0 + gain * (1.0 - s) ** 2 * weight * ev
+    return s, weight, ev
 
 
 def scene(T, h, w, seed=0):
@@ -166,3 +174,20 @@ def test_still_stability_is_the_maps_shading_gate_bit_for_bit_where_still(backen
     backend.maps.shading_gate(I, F, gate, 0.3)
     np.testing.assert_array_equal(backend.numpy(weight), backend.numpy(gate))
     assert (backend.numpy(weight) < 1).mean() > 0.5
+
+
+@pytest.mark.parametrize("size", [(2, 9, 13), (1, 6, 1)], ids=["two-frames", "one-column"])
+def test_the_share_read_around_each_pixel_enters_the_backend_gate(any_backend, size):
+    """``share_radius`` > 0: ``gate *= 1 + gain (1 - s(x))^2 w evidence`` with ``s(x)`` the
+    local share (tested pixel by pixel in tests/test_step_share.py)."""
+    be = any_backend
+    log_image, flow = scene(*size, seed=3)
+    gain, tau, tau_chroma, radius = 8.0, 0.1, 0.05, 0.3
+    _, weight, evidence = host_parts(log_image, flow, tau, tau_chroma, 0.3)
+    local = local_chromatic_share(log_image, tau, tau_chroma, radius)
+    assert local.min() < local.max()
+    want = 1.0 + gain * (1.0 - local) ** 2 * weight * evidence
+    gate = be.asarray(np.ones(size, np.float32))
+    multiply_step_gate(be, be.asarray(log_image), gate, gain, tau, tau_chroma, flow=be.asarray(flow),
+                       stability=0.3, share_radius=radius)
+    np.testing.assert_allclose(be.numpy(gate), want, rtol=1e-5, atol=5e-5)

@@ -23,15 +23,19 @@ largest channel), both read on ``log(i + DARK_OFFSET)``.  Coloured steps keep
 the calibrated balance of Eq. 9 and Eq. 11; a sharp grey step costs the
 shading up to ``1 + gain`` times more, and goes to the albedo unless the data
 or the temporal terms say otherwise.  The energy (:func:`multiply_step_gate`)
-scales the gain by ``(1 - chromatic_share)^2`` and, where the scene holds
-still, the evidence by Weiss's stability cue.
+scales the gain by ``(1 - chromatic_share)^2`` (or, with
+``Params.shading_step_share_radius`` > 0, by ``(1 - s(x))^2`` with the share
+read around each pixel, :func:`local_chromatic_share`) and, where the scene
+holds still, the evidence by Weiss's stability cue.
 
 The formula is computed by the kernels of the ``step_evidence`` family on
 the backend's arrays (:mod:`ivkernels.kernels.warp.step_evidence`, the
 Taichi mirror, and the NumPy reference
 :mod:`ivkernels.kernels.reference.step_evidence`, which holds the constants);
 :func:`chromatic_share`, :func:`step_evidence`, :func:`step_gate` and
-:func:`grey_step_gate` are that reference on host NumPy arrays.
+:func:`grey_step_gate` are that reference on host NumPy arrays.  The share
+read around each pixel is host NumPy still (box sums of per-pixel counts),
+used only when its radius is set.
 """
 from __future__ import annotations
 
