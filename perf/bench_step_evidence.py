@@ -8,14 +8,17 @@ default ``Params``: the cut at flow jumps times ``1 + gain' w evidence``):
   ``git show``): ``grey_step_gate`` on ``be.numpy(I)``, Weiss's stability
   cue on the host, and the product with the cut gate on the host;
 * ``kernels``: this checkout's :func:`ivkernels.solver.step_evidence.multiply_step_gate`,
-  the kernels of the ``step_evidence`` family on the backend's arrays.
+  the kernels of the ``step_evidence`` family on the backend's arrays, with
+  the whole video's chromatic share as the host way (``share_radius = 0``).
 
 Both start from the same cut gate (built once, outside the timing), are run
 in turn ``--repeat`` times, and the median seconds of each are printed with
 their ratio and the largest difference between the two gates.
 
-With ``--steps`` it then times each kernel of the ``kernels`` way alone, and
-``maps.shading_gate`` (Weiss's cue as the host way computes it), min of ``--repeat``.
+With ``--steps`` it then times each kernel of the ``kernels`` way alone,
+``maps.shading_gate`` (Weiss's cue as the host way computes it), and the
+share read around each pixel (host NumPy, what ``share_radius > 0`` adds),
+min of ``--repeat``.
 
     python perf/bench_step_evidence.py                          # 8 frames at 640x480, Warp, 2 threads
     python perf/bench_step_evidence.py --backend taichi --size 240 320
@@ -35,7 +38,7 @@ import ivkernels as iv
 from ivkernels.backends import get_backend
 from ivkernels.kernels.launch import threads
 from ivkernels.solver.motion_maps import shading_cut_gate
-from ivkernels.solver.step_evidence import DARK_OFFSET, STATIC_FLOW, multiply_step_gate
+from ivkernels.solver.step_evidence import DARK_OFFSET, STATIC_FLOW, local_chromatic_share, multiply_step_gate
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -68,7 +71,7 @@ def kernel_gate(be, I, flow, cut, p):
     gate = be.empty(cut.shape)
     be.vecops.copy(cut.reshape((cut.size,)), gate.reshape((gate.size,)))
     multiply_step_gate(be, I, gate, p.shading_step_gain, p.shading_step_tau, p.shading_step_chroma,
-                       flow=flow, stability=p.shading_step_stability)
+                       flow=flow, stability=p.shading_step_stability, share_radius=0.0)     # as the host way
     return gate
 
 
@@ -124,6 +127,8 @@ def print_steps(be, I, flow, p, repeat: int) -> None:
         "step_gate": lambda: k.step_gate(offset, counts, weight, gate, p.shading_step_gain, p.shading_step_tau,
                                          p.shading_step_chroma),
         "maps.shading_gate": lambda: be.maps.shading_gate(I, flow, weight, p.shading_step_stability),
+        "local share (host NumPy, share_radius 0.1)": lambda: local_chromatic_share(
+            be.numpy(I), p.shading_step_tau, p.shading_step_chroma, 0.1),
     }
     for name, step in steps.items():
         step()
