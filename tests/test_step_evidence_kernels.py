@@ -101,28 +101,33 @@ def test_without_colour_or_flow_the_gain_is_not_scaled(any_backend):
 
 
 @pytest.mark.parametrize("size", [(2, 7, 11), (1, 5, 7)], ids=["two-frames", "one-frame"])
-def test_window_energy_gate_is_the_cut_times_the_host_step_weight(any_backend, size):
-    """The energy's gate with the default Params: the cut at flow jumps (where there is a flow)
-    times the step weight, as the host computed it before the kernels."""
+@pytest.mark.parametrize("share_radius", [None, 0.0], ids=["default", "whole-video-share"])
+def test_window_energy_gate_is_the_cut_times_the_host_step_weight(any_backend, size, share_radius):
+    """The energy's gate with the default Params (and with the whole video's share): the cut at
+    flow jumps (where there is a flow) times the step weight, computed on the host."""
     be = any_backend
     T, h, w = size
     log_image, flow = scene(T, h, w, seed=2)
-    params = Params()
+    params = Params() if share_radius is None else Params(shading_step_share_radius=share_radius)
     temporal = T > 1
     energy = WindowEnergy(be, be.asarray(log_image), be.asarray(np.exp(log_image).mean(-1) + 1e-3),
                           be.asarray(flow) if temporal else None,
                           be.asarray(np.ones((T - 1, h, w), np.float32)) if temporal else None,
                           be.asarray(np.zeros((T - 1, h, w), np.float32)) if temporal else None,
                           params, load_albedo_prior())
-    want = host_step_weight(log_image, flow if temporal else None, params.shading_step_gain,
-                            params.shading_step_tau, params.shading_step_chroma, params.shading_step_stability)
+    s_whole, weight, evidence = host_parts(log_image, flow if temporal else None, params.shading_step_tau,
+                                           params.shading_step_chroma, params.shading_step_stability)
+    share = s_whole if params.shading_step_share_radius == 0 else local_chromatic_share(
+        log_image, params.shading_step_tau, params.shading_step_chroma, params.shading_step_share_radius)
+    want = 1.0 + params.shading_step_gain * (1.0 - share) ** 2 * weight * evidence
     if temporal:
         want = want * be.numpy(shading_cut_gate(be, be.asarray(flow), params.shading_cut_threshold, T))
     np.testing.assert_allclose(be.numpy(energy.gate), want, rtol=1e-5, atol=5e-5)
 
 
 def test_the_step_gate_reads_nothing_back_to_the_host(backend, monkeypatch):
-    """Every step runs on the backend's arrays: no ``be.numpy`` between the launches."""
+    """Every step runs on the backend's arrays: no ``be.numpy`` between the launches (with the
+    whole video's share; the share read around each pixel is host NumPy still)."""
     log_image, flow = scene(3, 9, 13)
     I, F, gate = backend.asarray(log_image), backend.asarray(flow), backend.asarray(np.ones((3, 9, 13), np.float32))
 
