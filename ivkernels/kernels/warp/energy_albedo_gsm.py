@@ -10,8 +10,8 @@ uniform in ``sqrt(r2)``, ``r2_i = (i sqrt(r2_max) / (n-1))^2``, so the cell is
 found in O(1) and ``g``, ``g'`` are interpolated linearly in ``r2`` inside it;
 beyond ``r2_max`` ``g`` continues linearly with the last slope.  Each call
 first turns the table into per-cell coefficients, ``g = a + b r2`` and
-``g' = c + d r2`` (one ``vec4`` per cell, the extrapolation as the last), so a
-look-up is a square root, one ``vec4`` read and two multiply-adds.
+``g' = c + d r2`` (four planes of ``n`` floats, the extrapolation as the last
+cell), so a look-up is a square root, four reads and two multiply-adds.
 
 Gradient.  The double sum visits every unordered pair ``{x, y}`` twice
 (``y in N(x)`` and ``x in N(y)``), and ``d/dA(x) g(r2) = 2 g'(r2) Sigma^-1 d``
@@ -19,35 +19,48 @@ for ``d = A(x) - A(y)`` (the other ordering has ``-d`` and the same ``r2``), so
 
     dE/dA(x) = 4 lam sum_{y in N(x)} g'(r2(x, y)) Sigma^-1 (A(x) - A(y)),
 
-computed in two gather passes, one thread per image row, so that each
-unordered pair is looked up once (12 table reads per pixel instead of 24):
-the first pass visits the pairs from their first pixel in scan order (the
-forward half of the window), stores ``(g, g')`` per pair and starts each
-pixel's sum; the second lets each pixel gather the pairs it closes (the
-backward half) from the stored values.  Each row's energy is the same as a
-single full-window visit would give.  The two passes are compiled per window
-radius (:func:`_pair_kernels_for`), so their offset loops are unrolled.
+and each unordered pair is looked up once (12 look-ups per pixel instead of
+24): from its first pixel in scan order (the forward half of the window,
+``dy > 0``, or ``dy = 0`` and ``dx > 0``), adding ``g' d`` to its first pixel,
+``-g' d`` to its second, and ``g`` to the energy of both.
 
-Whitening.  With ``L`` upper triangular, ``L^T L = Sigma^-1`` (Cholesky), a
-whitening pass stores ``B(x) = L A(x)`` per pixel in a scratch buffer (the
-scratch buffers, ~120 bytes per pixel, come from the caller's workspace,
-:mod:`ivkernels.kernels.workspace`); then
-``r2 = |B(x) - B(y)|^2`` and
+Whitening.  With ``L`` upper triangular, ``L^T L = Sigma^-1`` (Cholesky),
+``B(x) = L A(x)`` gives ``r2 = |B(x) - B(y)|^2`` and
 
     dE/dA(x) = 4 lam L^T sum_{y in N(x)} g'(r2) (B(x) - B(y)),
 
 so a pair costs a 3-vector difference, a dot product, a square root and one
-coefficient read, and the 3x3 products are once per pixel.
+cell's coefficients, and the 3x3 products are once per pixel.
+
+One pass, in row bands.  One thread per band of rows (about four bands per
+launch thread on the CPU, :func:`band_rows_for`) walks its rows in order,
+with a ring of ``radius + 1`` row slots: the whitened rows ``r .. r + radius``
+(each row whitened once, as it enters) and each pixel's running sums
+``(sum g' (B(x) - B(y)), sum g)`` (four planes).  Row ``r``'s pairs all lie
+in rows ``r .. r + radius``, so once row ``r`` is done its sums are complete:
+its gradient ``4 lam L^T sum`` and energy are written and its slot is cleared
+for row ``r + radius + 1``.  A band also walks the ``radius`` rows above it
+(in its frame), for the pairs that reach into its first rows, keeping only
+their halves in the band: every pair is added exactly once to each of its
+pixels, with no atomics and no scratch the size of the image (the buffers are
+``(radius + 1) * 7 + 4`` floats per band and column).
+
+The pair loop over a row, for one offset, is a native snippet
+(:func:`pair_row`, ``wp.func_native``): written as a plain C++ loop over
+contiguous planes, the compiler vectorises it (square roots and table reads
+eight at a time with AVX2 gathers) and no index pays the negative-index
+wrap of a Warp array access; the gradient and energy planes are then updated
+by two more such loops (apart, so that a lane never reads what another
+writes).  640x480, 8 frames, radius 2: see ``perf/RESULTS.md``.
 """
 from __future__ import annotations
 
-import functools
 import math
 
 import warp as wp
 
 from ivkernels.kernels.contract import implements
-from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.launch import get_threads, launch_rows
 from ivkernels.kernels.reference.energy_albedo_gsm import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
 from ivkernels.kernels.workspace import scratch_buffer
@@ -59,10 +72,11 @@ wp.set_module_options({"enable_backward": False})
 
 @wp.kernel
 def cell_coefficients(table_g: wp.array(dtype=float), table_dg: wp.array(dtype=float), r2_max: float,
-                      cells_per_root: float, coef: wp.array(dtype=wp.vec4)):
-    """Per table cell ``i``, ``(a, b, c, d)`` with ``g = a + b r2`` and ``g' = c + d r2``
-    inside it (the linear-in-r2 interpolation of the table); the last entry
-    holds the linear extrapolation beyond ``r2_max``.  Float64 arithmetic."""
+                      cells_per_root: float, coef: wp.array(dtype=float)):
+    """Per table cell ``i``, ``(a, b, c, d)`` at ``coef[i], coef[n + i], coef[2n + i],
+    coef[3n + i]`` with ``g = a + b r2`` and ``g' = c + d r2`` inside it (the
+    linear-in-r2 interpolation of the table); the last cell holds the linear
+    extrapolation beyond ``r2_max``.  Float64 arithmetic."""
     i = wp.tid()
     n = table_g.shape[0]
     if i < n - 1:
@@ -72,27 +86,16 @@ def cell_coefficients(table_g: wp.array(dtype=float), table_dg: wp.array(dtype=f
         inv_width = wp.float64(1.0) / (root_hi * root_hi - r2_lo)
         slope_g = (wp.float64(table_g[i + 1]) - wp.float64(table_g[i])) * inv_width
         slope_dg = (wp.float64(table_dg[i + 1]) - wp.float64(table_dg[i])) * inv_width
-        coef[i] = wp.vec4(float(wp.float64(table_g[i]) - slope_g * r2_lo), float(slope_g),
-                          float(wp.float64(table_dg[i]) - slope_dg * r2_lo), float(slope_dg))
+        coef[i] = float(wp.float64(table_g[i]) - slope_g * r2_lo)
+        coef[n + i] = float(slope_g)
+        coef[2 * n + i] = float(wp.float64(table_dg[i]) - slope_dg * r2_lo)
+        coef[3 * n + i] = float(slope_dg)
     else:
         last_dg = wp.float64(table_dg[n - 1])
-        coef[i] = wp.vec4(float(wp.float64(table_g[n - 1]) - last_dg * wp.float64(r2_max)), float(last_dg),
-                          float(last_dg), 0.0)
-
-
-@wp.func
-def gsm_lookup(r2: float, coef: wp.array(dtype=wp.vec4), cells_per_root: float):
-    """``(g, g')`` at ``r2``: the cell ``floor(sqrt(r2) (n-1) / sqrt(r2_max))``,
-    or the extrapolation entry beyond the table, then one multiply-add each."""
-    last = coef.shape[0] - 1
-    i = int(wp.min(wp.sqrt(r2) * cells_per_root, float(last)))
-    c = coef[i]
-    return c[0] + c[1] * r2, c[2] + c[3] * r2
-
-
-@wp.func
-def load_vec3(a: wp.array4d(dtype=float), t: int, y: int, x: int):
-    return wp.vec3(a[t, y, x, 0], a[t, y, x, 1], a[t, y, x, 2])
+        coef[i] = float(wp.float64(table_g[n - 1]) - last_dg * wp.float64(r2_max))
+        coef[n + i] = float(last_dg)
+        coef[2 * n + i] = float(last_dg)
+        coef[3 * n + i] = 0.0
 
 
 @wp.func
@@ -113,135 +116,218 @@ def precision_factor(sigma_inv: wp.array2d(dtype=float)):
                     0.0, 0.0, l22)
 
 
+_PAIR_ROW = r"""
+#if defined(__CUDA_ARCH__)
+#define IVK_GSM_SIMD
+#else
+#define IVK_GSM_SIMD _Pragma("clang loop vectorize(assume_safety)")
+#endif
+const int n_cells = coef.shape[0] / 4;
+const float last = (float)(n_cells - 1);
+const float* ca = (const float*)coef.data;
+const float* cb = ca + n_cells;
+const float* cc = cb + n_cells;
+const float* cd = cc + n_cells;
+const float* b0 = (const float*)whitened.data + (size_t)own * 3 * width;
+const float* b1 = b0 + width;
+const float* b2 = b1 + width;
+const float* q0 = (const float*)whitened.data + (size_t)other * 3 * width;
+const float* q1 = q0 + width;
+const float* q2 = q1 + width;
+float* s_own = (float*)sums.data + (size_t)own * 4 * width;
+float* s_other = (float*)sums.data + (size_t)other * 4 * width + dx;
+float* t_g = (float*)scratch.data + (size_t)band * 4 * width;
+float* t0 = t_g + width;
+float* t1 = t0 + width;
+float* t2 = t1 + width;
+const int x0 = dx < 0 ? -dx : 0;
+const int x1 = dx > 0 ? width - dx : width;
+IVK_GSM_SIMD
+for (int x = x0; x < x1; ++x) {
+    const float d0 = b0[x] - q0[x + dx];
+    const float d1 = b1[x] - q1[x + dx];
+    const float d2 = b2[x] - q2[x + dx];
+    const float r2 = d0 * d0 + d1 * d1 + d2 * d2;
+    float u = sqrtf(r2) * cells_per_root;
+    u = u < last ? u : last;
+    const int i = (int)u;
+    const float dg = cc[i] + cd[i] * r2;
+    t_g[x] = ca[i] + cb[i] * r2;
+    t0[x] = dg * d0;
+    t1[x] = dg * d1;
+    t2[x] = dg * d2;
+}
+IVK_GSM_SIMD
+for (int x = x0; x < x1; ++x) {
+    s_own[x] += t0[x];
+    s_own[x + width] += t1[x];
+    s_own[x + 2 * width] += t2[x];
+    s_own[x + 3 * width] += t_g[x];
+}
+IVK_GSM_SIMD
+for (int x = x0; x < x1; ++x) {
+    s_other[x] -= t0[x];
+    s_other[x + width] -= t1[x];
+    s_other[x + 2 * width] -= t2[x];
+    s_other[x + 3 * width] += t_g[x];
+}
+#undef IVK_GSM_SIMD
+"""
+
+
+@wp.func_native(_PAIR_ROW)
+def pair_row(whitened: wp.array(dtype=float), sums: wp.array(dtype=float), scratch: wp.array(dtype=float),
+             coef: wp.array(dtype=float), cells_per_root: float, own: int, other: int, dx: int, band: int,
+             width: int):
+    """The pairs of one row with offset ``(dy, dx)``: for every ``x`` with
+    ``0 <= x + dx < width``, ``d = B_own(x) - B_other(x + dx)``, ``r2 = |d|^2``,
+    ``(g, g')`` from the cell coefficients; adds ``(g' d, g)`` to the sums of
+    ``x`` in slot ``own`` and ``(-g' d, g)`` to those of ``x + dx`` in slot
+    ``other`` (``other`` is the slot of row ``r + dy``).  Slot ``k`` of
+    ``whitened`` holds three planes of ``width`` floats at ``3 k width``, of
+    ``sums`` four at ``4 k width`` (gradient x, y, z, energy); ``scratch``
+    holds four planes per band; ``coef`` the four coefficient planes."""
+    ...
+
+
+_WHITEN_ROW = r"""
+const char* row = (const char*)A.data + (size_t)t * A.strides[0] + (size_t)y * A.strides[1];
+const size_t sx = A.strides[2];
+const size_t sc = A.strides[3];
+float* w0 = (float*)whitened.data + (size_t)slot * 3 * width;
+float* w1 = w0 + width;
+float* w2 = w1 + width;
+const float l00 = L.data[0][0], l01 = L.data[0][1], l02 = L.data[0][2];
+const float l11 = L.data[1][1], l12 = L.data[1][2], l22 = L.data[2][2];
+#if !defined(__CUDA_ARCH__)
+#pragma clang loop vectorize(assume_safety)
+#endif
+for (int x = 0; x < width; ++x) {
+    const char* p = row + (size_t)x * sx;
+    const float a0 = *(const float*)p;
+    const float a1 = *(const float*)(p + sc);
+    const float a2 = *(const float*)(p + 2 * sc);
+    w0[x] = l00 * a0 + l01 * a1 + l02 * a2;
+    w1[x] = l11 * a1 + l12 * a2;
+    w2[x] = l22 * a2;
+}
+"""
+
+
+@wp.func_native(_WHITEN_ROW)
+def whiten_row(A: wp.array4d(dtype=float), t: int, y: int, L: wp.mat33, whitened: wp.array(dtype=float), slot: int,
+               width: int):
+    """Ring slot ``slot`` of ``whitened`` (three planes of ``width``) gets
+    ``B = L A(t, y, x)`` for every ``x`` (``L`` upper triangular)."""
+    ...
+
+
+_FINISH_ROW = r"""
+float* s0 = (float*)sums.data + (size_t)slot * 4 * width;
+float* s1 = s0 + width;
+float* s2 = s1 + width;
+float* s3 = s2 + width;
+double e = 0.0;
+if (write) {
+    char* row = (char*)gA.data + (size_t)t * gA.strides[0] + (size_t)y * gA.strides[1];
+    const size_t sx = gA.strides[2];
+    const size_t sc = gA.strides[3];
+    const float l00 = L.data[0][0], l01 = L.data[0][1], l02 = L.data[0][2];
+    const float l11 = L.data[1][1], l12 = L.data[1][2], l22 = L.data[2][2];
+#if !defined(__CUDA_ARCH__)
+#pragma clang loop vectorize(assume_safety)
+#endif
+    for (int x = 0; x < width; ++x) {
+        char* p = row + (size_t)x * sx;
+        const float g0 = s0[x], g1 = s1[x], g2 = s2[x];
+        *(float*)p += scale * (l00 * g0);
+        *(float*)(p + sc) += scale * (l01 * g0 + l11 * g1);
+        *(float*)(p + 2 * sc) += scale * (l02 * g0 + l12 * g1 + l22 * g2);
+    }
+    for (int x = 0; x < width; ++x)
+        e += (double)s3[x];
+}
+#if !defined(__CUDA_ARCH__)
+#pragma clang loop vectorize(assume_safety)
+#endif
+for (int x = 0; x < 4 * width; ++x)
+    s0[x] = 0.0f;
+return e;
+"""
+
+
+@wp.func_native(_FINISH_ROW)
+def finish_row(sums: wp.array(dtype=float), slot: int, width: int, write: int, L: wp.mat33, scale: float,
+               gA: wp.array4d(dtype=float), t: int, y: int) -> wp.float64:
+    """With ``write``, adds ``scale L^T s`` to ``gA(t, y, x)`` for the
+    gradient sums ``s`` of slot ``slot`` and returns the sum of its energy
+    plane (float64); then clears the slot (returns 0 without ``write``)."""
+    ...
+
+
 @wp.kernel
-def whiten_rows(row_begin: int, A: wp.array4d(dtype=float), sigma_inv: wp.array2d(dtype=float),
-                B: wp.array2d(dtype=wp.vec3)):
-    """``B(x) = L A(x)``: then ``r2 = d^T Sigma^-1 d = |B(x) - B(y)|^2``."""
-    r = row_begin + wp.tid()
+def gsm_bands(band_begin: int, band_rows: int, radius: int, A: wp.array4d(dtype=float),
+              sigma_inv: wp.array2d(dtype=float), coef: wp.array(dtype=float), cells_per_root: float, lam: float,
+              whitened: wp.array(dtype=float), sums: wp.array(dtype=float), scratch: wp.array(dtype=float),
+              gA: wp.array4d(dtype=float), energy_rows: wp.array(dtype=wp.float64)):
+    """One band of rows ``[r0, r1)`` (``r0 = band * band_rows``) with its ring of
+    ``radius + 1`` slots (slot ``band (radius + 1) + r mod (radius + 1)``): the
+    rows ``max(r0 - radius, frame start) .. r1 - 1`` are walked in order, each
+    one's forward pairs added to both pixels (:func:`pair_row`); rows from
+    ``r0`` on then get their gradient and energy."""
+    band = band_begin + wp.tid()
     height = A.shape[1]
-    t = r // height
-    y = r - t * height
+    width = A.shape[2]
+    n_rows = A.shape[0] * height
+    r0 = band * band_rows
+    if r0 >= n_rows:
+        return
+    r1 = wp.min(r0 + band_rows, n_rows)
+    start = wp.max(r0 - radius, (r0 // height) * height)
+    S = radius + 1
+    base = band * S
     L = precision_factor(sigma_inv)
-    for x in range(A.shape[2]):
-        B[r, x] = L * load_vec3(A, t, y, x)
-
-
-@functools.lru_cache(maxsize=None)
-def _pair_kernels_for(radius: int):
-    """The two pair passes with the window radius compiled in.
-
-    With ``radius`` a compile-time constant (``wp.static``) the offset loops
-    are unrolled and the test that picks the forward half is resolved at
-    compile time: 1.7x faster than a loop over a runtime radius on the CPU
-    (640x480, 8 frames, radius 2, both alternated in one process: 129
-    against 223 ms on 2 threads), with bitwise the same results.  Pixels whose
-    half window lies inside the image take a branch without the bounds tests
-    (the same sums in the same order, so bitwise the same again): the call
-    goes from 230 to 202 ms at 640x480, 8 frames, 2 threads.  One module
-    per radius, built on first use and kept (``functools.lru_cache``).
-    """
-    R = int(radius)
-
-    @wp.kernel(module="unique")
-    def gsm_forward_pairs_rows(row_begin: int, B: wp.array2d(dtype=wp.vec3), coef: wp.array(dtype=wp.vec4),
-                               cells_per_root: float, lam: float, height: int,
-                               pairs: wp.array3d(dtype=wp.vec2), acc_out: wp.array2d(dtype=wp.vec3),
-                               energy_rows: wp.array(dtype=wp.float64)):
-        """Pass 1: every unordered pair once, from its first pixel in scan order.
-
-        For the forward offsets ``k`` of pixel ``x`` (``dy > 0``, or ``dy = 0`` and
-        ``dx > 0``) stores ``pairs[r, x, k] = (g, g')`` and starts the gradient
-        sum ``acc_out(x) = sum_k g' (B(x) - B(x + o_k))`` and the row energy.
-        """
-        r = row_begin + wp.tid()
-        width = B.shape[1]
+    scale = 4.0 * lam
+    for s in range(S):
+        finish_row(sums, base + s, width, 0, L, scale, gA, 0, 0)
+    for r in range(start, wp.min(start + radius, n_rows)):
+        # the first rows enter the ring (later ones as the row radius above them is walked)
+        t = r // height
+        whiten_row(A, t, r - t * height, L, whitened, base + r % S, width)
+    for r in range(start, r1):
         t = r // height
         y = r - t * height
-        row0 = t * height
-        e = wp.float64(0.0)
-        inside_rows = y + R < height
-        for x in range(width):
-            b = B[r, x]
-            acc = wp.vec3(0.0, 0.0, 0.0)
-            e_x = float(0.0)
-            k = int(0)
-            if inside_rows and x >= R and x + R < width:
-                # the whole forward half lies in the image: no bounds tests
-                for dy in range(wp.static(R + 1)):
-                    for dx in range(wp.static(-R), wp.static(R + 1)):
-                        if wp.static(dy > 0 or dx > 0):
-                            d = b - B[r + dy, x + dx]
-                            g, dg = gsm_lookup(wp.dot(d, d), coef, cells_per_root)
-                            pairs[r, x, k] = wp.vec2(g, dg)
-                            acc += dg * d
-                            e_x += g
-                            k += 1
-            else:
-                for dy in range(wp.static(R + 1)):
-                    yy = y + dy
-                    for dx in range(wp.static(-R), wp.static(R + 1)):
-                        if dy > 0 or dx > 0:
-                            xx = x + dx
-                            if yy < height and xx >= 0 and xx < width:
-                                d = b - B[row0 + yy, xx]
-                                g, dg = gsm_lookup(wp.dot(d, d), coef, cells_per_root)
-                                pairs[r, x, k] = wp.vec2(g, dg)
-                                acc += dg * d
-                                e_x += g
-                            k += 1
-            acc_out[r, x] = acc
-            e += wp.float64(e_x)
-        energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
+        ahead = r + radius
+        if ahead < n_rows:
+            ta = ahead // height
+            whiten_row(A, ta, ahead - ta * height, L, whitened, base + ahead % S, width)
+        own = base + r % S
+        for dy in range(S):
+            if y + dy < height:
+                other = base + (r + dy) % S
+                dx0 = -radius
+                if dy == 0:
+                    dx0 = 1
+                for dx in range(dx0, radius + 1):
+                    pair_row(whitened, sums, scratch, coef, cells_per_root, own, other, dx, band, width)
+        # row r has all its pairs (rows above the band only served the band's first rows)
+        e = finish_row(sums, own, width, int(r >= r0), L, scale, gA, t, y)
+        if r >= r0:
+            energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
 
-    @wp.kernel(module="unique")
-    def gsm_backward_pairs_rows(row_begin: int, B: wp.array2d(dtype=wp.vec3), sigma_inv: wp.array2d(dtype=float),
-                                pairs: wp.array3d(dtype=wp.vec2), acc_in: wp.array2d(dtype=wp.vec3),
-                                lam: float, height: int,
-                                gA: wp.array4d(dtype=float), energy_rows: wp.array(dtype=wp.float64)):
-        """Pass 2: each pixel gathers the pairs in which it is the second pixel,
-        ``(g, g')`` read from ``pairs`` of the first, and writes its gradient
-        ``4 lam L^T (acc_in(x) + sum g' (B(x) - B(x - o_k)))``."""
-        r = row_begin + wp.tid()
-        width = B.shape[1]
-        t = r // height
-        y = r - t * height
-        row0 = t * height
-        Lt = wp.transpose(precision_factor(sigma_inv))
-        e = wp.float64(0.0)
-        inside_rows = y >= R
-        for x in range(width):
-            b = B[r, x]
-            acc = acc_in[r, x]
-            e_x = float(0.0)
-            k = int(0)
-            if inside_rows and x >= R and x + R < width:
-                # the whole backward half lies in the image: no bounds tests
-                for dy in range(wp.static(R + 1)):
-                    for dx in range(wp.static(-R), wp.static(R + 1)):
-                        if wp.static(dy > 0 or dx > 0):
-                            p = pairs[r - dy, x - dx, k]
-                            acc += p[1] * (b - B[r - dy, x - dx])
-                            e_x += p[0]
-                            k += 1
-            else:
-                for dy in range(wp.static(R + 1)):
-                    yy = y - dy
-                    for dx in range(wp.static(-R), wp.static(R + 1)):
-                        if dy > 0 or dx > 0:
-                            xx = x - dx
-                            if yy >= 0 and xx >= 0 and xx < width:
-                                p = pairs[row0 + yy, xx, k]
-                                acc += p[1] * (b - B[row0 + yy, xx])
-                                e_x += p[0]
-                            k += 1
-            grad = (4.0 * lam) * (Lt * acc)
-            gA[t, y, x, 0] = gA[t, y, x, 0] + grad[0]
-            gA[t, y, x, 1] = gA[t, y, x, 1] + grad[1]
-            gA[t, y, x, 2] = gA[t, y, x, 2] + grad[2]
-            e += wp.float64(e_x)
-        energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
 
-    return gsm_forward_pairs_rows, gsm_backward_pairs_rows
+#: Rows per band on a GPU (one thread per band).
+CUDA_BAND_ROWS = 4
+
+
+def band_rows_for(n_rows: int, device) -> int:
+    """Rows per band: on the CPU about four bands per launch thread (handed out
+    in turn, :func:`launch_rows` ``balance=True``), at least 16 rows each, so
+    the ``radius`` rows each band walks above itself cost a few percent at
+    most; on a GPU :data:`CUDA_BAND_ROWS`."""
+    if not wp.get_device(device).is_cpu:
+        return CUDA_BAND_ROWS
+    return max(16, -(-n_rows // (4 * get_threads())))
 
 
 def _scratch(workspace, name: str, shape: tuple, dtype, device):
@@ -281,16 +367,17 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
     dev = A.device
     n = table_g.shape[0]
     cells_per_root = (n - 1) / math.sqrt(r2_max)
-    n_forward = radius + radius * (2 * radius + 1)      # 12 for the 5x5 window
-    B = _scratch(workspace, "whitened", (T * H, W), wp.vec3, dev)
-    pairs = _scratch(workspace, "pairs", (T * H, W, n_forward), wp.vec2, dev)
-    acc = _scratch(workspace, "forward_sum", (T * H, W), wp.vec3, dev)
-    launch_rows(whiten_rows, T * H, [A, sigma_inv, B], device=dev)
-    coef = _scratch(workspace, "cell_coefficients", (n,), wp.vec4, dev)
+    band_rows = band_rows_for(T * H, dev)
+    n_bands = -(-T * H // band_rows)
+    if n_bands == 0 or W == 0:
+        return
+    coef = _scratch(workspace, "cell_coefficients", (4 * n,), float, dev)
     wp.launch(cell_coefficients, dim=n, inputs=[table_g, table_dg, float(r2_max), float(cells_per_root), coef],
               device=dev)
-    forward_pairs, backward_pairs = _pair_kernels_for(radius)
-    launch_rows(forward_pairs, T * H,
-                [B, coef, float(cells_per_root), float(lam), H, pairs, acc, energy_rows], device=dev)
-    launch_rows(backward_pairs, T * H,
-                [B, sigma_inv, pairs, acc, float(lam), H, gA, energy_rows], device=dev)
+    slots = n_bands * (radius + 1)
+    whitened = _scratch(workspace, "whitened_rows", (slots * 3 * W,), float, dev)
+    sums = _scratch(workspace, "pixel_sums", (slots * 4 * W,), float, dev)
+    scratch = _scratch(workspace, "pair_values", (n_bands * 4 * W,), float, dev)
+    launch_rows(gsm_bands, n_bands,
+                [band_rows, int(radius), A, sigma_inv, coef, float(cells_per_root), float(lam), whitened, sums,
+                 scratch, gA, energy_rows], device=dev, balance=True)
