@@ -157,11 +157,13 @@ def test_workspace_reused_across_shapes_gives_the_same_result(kernel_backend, rn
     a, b = make_albedo(rng, 2, 13, 17), make_albedo(rng, 1, 9, 20)
     fresh = [run(kernel_backend, x, arrays, r2_max, lam=0.7) for x in (a, b)]
     ws = Workspace()
+    held = []
     for _ in range(2):          # the second round finds the buffers left by the first
         for x, want in zip((a, b), fresh):
             for got, w in zip(run(kernel_backend, x, arrays, r2_max, lam=0.7, workspace=ws), want):
                 np.testing.assert_array_equal(got, w)
-    # whitened, pairs, forward sums per image shape; the cell coefficients once
-    assert len(ws) == 7
+        held.append(len(ws))
+    # the row-slot buffers per image shape and the cell coefficients once, none added by the second round
+    assert held[0] == held[1] >= 3
     ws.clear()
     assert ws.nbytes == 0
