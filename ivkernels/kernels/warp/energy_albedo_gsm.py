@@ -116,12 +116,17 @@ def precision_factor(sigma_inv: wp.array2d(dtype=float)):
                     0.0, 0.0, l22)
 
 
-_PAIR_ROW = r"""
+# The snippets' loops are marked for the CPU compiler: vectorise, the planes they
+# read and write do not overlap within a loop (a GPU build ignores the mark).
+_SIMD = r"""
 #if defined(__CUDA_ARCH__)
 #define IVK_GSM_SIMD
 #else
 #define IVK_GSM_SIMD _Pragma("clang loop vectorize(assume_safety)")
 #endif
+"""
+
+_PAIR_ROW = _SIMD + r"""
 const int n_cells = coef.shape[0] / 4;
 const float last = (float)(n_cells - 1);
 const float* ca = (const float*)coef.data;
@@ -142,35 +147,50 @@ float* t1 = t0 + width;
 float* t2 = t1 + width;
 const int x0 = dx < 0 ? -dx : 0;
 const int x1 = dx > 0 ? width - dx : width;
-IVK_GSM_SIMD
-for (int x = x0; x < x1; ++x) {
-    const float d0 = b0[x] - q0[x + dx];
-    const float d1 = b1[x] - q1[x + dx];
-    const float d2 = b2[x] - q2[x + dx];
-    const float r2 = d0 * d0 + d1 * d1 + d2 * d2;
-    float u = sqrtf(r2) * cells_per_root;
-    u = u < last ? u : last;
-    const int i = (int)u;
-    const float dg = cc[i] + cd[i] * r2;
-    t_g[x] = ca[i] + cb[i] * r2;
-    t0[x] = dg * d0;
-    t1[x] = dg * d1;
-    t2[x] = dg * d2;
+#define IVK_GSM_PAIR                                             \
+    const float d0 = b0[x] - q0[x + dx];                         \
+    const float d1 = b1[x] - q1[x + dx];                         \
+    const float d2 = b2[x] - q2[x + dx];                         \
+    const float r2 = d0 * d0 + d1 * d1 + d2 * d2;                \
+    float u = sqrtf(r2) * cells_per_root;                        \
+    u = u < last ? u : last;                                     \
+    const int i = (int)u;                                        \
+    const float g = ca[i] + cb[i] * r2;                          \
+    const float dg = cc[i] + cd[i] * r2;                         \
+    const float v0 = dg * d0, v1 = dg * d1, v2 = dg * d2;        \
+    s_own[x] += v0;                                              \
+    s_own[x + width] += v1;                                      \
+    s_own[x + 2 * width] += v2;                                  \
+    s_own[x + 3 * width] += g;
+if (other != own) {
+    // the other pixel lies in another row slot: one loop
+    IVK_GSM_SIMD
+    for (int x = x0; x < x1; ++x) {
+        IVK_GSM_PAIR
+        s_other[x] -= v0;
+        s_other[x + width] -= v1;
+        s_other[x + 2 * width] -= v2;
+        s_other[x + 3 * width] += g;
+    }
+} else {
+    // the same row: x + dx is another lane's x, so the other halves go through scratch
+    IVK_GSM_SIMD
+    for (int x = x0; x < x1; ++x) {
+        IVK_GSM_PAIR
+        t_g[x] = g;
+        t0[x] = v0;
+        t1[x] = v1;
+        t2[x] = v2;
+    }
+    IVK_GSM_SIMD
+    for (int x = x0; x < x1; ++x) {
+        s_other[x] -= t0[x];
+        s_other[x + width] -= t1[x];
+        s_other[x + 2 * width] -= t2[x];
+        s_other[x + 3 * width] += t_g[x];
+    }
 }
-IVK_GSM_SIMD
-for (int x = x0; x < x1; ++x) {
-    s_own[x] += t0[x];
-    s_own[x + width] += t1[x];
-    s_own[x + 2 * width] += t2[x];
-    s_own[x + 3 * width] += t_g[x];
-}
-IVK_GSM_SIMD
-for (int x = x0; x < x1; ++x) {
-    s_other[x] -= t0[x];
-    s_other[x + width] -= t1[x];
-    s_other[x + 2 * width] -= t2[x];
-    s_other[x + 3 * width] += t_g[x];
-}
+#undef IVK_GSM_PAIR
 #undef IVK_GSM_SIMD
 """
 
@@ -190,7 +210,7 @@ def pair_row(whitened: wp.array(dtype=float), sums: wp.array(dtype=float), scrat
     ...
 
 
-_WHITEN_ROW = r"""
+_WHITEN_ROW = _SIMD + r"""
 const char* row = (const char*)A.data + (size_t)t * A.strides[0] + (size_t)y * A.strides[1];
 const size_t sx = A.strides[2];
 const size_t sc = A.strides[3];
@@ -199,18 +219,27 @@ float* w1 = w0 + width;
 float* w2 = w1 + width;
 const float l00 = L.data[0][0], l01 = L.data[0][1], l02 = L.data[0][2];
 const float l11 = L.data[1][1], l12 = L.data[1][2], l22 = L.data[2][2];
-#if !defined(__CUDA_ARCH__)
-#pragma clang loop vectorize(assume_safety)
-#endif
-for (int x = 0; x < width; ++x) {
-    const char* p = row + (size_t)x * sx;
-    const float a0 = *(const float*)p;
-    const float a1 = *(const float*)(p + sc);
-    const float a2 = *(const float*)(p + 2 * sc);
-    w0[x] = l00 * a0 + l01 * a1 + l02 * a2;
-    w1[x] = l11 * a1 + l12 * a2;
-    w2[x] = l22 * a2;
+if (sx == 3 * sizeof(float) && sc == sizeof(float)) {
+    const float* a = (const float*)row;
+    IVK_GSM_SIMD
+    for (int x = 0; x < width; ++x) {
+        const float a0 = a[3 * x], a1 = a[3 * x + 1], a2 = a[3 * x + 2];
+        w0[x] = l00 * a0 + l01 * a1 + l02 * a2;
+        w1[x] = l11 * a1 + l12 * a2;
+        w2[x] = l22 * a2;
+    }
+} else {
+    for (int x = 0; x < width; ++x) {
+        const char* p = row + (size_t)x * sx;
+        const float a0 = *(const float*)p;
+        const float a1 = *(const float*)(p + sc);
+        const float a2 = *(const float*)(p + 2 * sc);
+        w0[x] = l00 * a0 + l01 * a1 + l02 * a2;
+        w1[x] = l11 * a1 + l12 * a2;
+        w2[x] = l22 * a2;
+    }
 }
+#undef IVK_GSM_SIMD
 """
 
 
@@ -222,7 +251,7 @@ def whiten_row(A: wp.array4d(dtype=float), t: int, y: int, L: wp.mat33, whitened
     ...
 
 
-_FINISH_ROW = r"""
+_FINISH_ROW = _SIMD + r"""
 float* s0 = (float*)sums.data + (size_t)slot * 4 * width;
 float* s1 = s0 + width;
 float* s2 = s1 + width;
@@ -234,25 +263,32 @@ if (write) {
     const size_t sc = gA.strides[3];
     const float l00 = L.data[0][0], l01 = L.data[0][1], l02 = L.data[0][2];
     const float l11 = L.data[1][1], l12 = L.data[1][2], l22 = L.data[2][2];
-#if !defined(__CUDA_ARCH__)
-#pragma clang loop vectorize(assume_safety)
-#endif
-    for (int x = 0; x < width; ++x) {
-        char* p = row + (size_t)x * sx;
-        const float g0 = s0[x], g1 = s1[x], g2 = s2[x];
-        *(float*)p += scale * (l00 * g0);
-        *(float*)(p + sc) += scale * (l01 * g0 + l11 * g1);
-        *(float*)(p + 2 * sc) += scale * (l02 * g0 + l12 * g1 + l22 * g2);
+    if (sx == 3 * sizeof(float) && sc == sizeof(float)) {
+        float* a = (float*)row;
+        IVK_GSM_SIMD
+        for (int x = 0; x < width; ++x) {
+            const float g0 = s0[x], g1 = s1[x], g2 = s2[x];
+            a[3 * x] += scale * (l00 * g0);
+            a[3 * x + 1] += scale * (l01 * g0 + l11 * g1);
+            a[3 * x + 2] += scale * (l02 * g0 + l12 * g1 + l22 * g2);
+        }
+    } else {
+        for (int x = 0; x < width; ++x) {
+            char* p = row + (size_t)x * sx;
+            const float g0 = s0[x], g1 = s1[x], g2 = s2[x];
+            *(float*)p += scale * (l00 * g0);
+            *(float*)(p + sc) += scale * (l01 * g0 + l11 * g1);
+            *(float*)(p + 2 * sc) += scale * (l02 * g0 + l12 * g1 + l22 * g2);
+        }
     }
     for (int x = 0; x < width; ++x)
         e += (double)s3[x];
 }
-#if !defined(__CUDA_ARCH__)
-#pragma clang loop vectorize(assume_safety)
-#endif
+IVK_GSM_SIMD
 for (int x = 0; x < 4 * width; ++x)
     s0[x] = 0.0f;
 return e;
+#undef IVK_GSM_SIMD
 """
 
 
