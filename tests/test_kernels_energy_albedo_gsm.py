@@ -57,6 +57,18 @@ def test_window_radius_and_borders(kernel_backend, rng, prior, radius, shape):
     np.testing.assert_allclose(gA, r_gA, rtol=1e-4, atol=1e-5 * max(1.0, np.abs(r_gA).max()))
 
 
+@pytest.mark.parametrize("radius, shape", [(2, (3, 25, 9)), (3, (2, 45, 13)), (1, (1, 70, 6))])
+def test_bands_split_inside_frames(kernel_backend, rng, prior, radius, shape):
+    """Frames of 25 to 70 rows: the rows are walked in several bands (at least 32 rows
+    each), whose boundaries fall inside frames and frames' inside bands."""
+    A = make_albedo(rng, *shape, patch=3)
+    arrays, r2_max = tables(prior)
+    er, gA = run(kernel_backend, A, arrays, r2_max, lam=0.9, radius=radius)
+    r_er, r_gA = ref.gsm_smoothness(A, *arrays, r2_max, lam=0.9, radius=radius)
+    np.testing.assert_allclose(er, r_er, rtol=2e-5, atol=1e-6 * np.abs(r_er).max())
+    np.testing.assert_allclose(gA, r_gA, rtol=1e-4, atol=1e-5 * max(1.0, np.abs(r_gA).max()))
+
+
 def test_reference_counts_each_pair_twice(prior):
     """Hand case: two pixels, one unordered pair, visited from both sides."""
     A = np.zeros((1, 1, 2, 3))

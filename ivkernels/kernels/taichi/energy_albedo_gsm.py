@@ -156,7 +156,8 @@ def _gsm_bands(A: nd4, sigma_inv: nd2, coef: nd1, cells_per_root: ti.f32, lam: t
                     qs = (base + (r + dy) % S) * 4 * width
                     for dx in ti.static(range(-radius, radius + 1)):
                         if ti.static(dy > 0 or dx > 0):
-                            if y + dy < height and x + dx >= 0 and x + dx < width:
+                            # a row above the band only serves the pairs that reach into it
+                            if y + dy < height and r + dy >= r0 and x + dx >= 0 and x + dx < width:
                                 d0 = b0 - whitened[qb + x + dx]
                                 d1 = b1 - whitened[qb + width + x + dx]
                                 d2 = b2 - whitened[qb + 2 * width + x + dx]
@@ -229,6 +230,14 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
 
 
 def band_rows_for(n_rows: int) -> int:
-    """Rows per band: about four bands per thread (the launch thread count, which
-    Taichi is initialised with), at least 16 rows each, as in the Warp module."""
-    return max(16, -(-n_rows // (4 * get_threads())))
+    """Rows per band: about :data:`BANDS_PER_THREAD` bands per thread (the
+    launch thread count, which Taichi is initialised with), at least
+    :data:`MIN_BAND_ROWS` rows each, as in the Warp module."""
+    return max(MIN_BAND_ROWS, -(-n_rows // (BANDS_PER_THREAD * get_threads())))
+
+
+#: Bands per thread: enough that a thread held up by another process leaves its share to the others.
+BANDS_PER_THREAD = 16
+
+#: Fewest rows of a band.
+MIN_BAND_ROWS = 32

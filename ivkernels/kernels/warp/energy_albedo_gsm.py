@@ -32,7 +32,7 @@ Whitening.  With ``L`` upper triangular, ``L^T L = Sigma^-1`` (Cholesky),
 so a pair costs a 3-vector difference, a dot product, a square root and one
 cell's coefficients, and the 3x3 products are once per pixel.
 
-One pass, in row bands.  One thread per band of rows (about four bands per
+One pass, in row bands.  One thread per band of rows (about sixteen bands per
 launch thread on the CPU, :func:`band_rows_for`) walks its rows in order,
 with a ring of ``radius + 1`` row slots: the whitened rows ``r .. r + radius``
 (each row whitened once, as it enters) and each pixel's running sums
@@ -45,13 +45,18 @@ their halves in the band: every pair is added exactly once to each of its
 pixels, with no atomics and no scratch the size of the image (the buffers are
 ``(radius + 1) * 7 + 4`` floats per band and column).
 
-The pair loop over a row, for one offset, is a native snippet
-(:func:`pair_row`, ``wp.func_native``): written as a plain C++ loop over
-contiguous planes, the compiler vectorises it (square roots and table reads
-eight at a time with AVX2 gathers) and no index pays the negative-index
-wrap of a Warp array access; the gradient and energy planes are then updated
-by two more such loops (apart, so that a lane never reads what another
-writes).  640x480, 8 frames, radius 2: see ``perf/RESULTS.md``.
+The row loops are native snippets (``wp.func_native``: :func:`pair_row`,
+:func:`whiten_row`, :func:`finish_row`).  Written as plain C++ loops over
+contiguous planes, marked free of overlaps between lanes, the CPU compiler
+vectorises them (square roots and coefficient reads eight at a time, with
+gathers, on an AVX2 machine), and no index pays the negative-index wrap and
+stride arithmetic of a Warp array access: a loop over one offset's pairs
+along a row runs 2.5x faster as a snippet even unvectorised.  Where the two
+pixels of the offset lie in different row slots (``dy > 0``) one loop adds
+both halves; within a row (``dy = 0``) the other halves land on other lanes'
+pixels, so they go through a scratch row and a second loop.  On a GPU the
+same code runs one thread per band of :data:`CUDA_BAND_ROWS` rows.
+Measurements (640x480, 8 frames, radius 2): ``perf/RESULTS.md``.
 """
 from __future__ import annotations
 
@@ -339,7 +344,8 @@ def gsm_bands(band_begin: int, band_rows: int, radius: int, A: wp.array4d(dtype=
             whiten_row(A, ta, ahead - ta * height, L, whitened, base + ahead % S, width)
         own = base + r % S
         for dy in range(S):
-            if y + dy < height:
+            # a row above the band only serves the pairs that reach into it
+            if y + dy < height and r + dy >= r0:
                 other = base + (r + dy) % S
                 dx0 = -radius
                 if dy == 0:
@@ -352,18 +358,26 @@ def gsm_bands(band_begin: int, band_rows: int, radius: int, A: wp.array4d(dtype=
             energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
 
 
-#: Rows per band on a GPU (one thread per band).
+#: Rows per band on a GPU (one thread per band; not measured on a GPU).
 CUDA_BAND_ROWS = 4
+
+#: Bands per launch thread on the CPU: enough that a thread held up by
+#: another process leaves its share to the others.
+BANDS_PER_THREAD = 16
+
+#: Fewest rows of a band on the CPU.
+MIN_BAND_ROWS = 32
 
 
 def band_rows_for(n_rows: int, device) -> int:
-    """Rows per band: on the CPU about four bands per launch thread (handed out
-    in turn, :func:`launch_rows` ``balance=True``), at least 16 rows each, so
-    the ``radius`` rows each band walks above itself cost a few percent at
-    most; on a GPU :data:`CUDA_BAND_ROWS`."""
+    """Rows per band: on the CPU about :data:`BANDS_PER_THREAD` bands per launch
+    thread (handed out in turn, :func:`launch_rows` ``balance=True``), at
+    least :data:`MIN_BAND_ROWS` rows each, so the ``radius`` rows each band
+    walks above itself (1.25 rows' pairs for the 5x5 window) cost a few
+    percent at most; on a GPU :data:`CUDA_BAND_ROWS`."""
     if not wp.get_device(device).is_cpu:
         return CUDA_BAND_ROWS
-    return max(16, -(-n_rows // (4 * get_threads())))
+    return max(MIN_BAND_ROWS, -(-n_rows // (BANDS_PER_THREAD * get_threads())))
 
 
 def _scratch(workspace, name: str, shape: tuple, dtype, device):
@@ -393,11 +407,11 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
     lam : Eq. 11's ``lambda_As``.
     radius : window radius (2: the paper's 5x5 window, 24 neighbours).
     workspace : optional :class:`ivkernels.kernels.workspace.Workspace` that
-        keeps the scratch buffers (``B`` and the forward sums, 12 bytes per
-        pixel each; the pairs, ``8 K`` bytes per pixel with
-        ``K = radius + radius (2 radius + 1)``; the cell coefficients, 16 bytes
-        per table entry) between calls; without one they are allocated for
-        this call.
+        keeps the scratch buffers (per band of rows, ``radius + 1`` row slots
+        of the whitened rows and of the pixel sums, 12 and 16 bytes per
+        column each, and one row of pair values, 16 bytes per column; the
+        cell coefficients, 16 bytes per table entry) between calls; without
+        one they are allocated for this call.
     """
     T, H, W, _ = A.shape
     dev = A.device
