@@ -51,7 +51,7 @@ contiguous planes, marked free of overlaps between lanes, the CPU compiler
 vectorises them (square roots and coefficient reads eight at a time, with
 gathers, on an AVX2 machine), and no index pays the negative-index wrap and
 stride arithmetic of a Warp array access: a loop over one offset's pairs
-along a row runs 2.5x faster as a snippet even unvectorised.  Where the two
+along a row ran 2.8x faster as a snippet even unvectorised.  Where the two
 pixels of the offset lie in different row slots (``dy > 0``) one loop adds
 both halves; within a row (``dy = 0``) the other halves land on other lanes'
 pixels, so they go through a scratch row and a second loop.  On a GPU the
