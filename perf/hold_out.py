@@ -142,7 +142,14 @@ def report(rows: dict) -> None:
     labels = [label for label in rows if label != "baselines"]
     if not labels:
         return
-    kinds = sorted(set.intersection(*(set(kind_of(k) for k in rows[label]) for label in labels)))
+    # every kind any setting was run on; a setting missing some of them is left out
+    kinds = sorted(set.union(*(set(kind_of(k) for k in rows[label]) for label in labels)))
+    missing = [label for label in labels if {kind_of(k) for k in rows[label]} != set(kinds)]
+    for label in missing:
+        print(f"left out (not run on every kind): {label}")
+    labels = [label for label in labels if label not in missing]
+    if not labels:
+        return
     table = {label: ratios({"baselines": rows["baselines"],
                             label: {k: v for k, v in rows[label].items() if kind_of(k) in kinds}}, label)
              for label in labels}
