@@ -57,7 +57,7 @@ TARGET_PER_KIND, TARGET_MEAN, TARGET_DARK_RATIO, TARGET_DRIFT = 0.9, 0.7, 0.4, 0
 DRIFT_MIN_FRAMES = 8
 #: Kinds whose light does not change (fixed lamps; camera and objects move): rendered
 #: long, the albedo's level must hold against the truth (``metrics.albedo_drift``).
-DRIFT_KINDS = ("objects_camera", "mixed_two_lights_orbit_hard")
+DRIFT_KINDS = ("objects_camera", "grey_turning_hard")
 
 
 def evaluate_mit(name: str, scale: float, methods, args, achromatic: bool = False) -> tuple[dict, tuple]:
