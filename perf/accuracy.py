@@ -347,16 +347,17 @@ def evaluate_all(parser, args, kinds, methods):
                 f"{m} dark {r['dark_ratio']:.3f} drift {r['drift']:+.2f}% ({r['seconds']:.1f} s)"
                 for m, r in footage[name].items()), flush=True)
             checkpoint()
-    for kind in args.drift_kinds:
+    drift_methods = [m for m in methods if m in ("IV", "IV-noflow", "IV-gtflow")]
+    for kind in args.drift_kinds if drift_methods else ():
         seq = synthetic.render_kind(kind, n_frames=args.drift_frames, size=tuple(args.drift_size), seed=args.seed)
         rows = {}
-        for name in [m for m in methods if m in ("IV", "IV-noflow", "IV-gtflow")]:
+        for name in drift_methods:
             t0 = time.perf_counter()
             albedo, _ = run_method(name, seq.frames, dict(flow=seq.flow), args)
             rows[name] = dict(drift=metrics.albedo_drift(albedo, reference=seq.albedo),
                               seconds=time.perf_counter() - t0)
         drift[kind] = dict(rows=rows, size=(args.drift_frames, args.drift_size[1], args.drift_size[0]))
-        print(f"drift {kind} ({args.drift_frames} frames at {args.drift_size[1]}x{args.drift_size[0]}): "
+        print(f"\ndrift {kind} ({args.drift_frames} frames at {args.drift_size[1]}x{args.drift_size[0]}): "
               + ", ".join(f"{m} {r['drift']:+.2f}% per 100 frames ({r['seconds']:.0f} s)" for m, r in rows.items()),
               flush=True)
         checkpoint()

@@ -271,7 +271,7 @@ def _method_rows(out: str, title_start: str) -> dict:
 def test_accuracy_ratio_table_puts_the_worst_kind_first():
     kinds = ["grey_turning_hard", "mixed_fast_light_hard", "static_moving_light"]
     out = _run("accuracy.py", "--size", "24", "32", "--frames", "3", "--seed", "4", "--kinds", *kinds, "--no-mit",
-               "--no-footage", "--methods", "IV", "LRET", "CRET-tuned", "Weiss", "--iv-param", "lbfgs_iterations=3")
+               "--no-footage", "--drift-kinds", "--methods", "IV", "LRET", "CRET-tuned", "Weiss", "--iv-param", "lbfgs_iterations=3")
     lines = out.splitlines()
     start = next(k for k, line in enumerate(lines) if line.startswith("issue 33: IV / best per-frame"))
     table = [line.split() for line in lines[start + 2:start + 2 + len(kinds)]]
@@ -301,6 +301,21 @@ def test_accuracy_refuses_unknown_kind_sets(argv, message):
     proc = subprocess.run([sys.executable, str(PERF / "accuracy.py"), "--no-mit", "--no-footage", *argv],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2 and message in proc.stderr
+
+
+def test_accuracy_drift_check_against_the_truth(tmp_path):
+    """The drift check renders the kind long and prints IV's drift against the truth,
+    saved and read back with --load."""
+    rows = tmp_path / "rows.json"
+    out = _run("accuracy.py", "--kinds", "--no-mit", "--no-footage", "--methods", "IV", "--seed", "3",
+               "--iv-param", "lbfgs_iterations=3", "--drift-kinds", "objects_camera", "--drift-frames", "6",
+               "--drift-size", "24", "32", "--save", str(rows))
+    line = next(l for l in out.splitlines() if l.strip().startswith("objects_camera") and " IV " in l)
+    assert line.split()[1] == "6x32x24"
+    drift = float(line.split()[3])
+    assert np.isfinite(drift) and ("met" in line or "missed by" in line)
+    again = _run("accuracy.py", "--load", str(rows))
+    assert line in again.splitlines()
 
 
 def test_accuracy_greyscale_footage_check(tmp_path):
@@ -376,3 +391,20 @@ def test_perf_scripts_import_only_the_common_module():
         assert "from common import" in text, stem
         for name in scripts:
             assert f"from {name} import" not in text and f"import {name}\n" not in text, (stem, name)
+
+
+def test_hold_out_chooses_leaving_one_kind_out(tmp_path):
+    """Two settings on two kinds: the ratio table, the held-out choice per kind, and --load
+    reading the saved rows back without running anything."""
+    rows = tmp_path / "ho.json"
+    out = _run("hold_out.py", "--seeds", "3", "--frames", "3", "--size", "24", "32", "--kinds", "objects_camera",
+               "grey_turning_hard", "--gt-flow", "--base", "lbfgs_iterations=3",
+               "--grid", "shading_step_share_radius=0,0.3", "--save", str(rows))
+    assert "Leave one kind out" in out
+    held = [line.split() for line in out.splitlines() if line.startswith("  ") and " chosen " in line]
+    assert sorted(r[0] for r in held) == ["grey_turning_hard", "objects_camera"]
+    assert all(float(r[-1]) > 0 for r in held)
+    again = _run("hold_out.py", "--load", str(rows))
+    assert [l for l in again.splitlines() if "held-out" in l] == [l for l in out.splitlines() if "held-out" in l]
+    with pytest.raises(AssertionError, match="evaluation seed"):
+        _run("hold_out.py", "--seeds", "0", "--kinds", "objects_camera")
