@@ -278,16 +278,12 @@ class OutputFolder:
         # The signal is also recorded: Python swallows an exception raised while it runs
         # certain hooks (an at-fork handler, a finaliser), and the run must then still
         # stop at commit() rather than publish an output the user asked it to abandon.
+        # SIGINT keeps Python's own handler (KeyboardInterrupt).
         def handler(signum, frame):
             self._signal = signum
-            if signum == signal.SIGINT:
-                raise KeyboardInterrupt
             raise Interrupted(signum)
 
-        signums = [signal.SIGTERM, getattr(signal, "SIGHUP", None)]
-        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
-            signums.append(signal.SIGINT)
-        for signum in signums:
+        for signum in (signal.SIGTERM, getattr(signal, "SIGHUP", None)):
             if signum is None:
                 continue
             try:
@@ -296,8 +292,6 @@ class OutputFolder:
                 break
 
     def _raise_if_signalled(self) -> None:
-        if self._signal == signal.SIGINT:
-            raise KeyboardInterrupt
         if self._signal is not None:
             raise Interrupted(self._signal)
 
