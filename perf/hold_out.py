@@ -38,20 +38,11 @@ from pathlib import Path
 import numpy as np
 
 import ivkernels as iv
-from common import EVAL_SEED, parse_grid
+from common import EVAL_SEED, parse_grid, run_method
 from ivkernels.evaluation import datasets, metrics, synthetic
-from ivkernels.evaluation.baselines import color_retinex, luminance_retinex, weiss
 
 BASELINES = ("LRET", "CRET-tuned", "Weiss")
 MIT_KINDS = ("MIT colour", "MIT grey")
-
-
-def baseline_split(name: str, frames: np.ndarray):
-    if name == "LRET":
-        return luminance_retinex(frames)
-    if name == "CRET-tuned":
-        return color_retinex(frames, thresholds="tuned")
-    return weiss(frames)
 
 
 def synthetic_item(kind: str, seed: int, args):
@@ -99,7 +90,8 @@ def run(args, rows: dict) -> None:
             item = load()
         if key not in rows.setdefault("baselines", {}):
             names = BASELINES if item["static"] else BASELINES[:2]
-            rows["baselines"][key] = {n: lmse(item, *baseline_split(n, item["frames"])) for n in names}
+            # the baselines read only the frames (common.run_method)
+            rows["baselines"][key] = {n: lmse(item, *run_method(n, item["frames"], {}, None)) for n in names}
             save(args, rows)
         for label in todo:
             params = iv.Params().replace(**base, **settings[label])

@@ -83,25 +83,11 @@ def chromatic_share(log_image: np.ndarray, tau: float, tau_chroma: float) -> flo
     return ref.share(ref.step_counts(_offset(log_image), tau, tau_chroma))
 
 
-def _pixel_counts(I, tau: float, tau_chroma: float):
-    """Per pixel of ``I`` (the offset log image), its sharp and its chromatic steps to the right and
-    below, (T, h, w) float64 each."""
-    L, C = ref.luminance_chroma(I)
-    sharp = np.zeros(L.shape)
-    chromatic = np.zeros(L.shape)
-    for dy, dx in AXIS_NEIGHBOURS:
-        a, b = ref.pair_slices(L.shape, dy, dx)
-        is_chromatic = np.abs(C[a] - C[b]).max(axis=-1) > tau_chroma
-        sharp[a] += is_chromatic | (np.abs(L[a] - L[b]) > tau)
-        chromatic[a] += is_chromatic
-    return sharp, chromatic
-
-
 def _box_sum(x: np.ndarray, r: int) -> np.ndarray:
     """Sum of each frame of ``x`` (T, h, w) over the (2r+1)^2 window at every pixel, cut at the borders."""
     _, h, w = x.shape
     c = np.zeros((x.shape[0], h + 1, w + 1), np.float64)
-    c[:, 1:, 1:] = x.cumsum(1).cumsum(2)
+    c[:, 1:, 1:] = x.cumsum(1, dtype=np.float64).cumsum(2)
     y0, y1 = np.clip(np.arange(h) - r, 0, h), np.clip(np.arange(h) + r + 1, 0, h)
     x0, x1 = np.clip(np.arange(w) - r, 0, w), np.clip(np.arange(w) + r + 1, 0, w)
     return (c[:, y1][:, :, x1] - c[:, y0][:, :, x1] - c[:, y1][:, :, x0] + c[:, y0][:, :, x0])
@@ -117,9 +103,9 @@ def local_chromatic_share(log_image: np.ndarray, tau: float, tau_chroma: float, 
     A grey floor beside coloured walls and objects keeps a low share where
     the floor is, which one number for the whole scene would not.
     """
-    sharp, chromatic = _pixel_counts(_offset(log_image), tau, tau_chroma)
-    total = sharp.sum()
-    whole = chromatic.sum() / total if total else 0.0
+    counts = ref.pixel_step_counts(_offset(log_image), tau, tau_chroma)
+    sharp, chromatic = counts[..., 0], counts[..., 1]
+    whole = ref.share(counts.reshape(-1, 2))
     r = max(1, int(round(radius * min(sharp.shape[1:]))))
     return ((_box_sum(chromatic, r) + SHARE_PRIOR_STEPS * whole)
             / (_box_sum(sharp, r) + SHARE_PRIOR_STEPS)).astype(np.float32)
@@ -191,14 +177,12 @@ def multiply_step_gate(be, log_image, gate, gain: float, tau: float, tau_chroma:
     share_radius : >= 0; > 0 (with ``tau_chroma > 0``): the share is read around each
         pixel (:func:`local_chromatic_share`), on the host: the one step that reads
         the input back and writes ``(1 - s)^2`` into ``w`` (``Params.shading_step_share_radius``,
-        off by default).
+        0.3 by default).
     """
     T, h, w, _ = log_image.shape
     kernels = be.step_evidence
     offset = be.empty((T, h, w, 3))
     kernels.offset_log(log_image, offset, DARK_OFFSET)
-    counts = be.empty((T * h, 2), np.int32)
-    kernels.step_counts(offset, counts, tau, tau_chroma)
     weight = be.empty((T, h, w))
     if flow is not None and T > 1 and stability > 0:
         kernels.still_stability(log_image, flow, weight, stability, static_flow)
@@ -207,5 +191,8 @@ def multiply_step_gate(be, log_image, gate, gain: float, tau: float, tau_chroma:
     if share_radius > 0 and tau_chroma > 0:
         keep = (1.0 - local_chromatic_share(be.numpy(log_image), tau, tau_chroma, share_radius)) ** 2
         weight = be.asarray(be.numpy(weight) * keep)
-        counts = be.zeros((T * h, 2), np.int32)                 # the share is in the weight now
+        counts = be.zeros((T * h, 2), np.int32)                 # the share is in the weight: none counted
+    else:
+        counts = be.empty((T * h, 2), np.int32)
+        kernels.step_counts(offset, counts, tau, tau_chroma)
     kernels.step_gate(offset, counts, weight, gate, gain, tau, tau_chroma)

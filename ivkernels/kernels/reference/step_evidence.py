@@ -105,23 +105,33 @@ def _chroma_change(C, a, b) -> np.ndarray:
     return np.abs(C[a] - C[b]).max(axis=-1)
 
 
-def step_counts(log_image, tau: float, tau_chroma: float = 0.0) -> np.ndarray:
-    """(T*H, 2) int32: per row ``t * H + y``, the sharp steps (column 0) and the chromatic ones
-    (column 1) among the pairs ``(x, x + (0, 1))`` and ``(x, x + (1, 0))`` of its pixels ``x``.
+def pixel_step_counts(log_image, tau: float, tau_chroma: float = 0.0) -> np.ndarray:
+    """(T, H, W, 2) int64: per pixel ``x``, the sharp steps (channel 0) and the chromatic ones
+    (channel 1) among its pairs ``(x, x + (0, 1))`` and ``(x, x + (1, 0))``.
 
     log_image : (T, H, W, 3), ``I'`` (:func:`offset_log`).
     tau_chroma : 0: no step is chromatic.
     """
     L, C = luminance_chroma(log_image)
-    t, h, _ = L.shape
-    counts = np.zeros((t, h, 2), np.int64)
+    counts = np.zeros(L.shape + (2,), np.int64)
     for dy, dx in AXIS_NEIGHBOURS:
         a, b = pair_slices(L.shape, dy, dx)
         chromatic = _chroma_change(C, a, b) > tau_chroma if tau_chroma > 0 else np.zeros(L[a].shape, bool)
-        sharp = chromatic | (np.abs(L[a] - L[b]) > tau)
-        counts[:, : h - dy, 0] += sharp.sum(axis=-1)
-        counts[:, : h - dy, 1] += chromatic.sum(axis=-1)
-    return counts.reshape(t * h, 2).astype(np.int32)
+        counts[a + (0,)] += chromatic | (np.abs(L[a] - L[b]) > tau)
+        counts[a + (1,)] += chromatic
+    return counts
+
+
+def step_counts(log_image, tau: float, tau_chroma: float = 0.0) -> np.ndarray:
+    """(T*H, 2) int32: per row ``t * H + y``, the sharp steps (column 0) and the chromatic ones
+    (column 1) among the pairs ``(x, x + (0, 1))`` and ``(x, x + (1, 0))`` of its pixels ``x``
+    (:func:`pixel_step_counts` summed over the row).
+
+    log_image : (T, H, W, 3), ``I'`` (:func:`offset_log`).
+    tau_chroma : 0: no step is chromatic.
+    """
+    counts = pixel_step_counts(log_image, tau, tau_chroma).sum(axis=2)
+    return counts.reshape(-1, 2).astype(np.int32)
 
 
 def share(counts) -> float:
