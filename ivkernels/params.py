@@ -101,6 +101,17 @@ class Params:
         median wins at every radius) against 2.98x with one share
         (mixed_turning_hard, a grey floor under coloured objects); 0.1 is
         better on the synthetic kinds but loses more on the MIT objects.
+    shading_step_static_flow
+        Where Weiss's cue of the step evidence is read: on the pixels whose
+        flow (of a pair touching the frame) is under this many pixels; the
+        cue compares each step along the flow.  Elsewhere the Retinex cue
+        acts alone.  A value above every flow reads the cue everywhere.
+        1 px chosen on training data by the worst kind against its best
+        baseline (``perf/hold_out.py``, synthetic seeds 1-2 and the MIT
+        objects in colour and grey, all on the estimated flow, which reports
+        false motion of 1 px or more on up to a fifth of a still object under
+        a changing light; perf/RESULTS.md, "Where Weiss's cue is read"):
+        worst kind 1.23x against 1.67x at 0.25 px (the MIT grey objects).
     shading_gate_chroma
         With the gate on and this > 0, a contrast change where the input's
         log chromaticity changes by about this much is not taken for a
@@ -207,6 +218,7 @@ class Params:
     shading_step_chroma: float = 0.05
     shading_step_stability: float = 0.3
     shading_step_share_radius: float = 0.3
+    shading_step_static_flow: float = 1.0
     shading_gate_chroma: float = 0.0
     lam_shading_nonlocal: float = 10000.0
     lam_coupling: float = 10.0
@@ -305,6 +317,7 @@ _RULES = {
     "shading_step_tau": Range(float, 0.0, low_open=True, why="a log step"),
     "shading_step_stability": Range(float, 0.0, why="a change of log contrast; 0: not looked at"),
     "shading_step_chroma": Range(float, 0.0, why="a change of log chromaticity; 0: chromaticity not looked at"),
+    "shading_step_static_flow": Range(float, 0.0, low_open=True, why="pixels of flow; above every flow, Weiss's cue is read everywhere"),
     "shading_step_share_radius": Range(float, 0.0, 1.0, why="a fraction of the frame's shorter side; "
                                        "0: the share of the whole video"),
     "shading_gate_chroma": Range(float, 0.0, why="a log-chromaticity change; 0: the gate ignores colour"),

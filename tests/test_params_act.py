@@ -48,6 +48,7 @@ MOVES = {
     "shading_step_share_radius": (0.0, {}, "truth"),
     # Weiss's cue is read where the scene holds still: a static scene under a moving light
     "shading_step_stability": (0.0, {}, "truth:static_moving_light"),
+    "shading_step_static_flow": (0.01, {}, "truth:objects_camera"),
     "lam_shading_nonlocal": (10.0, {}, "truth"),
     "lam_coupling": (1000.0, {}, "truth"),
     "sigma_s": (1.0, {}, "truth"),

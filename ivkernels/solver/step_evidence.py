@@ -47,8 +47,9 @@ from ivkernels.kernels.reference.step_evidence import AXIS_NEIGHBOURS, DARK_OFFS
 __all__ = ["chromatic_share", "local_chromatic_share", "grey_step_gate", "multiply_step_gate", "step_evidence",
            "step_gate", "DARK_OFFSET", "SHARE_PRIOR_STEPS", "STATIC_FLOW"]
 
-#: Flow (pixels) below which a pixel counts as holding still for Weiss's cue.
-STATIC_FLOW = 0.25
+#: Flow (pixels) below which a pixel counts as holding still for Weiss's cue
+#: (the default of ``Params.shading_step_static_flow``).
+STATIC_FLOW = 1.0
 
 
 #: Weight of the whole video's chromatic share in a window's (:func:`local_chromatic_share`),
