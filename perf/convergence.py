@@ -40,7 +40,8 @@ def main(argv=None) -> int:
     parser.add_argument("--seeds", type=int, nargs="+", default=[12])
     parser.add_argument("--frames", type=int, default=8)
     parser.add_argument("--size", type=int, nargs=2, default=(240, 320), metavar=("H", "W"))
-    parser.add_argument("--kinds", nargs="*", default=list(synthetic.KINDS))
+    parser.add_argument("--kinds", nargs="*", default=list(synthetic.KINDS), choices=list(synthetic.SCENE_KINDS),
+                        metavar="KIND", help="names of synthetic.SCENE_KINDS (default: the four classic kinds)")
     parser.add_argument("--budgets", type=int, nargs="*", default=[20, 80, 160])
     parser.add_argument("--reference", type=int, default=1000)
     parser.add_argument("--set", nargs="*", default=[], help="name=value Params fields")
@@ -55,7 +56,7 @@ def main(argv=None) -> int:
           f"{'LMSE':>7}")
     for seed in args.seeds:
         for kind in args.kinds:
-            seq = synthetic.render_sequence(kind, n_frames=args.frames, size=tuple(args.size), seed=seed)
+            seq = synthetic.render_kind(kind, n_frames=args.frames, size=tuple(args.size), seed=seed)
             flow = seq.flow if args.flow == "truth" else None
             rows = []
             for iters in [base.lbfgs_iterations, *args.budgets, args.reference]:
