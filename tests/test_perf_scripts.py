@@ -408,3 +408,22 @@ def test_hold_out_chooses_leaving_one_kind_out(tmp_path):
     assert [l for l in again.splitlines() if "held-out" in l] == [l for l in out.splitlines() if "held-out" in l]
     with pytest.raises(AssertionError, match="evaluation seed"):
         _run("hold_out.py", "--seeds", "0", "--kinds", "objects_camera")
+
+
+def test_long_video_prints_a_row_per_part():
+    proc = subprocess.run(
+        [sys.executable, str(PERF / "long_video.py"), "--frames", "30", "--size", "32", "40", "--parts", "3",
+         "--flow", "dis"], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    rows = [line.split() for line in proc.stdout.splitlines() if line.split() and "-" in line.split()[0]
+            and line.split()[0].replace("-", "").isdigit()]
+    assert [r[0] for r in rows] == ["0-10", "10-20", "20-30"]
+    assert all(float(r[1]) > 0 and float(r[3]) > 0 for r in rows)
+    assert rows[0][2] == "1.00"
+    assert "windows" in proc.stdout.splitlines()[-1]
+
+
+def test_long_video_refuses_too_few_frames():
+    proc = subprocess.run([sys.executable, str(PERF / "long_video.py"), "--frames", "1"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode != 0 and "--frames must be >= 2" in proc.stderr
