@@ -28,3 +28,10 @@ def test_bad_scalars_are_named(kernel_backend):
         k.step_counts(I, be.asarray(np.zeros((5, 2), np.int32)), 0.1)
     with pytest.raises(ValueError, match=r"^flow must have shape \(T-1, H, W, 2\) = \(1, 5, 7, 2\)"):
         k.still_stability(I, be.zeros((2, 5, 7, 2)), W, 0.3, 0.25)
+    pixel = be.asarray(np.zeros((2, 5, 7, 2), np.int32))
+    with pytest.raises(ValueError, match="^radius must be"):
+        k.share_weight(pixel, W, -1, 4.0)
+    with pytest.raises(ValueError, match="^prior_steps must be a finite float > 0"):
+        k.share_weight(pixel, W, 2, 0.0)
+    with pytest.raises(ValueError, match=r"^counts must have shape \(T, H, W, 2\) = \(2, 5, 7, 2\)"):
+        k.pixel_counts(I, be.asarray(np.zeros((10, 2), np.int32)), 0.02, 0.1)

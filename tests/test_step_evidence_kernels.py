@@ -11,8 +11,8 @@ from ivkernels.kernels.reference import maps as ref_maps
 from ivkernels.priors import load_albedo_prior
 from ivkernels.solver.energy import WindowEnergy
 from ivkernels.solver.motion_maps import shading_cut_gate
-from ivkernels.solver.step_evidence import (DARK_OFFSET, STATIC_FLOW, chromatic_share, local_chromatic_share,
-                                            multiply_step_gate)
+from ivkernels.solver.step_evidence import (DARK_OFFSET, SHARE_PRIOR_STEPS, STATIC_FLOW, chromatic_share,
+                                            local_chromatic_share, multiply_step_gate, share_radius_pixels)
 
 SIZES = {"odd": (3, 9, 13), "two-frames": (2, 7, 11), "one-frame": (1, 5, 7), "one-column": (2, 6, 1),
          "one-row": (2, 1, 9)}
@@ -125,9 +125,10 @@ def test_window_energy_gate_is_the_cut_times_the_host_step_weight(any_backend, s
     np.testing.assert_allclose(be.numpy(energy.gate), want, rtol=1e-5, atol=5e-5)
 
 
-def test_the_step_gate_reads_nothing_back_to_the_host(backend, monkeypatch):
+@pytest.mark.parametrize("share_radius", [0.0, Params().shading_step_share_radius], ids=["whole", "local"])
+def test_the_step_gate_reads_nothing_back_to_the_host(backend, monkeypatch, share_radius):
     """Every step runs on the backend's arrays: no ``be.numpy`` between the launches (with the
-    whole video's share; the share read around each pixel is host NumPy still)."""
+    whole video's share and with the share read around each pixel, the default)."""
     log_image, flow = scene(3, 9, 13)
     I, F, gate = backend.asarray(log_image), backend.asarray(flow), backend.asarray(np.ones((3, 9, 13), np.float32))
 
@@ -135,7 +136,7 @@ def test_the_step_gate_reads_nothing_back_to_the_host(backend, monkeypatch):
         raise AssertionError("the step gate read an array back to the host")
 
     monkeypatch.setattr(backend, "numpy", refuse)
-    multiply_step_gate(backend, I, gate, 8.0, 0.1, 0.05, flow=F, stability=0.3)
+    multiply_step_gate(backend, I, gate, 8.0, 0.1, 0.05, flow=F, stability=0.3, share_radius=share_radius)
     monkeypatch.undo()
     assert np.isfinite(backend.numpy(gate)).all() and (backend.numpy(gate) > 1).any()
 
@@ -196,3 +197,83 @@ def test_the_share_read_around_each_pixel_enters_the_backend_gate(any_backend, s
     multiply_step_gate(be, be.asarray(log_image), gate, gain, tau, tau_chroma, flow=be.asarray(flow),
                        stability=0.3, share_radius=radius)
     np.testing.assert_allclose(be.numpy(gate), want, rtol=1e-5, atol=5e-5)
+
+
+def host_share_step_gate(be, log_image, gate, gain, tau, tau_chroma, flow, stability, share_radius):
+    """``multiply_step_gate`` with the share read around each pixel on the host, as it was built before
+    the kernels ``pixel_counts`` and ``share_weight``: Weiss's cue (or 1) from the kernels, times
+    ``(1 - local_chromatic_share)^2`` on host NumPy, into ``step_gate`` with the gain unscaled."""
+    T, h, w, _ = log_image.shape
+    k = be.step_evidence
+    offset = be.empty((T, h, w, 3))
+    k.offset_log(log_image, offset, DARK_OFFSET)
+    weight = be.empty((T, h, w))
+    if flow is not None and T > 1 and stability > 0:
+        k.still_stability(log_image, flow, weight, stability, STATIC_FLOW)
+    else:
+        weight = be.asarray(np.ones((T, h, w), np.float32))
+    keep = (1.0 - local_chromatic_share(be.numpy(log_image), tau, tau_chroma, share_radius)) ** 2
+    weight = be.asarray(be.numpy(weight) * keep)
+    k.step_gate(offset, be.zeros((T * h, 2), np.int32), weight, gate, gain, tau, tau_chroma)
+
+
+def rendered(T, h, w):
+    """A rendered video's log input and flow: coloured objects, grey and dark parts, many pairs near the thresholds."""
+    seq = synthetic.render_sequence("objects_camera", n_frames=T, size=(h, w), seed=1)
+    return np.log(np.maximum(seq.frames, 1e-4)).astype(np.float32), seq.flow.astype(np.float32)
+
+
+#: (size, share_radius, what): windows inside the frame, a window that covers the frame, frames
+#: smaller than the smallest window (3 x 3), a flat frame in a coloured video (no sharp step of its
+#: own: its share is the video's) and a flat video (no sharp step at all: s = 0).
+SHARE_SCENES = {
+    "rendered": ((3, 30, 40), 0.3, "rendered"),
+    "window-covers-the-frame": ((2, 9, 13), 5.0, "scene"),
+    "frames-smaller-than-the-window": ((3, 2, 2), 0.3, "scene"),
+    "one-column": ((2, 7, 1), 0.3, "scene"),
+    "flat-frame": ((3, 9, 13), 0.2, "flat-frame"),
+    "flat-video": ((2, 6, 5), 0.3, "flat-video"),
+}
+
+
+def share_scene(size, what):
+    if what == "rendered":
+        return rendered(*size)
+    log_image, flow = scene(*size, seed=5)
+    if what == "flat-frame":
+        log_image[1] = -0.7
+    elif what == "flat-video":
+        log_image[:] = -0.7
+    return log_image, flow
+
+
+@pytest.mark.parametrize("stability", [0.3, 0.0])
+@pytest.mark.parametrize("key", SHARE_SCENES)
+def test_the_local_share_on_the_backend_is_the_host_computation_bit_for_bit(any_backend, key, stability):
+    """The share read around each pixel by the kernels (per-pixel counts in float64, integer window
+    sums, the float64 division rounded to float32, then float32) equals the host NumPy computation
+    from ``local_chromatic_share``, in the weight and in the whole gate, to the bit."""
+    be = any_backend
+    size, radius, what = SHARE_SCENES[key]
+    log_image, flow = share_scene(size, what)
+    T, h, w = size
+    gain, tau, tau_chroma = 8.0, 0.1, 0.05
+    local = local_chromatic_share(log_image, tau, tau_chroma, radius)
+    if what == "flat-video":
+        assert (local == 0).all()
+    elif what == "flat-frame":
+        assert np.ptp(local[1]) == 0 and 0 < local[1, 0, 0] < 1
+    weight = be.asarray(np.ones(size, np.float32))
+    counts = be.empty((T, h, w, 2), np.int32)
+    be.step_evidence.pixel_counts(be.asarray(log_image), counts, DARK_OFFSET, tau, tau_chroma)
+    be.step_evidence.share_weight(counts, weight, share_radius_pixels(radius, h, w), SHARE_PRIOR_STEPS)
+    np.testing.assert_array_equal(be.numpy(weight), np.ones(size, np.float32) * (1.0 - local) ** 2)
+
+    start = np.random.default_rng(2).uniform(0.5, 1.0, size).astype(np.float32)
+    gates = []
+    for multiply in (multiply_step_gate, host_share_step_gate):
+        gate = be.asarray(start.copy())
+        multiply(be, be.asarray(log_image), gate, gain, tau, tau_chroma, flow=be.asarray(flow), stability=stability,
+                 share_radius=radius)
+        gates.append(be.numpy(gate))
+    np.testing.assert_array_equal(gates[0], gates[1])

@@ -31,11 +31,11 @@ holds still, the evidence by Weiss's stability cue.
 The formula is computed by the kernels of the ``step_evidence`` family on
 the backend's arrays (:mod:`ivkernels.kernels.warp.step_evidence`, the
 Taichi mirror, and the NumPy reference
-:mod:`ivkernels.kernels.reference.step_evidence`, which holds the constants);
-:func:`chromatic_share`, :func:`step_evidence`, :func:`step_gate` and
-:func:`grey_step_gate` are that reference on host NumPy arrays.  The share
-read around each pixel is host NumPy still (box sums of per-pixel counts),
-used only when its radius is set.
+:mod:`ivkernels.kernels.reference.step_evidence`, which holds the constants),
+the share read around each pixel included (per-pixel counts and their window
+sums, ``pixel_counts`` and ``share_weight``); :func:`chromatic_share`,
+:func:`local_chromatic_share`, :func:`step_evidence`, :func:`step_gate` and
+:func:`grey_step_gate` are that reference on host NumPy arrays.
 """
 from __future__ import annotations
 
@@ -44,8 +44,8 @@ import numpy as np
 from ivkernels.kernels.reference import step_evidence as ref
 from ivkernels.kernels.reference.step_evidence import AXIS_NEIGHBOURS, DARK_OFFSET, HALF_NEIGHBOURS  # noqa: F401
 
-__all__ = ["chromatic_share", "local_chromatic_share", "grey_step_gate", "multiply_step_gate", "step_evidence",
-           "step_gate", "DARK_OFFSET", "SHARE_PRIOR_STEPS", "STATIC_FLOW"]
+__all__ = ["chromatic_share", "local_chromatic_share", "grey_step_gate", "multiply_step_gate", "share_radius_pixels",
+           "step_evidence", "step_gate", "DARK_OFFSET", "SHARE_PRIOR_STEPS", "STATIC_FLOW"]
 
 #: Flow (pixels) below which a pixel counts as holding still for Weiss's cue
 #: (the default of ``Params.shading_step_static_flow``).
@@ -94,6 +94,12 @@ def _box_sum(x: np.ndarray, r: int) -> np.ndarray:
     return (c[:, y1][:, :, x1] - c[:, y0][:, :, x1] - c[:, y1][:, :, x0] + c[:, y0][:, :, x0])
 
 
+def share_radius_pixels(radius: float, h: int, w: int) -> int:
+    """Half-side in pixels of the window of :func:`local_chromatic_share`: ``radius * min(h, w)``
+    rounded, at least 1."""
+    return max(1, int(round(radius * min(h, w))))
+
+
 def local_chromatic_share(log_image: np.ndarray, tau: float, tau_chroma: float, radius: float) -> np.ndarray:
     """:func:`chromatic_share` read around each pixel, (T, h, w) float32 in [0, 1].
 
@@ -107,7 +113,7 @@ def local_chromatic_share(log_image: np.ndarray, tau: float, tau_chroma: float, 
     counts = ref.pixel_step_counts(_offset(log_image), tau, tau_chroma)
     sharp, chromatic = counts[..., 0], counts[..., 1]
     whole = ref.share(counts.reshape(-1, 2))
-    r = max(1, int(round(radius * min(sharp.shape[1:]))))
+    r = share_radius_pixels(radius, *sharp.shape[1:])
     return ((_box_sum(chromatic, r) + SHARE_PRIOR_STEPS * whole)
             / (_box_sum(sharp, r) + SHARE_PRIOR_STEPS)).astype(np.float32)
 
@@ -176,9 +182,9 @@ def multiply_step_gate(be, log_image, gate, gain: float, tau: float, tau_chroma:
     stability : >= 0, log-contrast change of Weiss's cue (0: not looked at).
     static_flow : > 0, pixels.
     share_radius : >= 0; > 0 (with ``tau_chroma > 0``): the share is read around each
-        pixel (:func:`local_chromatic_share`), on the host: the one step that reads
-        the input back and writes ``(1 - s)^2`` into ``w`` (``Params.shading_step_share_radius``,
-        0.3 by default).
+        pixel (:func:`local_chromatic_share`, by the kernels ``pixel_counts`` and
+        ``share_weight``, bit for bit) and ``(1 - s)^2`` goes into ``w`` instead of the
+        gain (``Params.shading_step_share_radius``, 0.3 by default).
     """
     T, h, w, _ = log_image.shape
     kernels = be.step_evidence
@@ -190,8 +196,9 @@ def multiply_step_gate(be, log_image, gate, gain: float, tau: float, tau_chroma:
     elif weight.size:
         be.vecops.fill(weight.reshape((T * h * w,)), 1.0)
     if share_radius > 0 and tau_chroma > 0:
-        keep = (1.0 - local_chromatic_share(be.numpy(log_image), tau, tau_chroma, share_radius)) ** 2
-        weight = be.asarray(be.numpy(weight) * keep)
+        pixel_counts = be.empty((T, h, w, 2), np.int32)
+        kernels.pixel_counts(log_image, pixel_counts, DARK_OFFSET, tau, tau_chroma)
+        kernels.share_weight(pixel_counts, weight, share_radius_pixels(share_radius, h, w), SHARE_PRIOR_STEPS)
         counts = be.zeros((T * h, 2), np.int32)                 # the share is in the weight: none counted
     else:
         counts = be.empty((T * h, 2), np.int32)

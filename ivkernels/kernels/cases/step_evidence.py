@@ -1,5 +1,6 @@
 """Cases of :mod:`ivkernels.kernels.warp.step_evidence` (the offset log, the step counts of the
-chromatic share, the step gate of Eq. 9's local term, Weiss's stability cue where the scene holds still)."""
+chromatic share per row and per pixel, the share read around each pixel, the step gate of Eq. 9's
+local term, Weiss's stability cue where the scene holds still)."""
 from __future__ import annotations
 
 import numpy as np
@@ -11,6 +12,9 @@ from ivkernels.kernels.reference import step_evidence as ref
 #: Width of the band around a threshold (log units, pixels) where float32 and float64 may
 #: decide a comparison differently: pairs there are not compared.
 TIE = 1e-5
+
+#: The same band where both sides compute in float64.
+FLOAT64_TIE = 1e-12
 
 
 def steps_image(rng, T: int, H: int, W: int) -> np.ndarray:
@@ -62,6 +66,49 @@ def _counts(tau, tau_chroma):
     return Case("step_evidence", "step_counts", make, ("log_image", "counts", "tau", "tau_chroma"), ("counts",),
                 lambda v: {"counts": ref.step_counts(v["log_image"], v["tau"], v["tau_chroma"])},
                 variant=f"tau={tau:g},tau_chroma={tau_chroma:g}", tol=EXACT, ignore=tied)
+
+
+def _pixel_counts(tau, tau_chroma):
+    def make(rng, T, H, W):
+        return {"log_image": steps_image(rng, T, H, W), "counts": np.full((T, H, W, 2), -1, np.int32),
+                "offset": ref.DARK_OFFSET, "tau": tau, "tau_chroma": tau_chroma}
+
+    def tied(v):
+        """Pixels with a pair within :data:`FLOAT64_TIE` of a threshold: a last-place difference of
+        ``exp`` or ``log`` between libraries could decide them differently."""
+        L, C = ref.luminance_chroma(ref.offset_log(v["log_image"], v["offset"]))
+        near = np.zeros(L.shape, bool)
+        for dy, dx in ref.AXIS_NEIGHBOURS:
+            a, b = ref.pair_slices(L.shape, dy, dx)
+            close = np.abs(np.abs(L[a] - L[b]) - v["tau"]) < FLOAT64_TIE
+            if v["tau_chroma"] > 0:
+                close |= np.abs(np.abs(C[a] - C[b]).max(axis=-1) - v["tau_chroma"]) < FLOAT64_TIE
+            near[a] |= close
+        return {"counts": np.repeat(near[..., None], 2, axis=-1)}
+
+    return Case("step_evidence", "pixel_counts", make, ("log_image", "counts", "offset", "tau", "tau_chroma"),
+                ("counts",), lambda v: {"counts": ref.pixel_counts(v["log_image"], v["offset"], v["tau"],
+                                                                   v["tau_chroma"])},
+                variant=f"tau={tau:g},tau_chroma={tau_chroma:g}", tol=EXACT, ignore=tied)
+
+
+def _share_weight(radius, counts):
+    """``counts``: "random" (0 to 2 sharp steps per pixel, some chromatic, empty patches),
+    or "none" (no sharp step anywhere: the share is the prior's, 0)."""
+    def make(rng, T, H, W):
+        if counts == "random":
+            sharp = rng.integers(0, 3, (T, H, W))
+            sharp[:, : H // 2, : W // 2] = 0                                  # a patch without steps
+            c = np.stack([sharp, rng.integers(0, sharp + 1)], axis=-1).astype(np.int32)
+        else:
+            c = np.zeros((T, H, W, 2), np.int32)
+        return {"counts": c, "weight": uniform(rng, (T, H, W), 0.0, 1.0), "radius": radius,
+                "prior_steps": 4.0}
+
+    # integer window sums, one float64 division rounded to float32, then float32 products: bit for bit
+    return Case("step_evidence", "share_weight", make, ("counts", "weight", "radius", "prior_steps"), ("weight",),
+                lambda v: {"weight": ref.share_weight(v["counts"], v["weight"], v["radius"], v["prior_steps"])},
+                variant=f"radius={radius},{counts}", updates=("weight",), tol=EXACT)
 
 
 def _gate(tau, tau_chroma, counts):
@@ -118,6 +165,12 @@ CASES = (
     _offset_log(0.5),
     _counts(0.1, 0.05),
     _counts(0.3, 0.0),
+    _pixel_counts(0.1, 0.05),
+    _pixel_counts(0.3, 0.0),
+    _share_weight(2, "random"),
+    _share_weight(0, "random"),
+    _share_weight(1000, "random"),
+    _share_weight(3, "none"),
     _gate(0.1, 0.05, "image"),
     _gate(0.1, 0.05, "random"),
     _gate(0.25, 0.0, "none"),

@@ -24,6 +24,11 @@ log input (:func:`still_stability`) where the scene holds still, 1 where it move
 The share ``s`` of chromatic steps among the sharp ones, over the
 horizontal and vertical pairs of the whole window (:func:`step_counts` per
 row, :func:`share` of the counts), scales the gain: ``gain' = gain (1 - s)^2``.
+Read around each pixel instead (``Params.shading_step_share_radius``), the
+share is that of a square window of the pixel's frame with ``prior_steps``
+steps of the whole video's share added (:func:`pixel_counts` per pixel,
+:func:`local_share` of their window sums), and ``(1 - s)^2`` goes into the
+weight (:func:`share_weight`) while the gain stays unscaled.
 """
 from __future__ import annotations
 
@@ -31,7 +36,7 @@ import math
 
 import numpy as np
 
-from ivkernels.kernels.contract import Array, Family, FinitePositive, NonNegative, Out, Positive, Rule
+from ivkernels.kernels.contract import Array, Family, FinitePositive, Int, NonNegative, Out, Positive, Rule
 from ivkernels.kernels.reference import maps as ref_maps
 
 FAMILY = Family("step_evidence", "Retinex's sharp grey steps and Weiss's still steps on Eq. 9's local term.")
@@ -64,6 +69,16 @@ FAMILY.declare("step_counts(log_image, counts, tau, tau_chroma=0.0)",
                "Per row, the sharp and the chromatic steps of the horizontal and vertical pairs it starts.",
                log_image="T H W 3", counts=Out("T*H 2", "int32", layout="(T*H, 2)"), tau=FinitePositive,
                tau_chroma=NonNegative)
+FAMILY.declare("pixel_counts(log_image, counts, offset, tau, tau_chroma=0.0)",
+               "Per pixel, the sharp and the chromatic steps of its horizontal and vertical pairs, read in "
+               "float64 on ``log(exp(log_image) + offset)``.",
+               log_image="T H W 3", counts=Out("T H W 2", "int32", layout="(T, H, W, 2)"), offset=FinitePositive,
+               tau=FinitePositive, tau_chroma=NonNegative)
+FAMILY.declare("share_weight(counts, weight, radius, prior_steps)",
+               "``weight *= (1 - s)^2``, ``s`` the chromatic share of ``counts`` in the (2 radius + 1)^2 window "
+               "of each pixel with ``prior_steps`` steps of the whole video's share.",
+               counts=Array("T H W 2", "int32", layout="(T, H, W, 2)"), weight=Out("T H W"),
+               radius=Int(0, "(pixels)"), prior_steps=FinitePositive)
 FAMILY.declare("step_gate(log_image, counts, weight, gate, gain, tau, tau_chroma=0.0)",
                "``gate *= 1 + gain (1 - s)^2 weight evidence``, ``s`` the chromatic share of ``counts``.",
                log_image="T H W 3", counts=Array("T*H 2", "int32", layout="(T*H, 2)"), weight="T H W",
@@ -132,6 +147,42 @@ def step_counts(log_image, tau: float, tau_chroma: float = 0.0) -> np.ndarray:
     """
     counts = pixel_step_counts(log_image, tau, tau_chroma).sum(axis=2)
     return counts.reshape(-1, 2).astype(np.int32)
+
+
+def pixel_counts(log_image, offset: float, tau: float, tau_chroma: float = 0.0) -> np.ndarray:
+    """(T, H, W, 2) int32: :func:`pixel_step_counts` of ``offset_log(log_image, offset)``, all in float64.
+
+    log_image : (T, H, W, 3), ``log i`` (not offset).
+    """
+    return pixel_step_counts(offset_log(log_image, offset), tau, tau_chroma).astype(np.int32)
+
+
+def window_sums(counts, radius: int) -> np.ndarray:
+    """(T, H, W, 2) int64: the sums of ``counts`` (T, H, W, 2) over the (2 radius + 1)^2 window of
+    each pixel of its frame, cut at the borders (from an integral image, exactly)."""
+    counts = np.asarray(counts, np.int64)
+    t, h, w, _ = counts.shape
+    c = np.zeros((t, h + 1, w + 1, 2), np.int64)
+    c[:, 1:, 1:] = counts.cumsum(1).cumsum(2)
+    y0, y1 = np.clip(np.arange(h) - radius, 0, h), np.clip(np.arange(h) + radius + 1, 0, h)
+    x0, x1 = np.clip(np.arange(w) - radius, 0, w), np.clip(np.arange(w) + radius + 1, 0, w)
+    return c[:, y1][:, :, x1] - c[:, y0][:, :, x1] - c[:, y1][:, :, x0] + c[:, y0][:, :, x0]
+
+
+def local_share(counts, radius: int, prior_steps: float) -> np.ndarray:
+    """(T, H, W) float32: per pixel ``(chromatic + prior_steps * whole) / (sharp + prior_steps)``,
+    ``sharp`` and ``chromatic`` the :func:`window_sums` of :func:`pixel_counts` ``counts`` and
+    ``whole`` their :func:`share` over the video; the division in float64, then rounded."""
+    counts = np.asarray(counts, np.int64)
+    whole = share(counts.reshape(-1, 2))
+    box = window_sums(counts, radius)
+    return ((box[..., 1] + prior_steps * whole) / (box[..., 0] + prior_steps)).astype(np.float32)
+
+
+def share_weight(counts, weight, radius: int, prior_steps: float) -> np.ndarray:
+    """(T, H, W) float32: ``weight * (1 - s)^2`` with ``s`` the :func:`local_share`, in float32."""
+    keep = (np.float32(1.0) - local_share(counts, radius, prior_steps)) ** 2
+    return np.asarray(weight, np.float32) * keep
 
 
 def share(counts) -> float:

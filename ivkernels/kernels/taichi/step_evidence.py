@@ -1,7 +1,8 @@
 """Taichi mirror of :mod:`ivkernels.kernels.warp.step_evidence` (the step evidence on Eq. 9's
 local term): same host functions and signatures, NumPy arrays passed as ``ti.types.ndarray()``.
 The outermost loop runs over rows in parallel.  The arrays live on the host, so the chromatic
-share is summed there from the kernel's per-row counts (in int64, exactly).
+share is summed there from the kernel's per-row counts (in int64, exactly), and so is the whole
+video's share of :func:`share_weight`.
 """
 import numpy as np
 import taichi as ti
@@ -16,6 +17,8 @@ host = implements(FAMILY, FRONT)
 nd2_i32 = ti.types.ndarray(dtype=ti.i32, ndim=2)
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
+nd4_i32 = ti.types.ndarray(dtype=ti.i32, ndim=4)
+nd4_f64 = ti.types.ndarray(dtype=ti.f64, ndim=4)
 
 #: Below this argument ``exp(-a)`` and ``1 - exp(-a)`` are read from their series (see the Warp module).
 SERIES_BELOW = 1.0e-3
@@ -109,6 +112,109 @@ def step_counts_rows(img: nd4, counts: nd2_i32, tau: ti.f32, tau_chroma: ti.f32)
                 chromatic += c
         counts[r, 0] = sharp
         counts[r, 1] = chromatic
+
+
+@ti.kernel
+def luminance_chroma_rows(img: nd4, lc: nd4_f64, offset: ti.f64):
+    """``lc[t, y, x] = (L, C_0, C_1, C_2)`` of ``log(exp(img) + offset)`` in float64 (see the Warp module)."""
+    height = img.shape[1]
+    for r in range(img.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for x in range(img.shape[2]):
+            i0 = ti.log(ti.exp(ti.cast(img[t, y, x, 0], ti.f64)) + offset)
+            i1 = ti.log(ti.exp(ti.cast(img[t, y, x, 1], ti.f64)) + offset)
+            i2 = ti.log(ti.exp(ti.cast(img[t, y, x, 2], ti.f64)) + offset)
+            m = (i0 + i1 + i2) / ti.f64(3.0)
+            lc[t, y, x, 0] = m
+            lc[t, y, x, 1] = i0 - m
+            lc[t, y, x, 2] = i1 - m
+            lc[t, y, x, 3] = i2 - m
+
+
+@ti.func
+def pair_counts64(lc: ti.template(), t, y, x, yy, xx, tau, tau_chroma):
+    """``(sharp, chromatic)`` of one pair from the float64 ``(L, C)`` (see the Warp module)."""
+    dc = ti.max(ti.max(ti.abs(lc[t, y, x, 1] - lc[t, yy, xx, 1]), ti.abs(lc[t, y, x, 2] - lc[t, yy, xx, 2])),
+                ti.abs(lc[t, y, x, 3] - lc[t, yy, xx, 3]))
+    chromatic = 0
+    if tau_chroma > 0.0 and dc > tau_chroma:
+        chromatic = 1
+    sharp = chromatic
+    if ti.abs(lc[t, y, x, 0] - lc[t, yy, xx, 0]) > tau:
+        sharp = 1
+    return sharp, chromatic
+
+
+@ti.kernel
+def pixel_counts_rows(lc: nd4_f64, counts: nd4_i32, tau: ti.f64, tau_chroma: ti.f64):
+    height = lc.shape[1]
+    width = lc.shape[2]
+    for r in range(lc.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for x in range(width):
+            sharp = 0
+            chromatic = 0
+            if x + 1 < width:
+                s, c = pair_counts64(lc, t, y, x, y, x + 1, tau, tau_chroma)
+                sharp += s
+                chromatic += c
+            if y + 1 < height:
+                s, c = pair_counts64(lc, t, y, x, y + 1, x, tau, tau_chroma)
+                sharp += s
+                chromatic += c
+            counts[t, y, x, 0] = sharp
+            counts[t, y, x, 1] = chromatic
+
+
+@ti.kernel
+def row_window_rows(counts: nd4_i32, sums: nd4_i32, totals: nd2_i32, radius: ti.i32):
+    """Running window sums along each row and the row's totals (see the Warp module)."""
+    height = counts.shape[1]
+    width = counts.shape[2]
+    for r in range(counts.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for k in ti.static(range(2)):
+            run = 0
+            for x in range(ti.min(radius, width - 1) + 1):
+                run += counts[t, y, x, k]
+            total = 0
+            for x in range(width):
+                sums[t, y, x, k] = run
+                total += counts[t, y, x, k]
+                if x + radius + 1 < width:
+                    run += counts[t, y, x + radius + 1, k]
+                if x - radius >= 0:
+                    run -= counts[t, y, x - radius, k]
+            totals[r, k] = total
+
+
+@ti.kernel
+def share_weight_columns(sums: nd4_i32, weight: nd3, radius: ti.i32, prior_whole: ti.f64, prior_steps: ti.f64):
+    """Running window sums down each column, the share in float64 rounded to float32, and
+    ``weight *= (1 - s)^2`` in float32 (see the Warp module)."""
+    height = sums.shape[1]
+    width = sums.shape[2]
+    for c in range(sums.shape[0] * width):
+        t = c // width
+        x = c - t * width
+        sharp = 0
+        chromatic = 0
+        for y in range(ti.min(radius, height - 1) + 1):
+            sharp += sums[t, y, x, 0]
+            chromatic += sums[t, y, x, 1]
+        for y in range(height):
+            s = ti.cast((ti.cast(chromatic, ti.f64) + prior_whole) / (ti.cast(sharp, ti.f64) + prior_steps), ti.f32)
+            keep = ti.f32(1.0) - s
+            weight[t, y, x] = weight[t, y, x] * (keep * keep)
+            if y + radius + 1 < height:
+                sharp += sums[t, y + radius + 1, x, 0]
+                chromatic += sums[t, y + radius + 1, x, 1]
+            if y - radius >= 0:
+                sharp -= sums[t, y - radius, x, 0]
+                chromatic -= sums[t, y - radius, x, 1]
 
 
 @ti.kernel
@@ -222,6 +328,29 @@ def step_counts(log_image, counts, tau: float, tau_chroma: float = 0.0) -> None:
     """Per row, the sharp and the chromatic steps; see :func:`ivkernels.kernels.warp.step_evidence.step_counts`."""
     if counts.size:
         step_counts_rows(log_image, counts, tau, tau_chroma)
+
+
+@host("pixel_counts")
+def pixel_counts(log_image, counts, offset: float, tau: float, tau_chroma: float = 0.0) -> None:
+    """Per pixel, the sharp and the chromatic steps in float64; see
+    :func:`ivkernels.kernels.warp.step_evidence.pixel_counts`."""
+    if counts.size:
+        lc = np.empty((*counts.shape[:3], 4), np.float64)
+        luminance_chroma_rows(log_image, lc, offset)
+        pixel_counts_rows(lc, counts, tau, tau_chroma)
+
+
+@host("share_weight")
+def share_weight(counts, weight, radius: int, prior_steps: float) -> None:
+    """``weight *= (1 - s)^2``, ``s`` the share read around each pixel; see
+    :func:`ivkernels.kernels.warp.step_evidence.share_weight`."""
+    t, h, w, _ = counts.shape
+    if weight.size:
+        radius = min(radius, max(h, w))
+        sums = np.empty(counts.shape, np.int32)
+        totals = np.empty((t * h, 2), np.int32)
+        row_window_rows(counts, sums, totals, radius)
+        share_weight_columns(sums, weight, radius, prior_steps * share(totals), prior_steps)
 
 
 @host("step_gate")

@@ -3,6 +3,10 @@
 * :func:`offset_log`: the log image read with a linear offset, ``log(i + offset)``,
 * :func:`step_counts`: per row, the sharp and the chromatic steps of the
   horizontal and vertical pairs it starts (the chromatic share's counts),
+* :func:`pixel_counts`: per pixel, the same counts read in float64 (the
+  share read around each pixel),
+* :func:`share_weight`: ``weight *= (1 - s)^2``, ``s`` the share of the
+  window around each pixel (running window sums of the per-pixel counts),
 * :func:`step_gate`: ``gate *= 1 + gain (1 - s)^2 weight evidence``, the share
   ``s`` summed from the counts on the device (no host round trip),
 * :func:`still_stability`: Weiss's stability cue (``maps.shading_gate``) where
@@ -10,7 +14,8 @@
 
 The formula, its constants and the NumPy reference:
 :mod:`ivkernels.kernels.reference.step_evidence`; its use in the energy:
-:mod:`ivkernels.solver.step_evidence`.  One thread per row ``t * H + y``.
+:mod:`ivkernels.solver.step_evidence`.  One thread per row ``t * H + y`` (per column ``t * W + x``
+for the vertical window sums).
 """
 from __future__ import annotations
 
@@ -128,6 +133,134 @@ def step_counts_rows(row_begin: int, img: wp.array4d(dtype=float), counts: wp.ar
             chromatic += c
     counts[r, 0] = sharp
     counts[r, 1] = chromatic
+
+
+@wp.kernel
+def luminance_chroma_rows(row_begin: int, img: wp.array4d(dtype=float), lc: wp.array4d(dtype=wp.float64),
+                          offset: wp.float64):
+    """``lc[t, y, x] = (L, C_0, C_1, C_2)`` of ``I' = log(exp(img) + offset)`` in float64, the operations
+    of the NumPy reference in its order: ``L = (I'_0 + I'_1 + I'_2) / 3``, ``C_c = I'_c - L``."""
+    r = row_begin + wp.tid()
+    height = img.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(img.shape[2]):
+        i0 = wp.log(wp.exp(wp.float64(img[t, y, x, 0])) + offset)
+        i1 = wp.log(wp.exp(wp.float64(img[t, y, x, 1])) + offset)
+        i2 = wp.log(wp.exp(wp.float64(img[t, y, x, 2])) + offset)
+        m = (i0 + i1 + i2) / wp.float64(3.0)
+        lc[t, y, x, 0] = m
+        lc[t, y, x, 1] = i0 - m
+        lc[t, y, x, 2] = i1 - m
+        lc[t, y, x, 3] = i2 - m
+
+
+@wp.func
+def pair_counts64(lc: wp.array4d(dtype=wp.float64), t: int, y: int, x: int, yy: int, xx: int,
+                  tau: wp.float64, tau_chroma: wp.float64):
+    """``(sharp, chromatic)``, each 0 or 1, of one pair from the float64 ``(L, C)`` of :func:`luminance_chroma_rows`."""
+    dc = wp.max(wp.max(wp.abs(lc[t, y, x, 1] - lc[t, yy, xx, 1]), wp.abs(lc[t, y, x, 2] - lc[t, yy, xx, 2])),
+                wp.abs(lc[t, y, x, 3] - lc[t, yy, xx, 3]))
+    chromatic = int(0)
+    if tau_chroma > wp.float64(0.0):
+        if dc > tau_chroma:
+            chromatic = 1
+    sharp = chromatic
+    if wp.abs(lc[t, y, x, 0] - lc[t, yy, xx, 0]) > tau:
+        sharp = 1
+    return sharp, chromatic
+
+
+@wp.kernel
+def pixel_counts_rows(row_begin: int, lc: wp.array4d(dtype=wp.float64), counts: wp.array4d(dtype=wp.int32),
+                      tau: wp.float64, tau_chroma: wp.float64):
+    r = row_begin + wp.tid()
+    height = lc.shape[1]
+    width = lc.shape[2]
+    t = r // height
+    y = r - t * height
+    for x in range(width):
+        sharp = int(0)
+        chromatic = int(0)
+        if x + 1 < width:
+            s, c = pair_counts64(lc, t, y, x, y, x + 1, tau, tau_chroma)
+            sharp += s
+            chromatic += c
+        if y + 1 < height:
+            s, c = pair_counts64(lc, t, y, x, y + 1, x, tau, tau_chroma)
+            sharp += s
+            chromatic += c
+        counts[t, y, x, 0] = sharp
+        counts[t, y, x, 1] = chromatic
+
+
+@wp.kernel
+def row_window_rows(row_begin: int, counts: wp.array4d(dtype=wp.int32), sums: wp.array4d(dtype=wp.int32),
+                    totals: wp.array2d(dtype=wp.int32), radius: int):
+    """``sums[t, y, x]``: the counts of row ``t * H + y`` over ``[x - radius, x + radius]`` (inside the
+    row), by a running sum; ``totals[t * H + y]``: the row's."""
+    r = row_begin + wp.tid()
+    height = counts.shape[1]
+    width = counts.shape[2]
+    t = r // height
+    y = r - t * height
+    for k in range(2):
+        run = int(0)
+        for x in range(wp.min(radius, width - 1) + 1):
+            run += counts[t, y, x, k]
+        total = int(0)
+        for x in range(width):
+            sums[t, y, x, k] = run
+            total += counts[t, y, x, k]
+            if x + radius + 1 < width:
+                run += counts[t, y, x + radius + 1, k]
+            if x - radius >= 0:
+                run -= counts[t, y, x - radius, k]
+        totals[r, k] = total
+
+
+@wp.kernel
+def prior_share(totals: wp.array2d(dtype=wp.int32), prior_steps: wp.float64, out: wp.array(dtype=wp.float64)):
+    """One thread: ``out[0] = prior_steps * whole``, ``whole`` the chromatic share of the row ``totals``
+    (0 without sharp steps); the product once, as the NumPy reference forms it."""
+    sharp = wp.int64(0)
+    chromatic = wp.int64(0)
+    for r in range(totals.shape[0]):
+        sharp += wp.int64(totals[r, 0])
+        chromatic += wp.int64(totals[r, 1])
+    whole = wp.float64(0.0)
+    if sharp > wp.int64(0):
+        whole = wp.float64(chromatic) / wp.float64(sharp)
+    out[0] = prior_steps * whole
+
+
+@wp.kernel
+def share_weight_columns(col_begin: int, sums: wp.array4d(dtype=wp.int32), weight: wp.array3d(dtype=float),
+                         radius: int, prior_whole: wp.array(dtype=wp.float64), prior_steps: wp.float64):
+    """Down column ``t * W + x``: the window sums of :func:`row_window_rows` over ``[y - radius, y + radius]``
+    by a running sum, ``s = (chromatic + prior_whole) / (sharp + prior_steps)`` in float64 rounded
+    to float32, and ``weight *= (1 - s)^2`` in float32."""
+    c = col_begin + wp.tid()
+    height = sums.shape[1]
+    width = sums.shape[2]
+    t = c // width
+    x = c - t * width
+    pw = prior_whole[0]
+    sharp = int(0)
+    chromatic = int(0)
+    for y in range(wp.min(radius, height - 1) + 1):
+        sharp += sums[t, y, x, 0]
+        chromatic += sums[t, y, x, 1]
+    for y in range(height):
+        s = float((wp.float64(chromatic) + pw) / (wp.float64(sharp) + prior_steps))
+        keep = 1.0 - s
+        weight[t, y, x] = weight[t, y, x] * (keep * keep)
+        if y + radius + 1 < height:
+            sharp += sums[t, y + radius + 1, x, 0]
+            chromatic += sums[t, y + radius + 1, x, 1]
+        if y - radius >= 0:
+            sharp -= sums[t, y - radius, x, 0]
+            chromatic -= sums[t, y - radius, x, 1]
 
 
 @wp.kernel
@@ -287,6 +420,63 @@ def step_counts(log_image, counts, tau: float, tau_chroma: float = 0.0) -> None:
     """
     t, h, _, _ = log_image.shape
     launch_rows(step_counts_rows, t * h, [log_image, counts, tau, tau_chroma], device=log_image.device)
+
+
+@host("pixel_counts")
+def pixel_counts(log_image, counts, offset: float, tau: float, tau_chroma: float = 0.0) -> None:
+    """Counts of the steps of the chromatic share, per pixel and in float64.
+
+    For each pixel ``x``, over its pairs ``(x, x + (0, 1))`` and ``(x, x + (1, 0))``
+    inside the image: ``counts[..., 0]`` the sharp steps (log-luminance step
+    ``> tau`` or chromatic), ``counts[..., 1]`` the chromatic ones
+    (log-chromaticity change ``> tau_chroma``; none with ``tau_chroma = 0``),
+    read on ``I' = log(exp(log_image) + offset)`` computed in float64 (a
+    (T, H, W, 4) float64 buffer of this call holds its ``L`` and ``C``), as
+    :func:`ivkernels.kernels.reference.step_evidence.pixel_counts` does: the
+    counts equal the reference's but for a pair within a last place of
+    ``exp`` or ``log`` of a threshold.
+
+    log_image : wp.array float32 (T, H, W, 3), ``log i`` (not offset).
+    counts : wp.array int32 (T, H, W, 2), written.
+    offset : > 0 (``DARK_OFFSET``); tau, tau_chroma : log units.
+    """
+    t, h, w, _ = log_image.shape
+    dev = log_image.device
+    lc = wp.empty((t, h, w, 4), dtype=wp.float64, device=dev)
+    launch_rows(luminance_chroma_rows, t * h, [log_image, lc, offset], device=dev)
+    launch_rows(pixel_counts_rows, t * h, [lc, counts, tau, tau_chroma], device=dev)
+
+
+@host("share_weight")
+def share_weight(counts, weight, radius: int, prior_steps: float) -> None:
+    """``weight *= (1 - s)^2`` with ``s`` the chromatic share read around each pixel.
+
+    ``s = (chromatic + prior_steps * whole) / (sharp + prior_steps)``, ``sharp``
+    and ``chromatic`` the sums of :func:`pixel_counts` ``counts`` over the
+    (2 radius + 1)^2 window of the pixel's frame cut at the borders, ``whole``
+    the share of the whole video (0 without sharp steps).  Window sums in
+    int32 (exact: a frame holds at most ``2 H W`` steps), the division in
+    float64 rounded to float32, the rest in float32: bit for bit
+    :func:`ivkernels.kernels.reference.step_evidence.share_weight`.  Running
+    sums along the rows (a (T, H, W, 2) int32 buffer of this call, and each
+    row's total), the whole video's share from the row totals on one thread,
+    then running sums down the columns.
+
+    counts : wp.array int32 (T, H, W, 2), :func:`pixel_counts`.
+    weight : wp.array float32 (T, H, W), updated.
+    radius : >= 0, half-side of the window in pixels; prior_steps : > 0, steps.
+    """
+    t, h, w, _ = counts.shape
+    if weight.size == 0:
+        return
+    dev = counts.device
+    radius = min(radius, max(h, w))                       # the same windows, and no overflow of y + radius
+    sums = wp.empty((t, h, w, 2), dtype=wp.int32, device=dev)
+    totals = wp.empty((t * h, 2), dtype=wp.int32, device=dev)
+    prior_whole = wp.empty(1, dtype=wp.float64, device=dev)
+    launch_rows(row_window_rows, t * h, [counts, sums, totals, radius], device=dev)
+    wp.launch(prior_share, dim=1, inputs=[totals, prior_steps, prior_whole], device=dev)
+    launch_rows(share_weight_columns, t * w, [sums, weight, radius, prior_whole, prior_steps], device=dev)
 
 
 @host("step_gate")
