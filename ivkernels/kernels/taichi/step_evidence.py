@@ -2,7 +2,7 @@
 local term): same host functions and signatures, NumPy arrays passed as ``ti.types.ndarray()``.
 The outermost loop runs over rows in parallel.  The arrays live on the host, so the chromatic
 share is summed there from the kernel's per-row counts (in int64, exactly), and so is the whole
-video's share of :func:`share_weight`.
+video's share of :func:`share_weight` and the float64 offset log of :func:`pixel_counts`.
 """
 import numpy as np
 import taichi as ti
@@ -10,6 +10,7 @@ import taichi as ti
 from ivkernels.kernels.contract import implements
 from ivkernels.kernels.ndarray_checks import FRONT
 from ivkernels.kernels.taichi.maps import log_change_at
+from ivkernels.kernels.reference import step_evidence as ref
 from ivkernels.kernels.reference.step_evidence import FAMILY, share
 
 host = implements(FAMILY, FRONT)
@@ -114,27 +115,9 @@ def step_counts_rows(img: nd4, counts: nd2_i32, tau: ti.f32, tau_chroma: ti.f32)
         counts[r, 1] = chromatic
 
 
-@ti.kernel
-def luminance_chroma_rows(img: nd4, lc: nd4_f64, offset: ti.f64):
-    """``lc[t, y, x] = (L, C_0, C_1, C_2)`` of ``log(exp(img) + offset)`` in float64 (see the Warp module)."""
-    height = img.shape[1]
-    for r in range(img.shape[0] * height):
-        t = r // height
-        y = r - t * height
-        for x in range(img.shape[2]):
-            i0 = ti.log(ti.exp(ti.cast(img[t, y, x, 0], ti.f64)) + offset)
-            i1 = ti.log(ti.exp(ti.cast(img[t, y, x, 1], ti.f64)) + offset)
-            i2 = ti.log(ti.exp(ti.cast(img[t, y, x, 2], ti.f64)) + offset)
-            m = (i0 + i1 + i2) / ti.f64(3.0)
-            lc[t, y, x, 0] = m
-            lc[t, y, x, 1] = i0 - m
-            lc[t, y, x, 2] = i1 - m
-            lc[t, y, x, 3] = i2 - m
-
-
 @ti.func
 def pair_counts64(lc: ti.template(), t, y, x, yy, xx, tau, tau_chroma):
-    """``(sharp, chromatic)`` of one pair from the float64 ``(L, C)`` (see the Warp module)."""
+    """``(sharp, chromatic)`` of one pair from the float64 ``(L, C_0, C_1, C_2)`` of ``lc`` (see the Warp module)."""
     dc = ti.max(ti.max(ti.abs(lc[t, y, x, 1] - lc[t, yy, xx, 1]), ti.abs(lc[t, y, x, 2] - lc[t, yy, xx, 2])),
                 ti.abs(lc[t, y, x, 3] - lc[t, yy, xx, 3]))
     chromatic = 0
@@ -335,8 +318,12 @@ def pixel_counts(log_image, counts, offset: float, tau: float, tau_chroma: float
     """Per pixel, the sharp and the chromatic steps in float64; see
     :func:`ivkernels.kernels.warp.step_evidence.pixel_counts`."""
     if counts.size:
+        # the float64 offset log by NumPy on the (host) arrays: Taichi's float64 exp and log call the C
+        # library, measured 35 times slower once another kernel of this family has run; the counting is the kernel's
+        L, C = ref.luminance_chroma(ref.offset_log(log_image, offset))
         lc = np.empty((*counts.shape[:3], 4), np.float64)
-        luminance_chroma_rows(log_image, lc, offset)
+        lc[..., 0] = L
+        lc[..., 1:] = C
         pixel_counts_rows(lc, counts, tau, tau_chroma)
 
 
