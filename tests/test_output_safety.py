@@ -188,7 +188,7 @@ def test_sigterm_inside_an_output_folder_removes_it(tmp_path):
     assert signal.getsignal(signal.SIGTERM) == before
 
 
-@pytest.mark.parametrize("signum, expected", [(signal.SIGTERM, Interrupted)])
+@pytest.mark.parametrize("signum, expected", [(signal.SIGTERM, Interrupted), (signal.SIGINT, KeyboardInterrupt)])
 def test_a_swallowed_signal_still_stops_the_commit(tmp_path, signum, expected):
     """Python drops an exception raised inside some hooks (an at-fork handler, a
     finaliser); the signal must still keep the output from being published."""

@@ -23,7 +23,7 @@ _PARTIAL = re.compile(r"^(?P<name>.+)\.(?P<pid>\d+)(?:\.old)?\.partial$")
 
 class Interrupted(BaseException):
     """Raised in the main thread when the process receives SIGTERM or SIGHUP while an
-    :class:`OutputFolder` is open (SIGINT raises :class:`KeyboardInterrupt`)."""
+    :class:`OutputFolder` is open (SIGINT raises :class:`KeyboardInterrupt`, recorded alike)."""
 
     def __init__(self, signum: int):
         super().__init__(f"interrupted by {signal.Signals(signum).name}")
@@ -278,12 +278,17 @@ class OutputFolder:
         # The signal is also recorded: Python swallows an exception raised while it runs
         # certain hooks (an at-fork handler, a finaliser), and the run must then still
         # stop at commit() rather than publish an output the user asked it to abandon.
-        # SIGINT keeps Python's own handler (KeyboardInterrupt).
+        # SIGINT still raises KeyboardInterrupt (when Python's own handler is in place).
         def handler(signum, frame):
             self._signal = signum
+            if signum == signal.SIGINT:
+                raise KeyboardInterrupt
             raise Interrupted(signum)
 
-        for signum in (signal.SIGTERM, getattr(signal, "SIGHUP", None)):
+        signums = [signal.SIGTERM, getattr(signal, "SIGHUP", None)]
+        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            signums.append(signal.SIGINT)
+        for signum in signums:
             if signum is None:
                 continue
             try:
@@ -292,6 +297,8 @@ class OutputFolder:
                 break
 
     def _raise_if_signalled(self) -> None:
+        if self._signal == signal.SIGINT:
+            raise KeyboardInterrupt
         if self._signal is not None:
             raise Interrupted(self._signal)
 
