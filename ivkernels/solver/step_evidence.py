@@ -84,16 +84,6 @@ def chromatic_share(log_image: np.ndarray, tau: float, tau_chroma: float) -> flo
     return ref.share(ref.step_counts(_offset(log_image), tau, tau_chroma))
 
 
-def _box_sum(x: np.ndarray, r: int) -> np.ndarray:
-    """Sum of each frame of ``x`` (T, h, w) over the (2r+1)^2 window at every pixel, cut at the borders."""
-    _, h, w = x.shape
-    c = np.zeros((x.shape[0], h + 1, w + 1), np.float64)
-    c[:, 1:, 1:] = x.cumsum(1, dtype=np.float64).cumsum(2)
-    y0, y1 = np.clip(np.arange(h) - r, 0, h), np.clip(np.arange(h) + r + 1, 0, h)
-    x0, x1 = np.clip(np.arange(w) - r, 0, w), np.clip(np.arange(w) + r + 1, 0, w)
-    return (c[:, y1][:, :, x1] - c[:, y0][:, :, x1] - c[:, y1][:, :, x0] + c[:, y0][:, :, x0])
-
-
 def share_radius_pixels(radius: float, h: int, w: int) -> int:
     """Half-side in pixels of the window of :func:`local_chromatic_share`: ``radius * min(h, w)``
     rounded, at least 1."""
@@ -110,12 +100,8 @@ def local_chromatic_share(log_image: np.ndarray, tau: float, tau_chroma: float, 
     A grey floor beside coloured walls and objects keeps a low share where
     the floor is, which one number for the whole scene would not.
     """
-    counts = ref.pixel_step_counts(_offset(log_image), tau, tau_chroma)
-    sharp, chromatic = counts[..., 0], counts[..., 1]
-    whole = ref.share(counts.reshape(-1, 2))
-    r = share_radius_pixels(radius, *sharp.shape[1:])
-    return ((_box_sum(chromatic, r) + SHARE_PRIOR_STEPS * whole)
-            / (_box_sum(sharp, r) + SHARE_PRIOR_STEPS)).astype(np.float32)
+    counts = ref.pixel_counts(log_image, DARK_OFFSET, tau, tau_chroma)
+    return ref.local_share(counts, share_radius_pixels(radius, *counts.shape[1:3]), SHARE_PRIOR_STEPS)
 
 
 def step_evidence(log_image: np.ndarray, tau: float, tau_chroma: float) -> np.ndarray:
