@@ -30,10 +30,9 @@ Inputs:
 from __future__ import annotations
 
 import argparse
-import importlib.util
+import importlib
 import os
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -41,27 +40,12 @@ from pathlib import Path
 
 import numpy as np
 
-from common import default_data_dir, middlebury_pairs
+from common import default_data_dir, load_revision, middlebury_pairs
 from ivkernels.backends import get_backend
 from ivkernels.kernels import launch
 from ivkernels.kernels.cases import median as median_cases
 
-ROOT = Path(__file__).resolve().parents[1]
 FUNCTIONS = ("weighted_median_flow", "weighted_median_shading")
-
-
-def load_revision(rev: str, backend: str, folder: Path):
-    """``ivkernels/kernels/<backend>/median.py`` of ``rev``, imported under a name of its own."""
-    text = subprocess.run(["git", "show", f"{rev}:ivkernels/kernels/{backend}/median.py"], cwd=ROOT,
-                          check=True, capture_output=True, text=True).stdout
-    name = f"median_{backend}_{rev.replace('/', '_').replace('~', '_').replace('^', '_')}"
-    path = folder / f"{name}.py"
-    path.write_text(text)
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
 
 
 def case_inputs(function: str, frames: int, size: tuple, smooth: bool, seed: int = 0) -> list:
@@ -134,7 +118,7 @@ def main(argv=None) -> int:
                 from ivkernels.kernels.taichi import init
                 init(args.threads)
             new = importlib.import_module(f"ivkernels.kernels.{backend}.median")
-            old = load_revision(args.rev, backend, Path(tmp))
+            old = load_revision(backend, "median", args.rev, Path(tmp))
             for function in functions:
                 raw = (middlebury_inputs(args.sequences) if args.inputs == "middlebury"
                        else case_inputs(function, args.frames, tuple(args.size), args.inputs == "smooth"))

@@ -27,8 +27,11 @@ from __future__ import annotations
 
 import ast
 import dataclasses
+import importlib.util
 import itertools
 import statistics
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -41,6 +44,26 @@ from ivkernels.flow import ClassicNLSettings
 from ivkernels.flowio import read_flo
 from ivkernels.io import read_image
 from ivkernels.kernels import launch
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def load_revision(backend: str, family: str, rev: str, into: Path):
+    """The module ``ivkernels/kernels/<backend>/<family>.py`` as of git revision ``rev``, imported
+    from a copy in the folder ``into`` under a name of its own, beside this checkout's module
+    (its imports resolve to this checkout's package)."""
+    rel = f"ivkernels/kernels/{backend}/{family}.py"
+    source = subprocess.run(["git", "show", f"{rev}:{rel}"], cwd=ROOT, check=True, capture_output=True,
+                            text=True).stdout
+    name = f"{backend}_{family}_at_{''.join(c if c.isalnum() else '_' for c in rev)}"
+    path = Path(into) / f"{name}.py"
+    path.write_text(source)
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
+
 
 #: Seed 0 of every synthetic kind is for reporting only; choices are made on other seeds.
 EVAL_SEED = 0

@@ -21,34 +21,16 @@ over the rounds, so nothing is compared here: the kernel tests do that.
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import inspect
 import pathlib
 import resource
 import statistics
-import subprocess
-import sys
 import tempfile
 import time
 
 import numpy as np
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-
-
-def load_revision(backend: str, family: str, rev: str, into: pathlib.Path):
-    """The module ``ivkernels/kernels/<backend>/<family>.py`` as of ``rev``, imported from a copy in ``into``."""
-    rel = f"ivkernels/kernels/{backend}/{family}.py"
-    source = subprocess.run(["git", "show", f"{rev}:{rel}"], cwd=ROOT, check=True, capture_output=True,
-                            text=True).stdout
-    name = f"{family}_at_{''.join(c if c.isalnum() else '_' for c in rev)}"
-    path = into / f"{name}.py"
-    path.write_text(source)
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
+from common import load_revision
 
 
 def cpu_seconds() -> float:
