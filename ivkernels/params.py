@@ -317,7 +317,8 @@ _RULES = {
     "shading_step_tau": Range(float, 0.0, low_open=True, why="a log step"),
     "shading_step_stability": Range(float, 0.0, why="a change of log contrast; 0: not looked at"),
     "shading_step_chroma": Range(float, 0.0, why="a change of log chromaticity; 0: chromaticity not looked at"),
-    "shading_step_static_flow": Range(float, 0.0, low_open=True, why="pixels of flow; above every flow, Weiss's cue is read everywhere"),
+    "shading_step_static_flow": Range(float, 0.0, low_open=True,
+                                      why="pixels of flow; above every flow, Weiss's cue is read everywhere"),
     "shading_step_share_radius": Range(float, 0.0, 1.0, why="a fraction of the frame's shorter side; "
                                        "0: the share of the whole video"),
     "shading_gate_chroma": Range(float, 0.0, why="a log-chromaticity change; 0: the gate ignores colour"),

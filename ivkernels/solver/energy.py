@@ -134,7 +134,8 @@ class WindowEnergy:
             multiply_step_gate(be, self.I, gate, params.shading_step_gain, params.shading_step_tau,
                                params.shading_step_chroma, flow=flow if self.temporal else None,
                                stability=params.shading_step_stability,
-                               static_flow=params.shading_step_static_flow, share_radius=params.shading_step_share_radius)
+                               static_flow=params.shading_step_static_flow,
+                               share_radius=params.shading_step_share_radius)
         return gate
 
     # ------------------------------------------------------------------ terms
