@@ -43,13 +43,14 @@ import numpy as np
 
 from ivkernels.kernels.reference import step_evidence as ref
 from ivkernels.kernels.reference.step_evidence import AXIS_NEIGHBOURS, DARK_OFFSET, HALF_NEIGHBOURS  # noqa: F401
+from ivkernels.params import Params
 
 __all__ = ["chromatic_share", "local_chromatic_share", "grey_step_gate", "multiply_step_gate", "share_radius_pixels",
            "step_evidence", "step_gate", "DARK_OFFSET", "SHARE_PRIOR_STEPS", "STATIC_FLOW"]
 
-#: Flow (pixels) below which a pixel counts as holding still for Weiss's cue
-#: (the default of ``Params.shading_step_static_flow``).
-STATIC_FLOW = 1.0
+#: Flow (pixels) below which a pixel counts as holding still for Weiss's cue:
+#: the default of ``Params.shading_step_static_flow``, read from there.
+STATIC_FLOW = Params.shading_step_static_flow
 
 
 #: Weight of the whole video's chromatic share in a window's (:func:`local_chromatic_share`),
