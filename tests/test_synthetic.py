@@ -368,7 +368,7 @@ STYLE_SIZE = (45, 61)      # odd sizes
 def styled():
     """One scene (static_moving_light, seed 3) in every palette and light."""
     return {(p, lt): render_sequence("static_moving_light", n_frames=3, size=STYLE_SIZE, seed=3, palette=p, light=lt)
-            for p in ("colour", "grey", "mixed") for lt in ("soft", "hard")}
+            for p in ("colour", "grey", "mixed", "ground") for lt in ("soft", "hard")}
 
 
 def test_the_defaults_are_the_colour_soft_scene_and_the_classic_catalogue_entries():
@@ -413,6 +413,23 @@ def test_mixed_palette_has_a_grey_checkerboard_floor_among_colours(styled):
     levels = np.unique(np.round(s.albedo[floor][:, 0], 6))
     assert len(levels) == 2 and levels[1] / levels[0] > 2.0      # two greys, a clear step
     assert ratio[~floor].max() > 1.5                              # coloured walls and objects
+
+
+def test_ground_palette_is_a_pale_path_across_a_dark_uniform_ground():
+    """Two flat grey materials on the floor, one dark (0.04-0.1) and one pale (0.45-0.8),
+    each a large region, split by long straight edges; the rest is the grey palette."""
+    for seed in (1, 2, 3):
+        s = render_sequence("turning_objects", n_frames=2, size=(60, 80), seed=seed, palette="ground")
+        floor = s.object_id[0] == 0
+        grey = s.albedo[0][floor]
+        assert _channel_ratio(grey).max() <= (1 + NEAR_GREY_TINT) / (1 - NEAR_GREY_TINT) + 1e-5
+        levels, counts = np.unique(np.round(grey[:, 0], 6), return_counts=True)
+        assert len(levels) <= 2 and 0.04 * 0.9 <= levels[0] <= 0.1 * 1.1
+        if len(levels) == 2:
+            assert 0.45 * 0.9 <= levels[1] <= 0.8 * 1.1
+        dark = counts[0] / counts.sum()
+        assert dark > 0.2                                            # a large dark region
+    assert render_kind("ground_turning_soft", n_frames=2, size=(20, 28), seed=1).options["palette"] == "ground"
 
 
 def test_hard_light_casts_shadows_with_no_direct_light(styled):

@@ -103,7 +103,8 @@ Sequence kinds (:data:`KINDS`)
 Options (:func:`render_sequence`), orthogonal to the motion: the palette
 (``colour``, ``grey``: achromatic and near-achromatic checkerboards, stripes,
 print and dark materials, ``mixed``: a grey checkerboard floor among coloured
-surfaces), the light (``soft`` lamps or ``hard`` point bulbs with little
+surfaces, ``ground``: the grey palette on a pale path across a dark, uniform
+ground), the light (``soft`` lamps or ``hard`` point bulbs with little
 ambient light), one light colour (folded into the albedo truth), and sensor
 noise and JPEG compression of the frames (truth unchanged).  The named
 evaluation kinds are :data:`SCENE_KINDS` (:func:`render_kind`); seed 0 of
@@ -129,13 +130,13 @@ KINDS = ("free_camera", "objects_camera", "static_moving_light", "rotating_shado
 MOTION_KINDS = KINDS + ("turning_objects", "camera_light", "fast_light", "two_lights_orbit")
 #: Motion kinds whose scene and camera stand still while the light moves (Weiss's setting).
 STATIC_SCENE_MOTIONS = ("static_moving_light", "fast_light")
-PALETTES = ("colour", "grey", "mixed")
+PALETTES = ("colour", "grey", "mixed", "ground")
 LIGHTS = ("soft", "hard")
 NOISE_KINDS = ("gaussian", "poisson")
 COMPRESSIONS = ("jpeg",)
 
 TEXTURE_KINDS = ("patches", "stripes", "noise", "uniform")
-GREY_TEXTURE_KINDS = ("checker", "glyphs")   # drawn only by the grey and mixed palettes
+GREY_TEXTURE_KINDS = ("checker", "glyphs", "path")   # drawn only by the grey, mixed and ground palettes
 HARD_AMBIENT = 0.01     # ambient term under a hard light (bounce light only)
 HARD_MARGIN = 0.15      # exposure headroom of a bulb (its peak is sharper than a lamp's, see _set_exposure)
 NEAR_GREY_TINT = 0.04   # largest relative channel deviation of a near-achromatic grey
@@ -307,6 +308,12 @@ class _Texture:
             while np.abs(np.log(c[0] / c[1])).max() < 0.8:   # a clear step (a factor 2.2 at least)
                 c = levels(2)
             self.colours = c
+        elif kind == "path":     # a pale paved band across a dark, uniform ground (a lawn, tarmac)
+            self.centre = rng.uniform(-0.8, 0.8)
+            self.half_width = rng.uniform(0.4, 0.9)
+            ground = _grey_levels(rng, 1, 0.04, 0.1)[0]
+            paving = rng.uniform(0.45, 0.8)
+            self.colours = np.array([paving, ground])[:, None] * tint
         elif kind == "glyphs":   # dark print on light paper: rows of 5x7 glyphs, word gaps
             self.char = rng.uniform(0.12, 0.2) * scale   # character width (scene units)
             self.offset = rng.uniform(0.0, 1.0, 2)
@@ -340,6 +347,9 @@ class _Texture:
             c = np.floor(p / self.cell + self.offset).astype(np.int64)
             out = self.colours[(c[:, 0] + c[:, 1] + c[:, 2]) & 1]
             return np.clip(out, ALBEDO_MIN, 1.0)
+        if self.kind == "path":
+            off_path = np.abs(p[:, 0] - self.centre) > self.half_width
+            return np.clip(self.colours[off_path.astype(np.int64)], ALBEDO_MIN, 1.0)
         if self.kind == "glyphs":
             u = p[:, 0] / self.char + self.offset[0]
             v = (p[:, 2] if self.planar else p[:, 1]) / (1.6 * self.char) + self.offset[1]
@@ -887,6 +897,9 @@ def _restyle(scene: _Scene, style: dict, rng) -> None:
     checkers on the objects, smooth grey noise on one, a dark material on
     another.  ``palette="mixed"``: a grey checkerboard floor and one dark grey
     object; the wall and the other objects keep their colours.
+    ``palette="ground"``: the grey palette's wall and objects on a floor of
+    large uniform regions, a pale paved band across a dark ground (a path
+    over a lawn): a long straight step between two flat grey materials.
     ``light="hard"``: every key lamp becomes a bare point bulb at its centre
     (isotropic, one shadow ray: hard cast shadows), the fills go, and the
     ambient term drops to ``HARD_AMBIENT``; the bulbs share the exposure in
@@ -894,13 +907,18 @@ def _restyle(scene: _Scene, style: dict, rng) -> None:
     """
     palette, light = style.get("palette", "colour"), style.get("light", "soft")
     floor, wall, objs = scene.objects[0], scene.objects[1], scene.objects[2:]
+    if palette == "ground":
+        floor.texture = _Texture("path", rng, 1.0, grey=True, planar=True)
+        for o in objs:
+            if o.texture.kind == "uniform":
+                o.texture = _Texture("uniform", rng, grey=True)
     if palette in ("grey", "mixed"):
         floor.texture = _Texture("checker" if palette == "mixed" or rng.uniform() < 0.7 else "stripes",
                                  rng, 2.4, grey=True, planar=True)
         dark = [o for o in objs if o.texture.kind == "uniform"]
         for o in dark:
             o.texture = _Texture("uniform", rng, grey=True)
-    if palette == "grey":
+    if palette in ("grey", "ground"):
         if rng.uniform() < 0.6:    # a printed wall (a poster, a notice board) or grey patches
             wall.texture = _Texture("glyphs", rng, 2.5, grey=True, planar=True)
         else:
@@ -1190,8 +1208,9 @@ def render_sequence(kind: str, n_frames: int = 8, size: tuple[int, int] = (240, 
         Seed of ``numpy.random.default_rng`` for the scene and motion.
     palette : ``"colour"`` (random RGB), ``"grey"`` (achromatic and
         near-achromatic: grey checkerboards, stripes, print, dark materials)
-        or ``"mixed"`` (a grey checkerboard floor and a dark grey object among
-        coloured surfaces).  The scene's geometry, motion and light positions
+        ``"mixed"`` (a grey checkerboard floor and a dark grey object among
+        coloured surfaces) or ``"ground"`` (the grey palette on a floor of a
+        pale path across a dark, uniform ground).  The scene's geometry, motion and light positions
         do not depend on it.
     light : ``"soft"`` (disc lamps, a fill and an ambient term) or ``"hard"``
         (bare point bulbs, hard cast shadows, ambient ``HARD_AMBIENT``).
@@ -1336,7 +1355,9 @@ class SceneKind:
 #: motions ``turning_objects`` (objects turning in place under a low static
 #: lamp), ``camera_light`` (a lamp on the moving camera), ``fast_light`` (a
 #: lamp orbiting 70-100 degrees a frame) and ``two_lights_orbit`` (two static
-#: lamps, the camera orbiting the objects).
+#: lamps, the camera orbiting the objects).  The ``ground`` kinds put a long
+#: straight step between two large flat grey materials on the floor (a pale
+#: path across a dark lawn), the case of street footage.
 SCENE_KINDS = {
     "free_camera": SceneKind("free_camera"),
     "objects_camera": SceneKind("objects_camera"),
@@ -1356,6 +1377,8 @@ SCENE_KINDS = {
                                         compression=("jpeg", 80)),
     "colour_turning_warm_light": SceneKind("turning_objects", light_colour="random"),
     "colour_fast_light_noisy": SceneKind("fast_light", noise=("poisson", 400.0), compression=("jpeg", 70)),
+    "ground_turning_soft": SceneKind("turning_objects", "ground"),
+    "ground_objects_soft": SceneKind("objects_camera", "ground"),
 }
 
 
