@@ -38,7 +38,7 @@ from ivkernels.evaluation import baselines, datasets, metrics, synthetic
 from ivkernels.backends.registry import get_backend
 from ivkernels.priors import load_albedo_prior
 from ivkernels.solver.energy import ConstrainedEnergy, WindowEnergy
-from ivkernels.solver.independent_shadings import independent_shadings, with_albedo_priors_divided
+from ivkernels.solver.independent_shadings import independent_shadings, window_params
 from ivkernels.solver.motion_maps import motion_maps
 from ivkernels.solver.window_solver import log_and_weight
 
@@ -47,12 +47,13 @@ TERMS = ConstrainedEnergy.TERMS
 
 def finest_energy(be, frames, flow, params, prior) -> WindowEnergy:
     """The finest level's :class:`WindowEnergy` of a one-window decomposition,
-    with the albedo priors divided by the window's independent shadings as the solve does."""
+    with the window's settings as the solve makes them (:func:`window_params`: the albedo
+    priors divided by its independent shadings, Weiss's cue only where its light changes)."""
     frames_be = be.asarray(frames)
     flow_be = be.asarray(flow)
     occlusion, boundary = motion_maps(be, frames_be, flow_be, params)
     n = independent_shadings(be, frames_be, flow_be, params.independent_shading_gain, params.log_floor)
-    params = with_albedo_priors_divided(params, n)
+    params = window_params(params, n)
     log_image, w_lum = log_and_weight(be, frames_be, params)
     return WindowEnergy(be, log_image, w_lum, flow_be, occlusion, boundary, params, prior)
 

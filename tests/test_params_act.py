@@ -40,6 +40,7 @@ MOVES = {
     "boundary_radius": (0, {}, "truth"),
     "lam_shading_local": (1.0, {}, "truth"),
     "shading_cut_threshold": (0.05, {}, "truth"),
+    "shading_step_stability_changing_light": (False, {}, "truth"),
     "shading_gate_tau": (0.2, {}, "truth"),
     "shading_gate_chroma": (0.05, {"shading_gate_tau": 0.2}, "truth"),
     "shading_step_gain": (0.0, {}, "truth"),
@@ -47,8 +48,8 @@ MOVES = {
     "shading_step_chroma": (0.0, {}, "truth"),
     "shading_step_share_radius": (0.0, {}, "truth"),
     # Weiss's cue is read where the scene holds still: a static scene under a moving light
-    "shading_step_stability": (0.0, {}, "truth:static_moving_light"),
-    "shading_step_static_flow": (0.01, {}, "truth:objects_camera"),
+    "shading_step_stability": (0.0, {"shading_step_stability_changing_light": False}, "truth:static_moving_light"),
+    "shading_step_static_flow": (0.01, {"shading_step_stability_changing_light": False}, "truth:objects_camera"),
     "lam_shading_nonlocal": (10.0, {}, "truth"),
     "lam_coupling": (1000.0, {}, "truth"),
     "sigma_s": (1.0, {}, "truth"),

@@ -150,9 +150,22 @@ def independent_shadings(be, frames_linear, flow, gain: float, log_floor: float,
     return count_from_ratios(ratios, gain, T if n_frames is None else int(n_frames))
 
 
-def with_albedo_priors_divided(params, n: float):
-    """``params`` with both albedo priors (Eq. 11, 12) divided by ``n`` (unchanged at 1)."""
-    if n == 1.0:
+def window_params(params, n: float):
+    """``params`` for a window of ``n`` independent shadings.
+
+    Both albedo priors (Eq. 11, 12) are divided by ``n``; and with
+    ``Params.shading_step_stability_changing_light``, a window with no new
+    shading (``n = 1``) does not read Weiss's cue (``shading_step_stability``
+    0): with no light change to read, the cue would take a step whose
+    contrast the flow's errors or a moving shadow change for light.
+    Unchanged at ``n = 1`` with the switch off.
+    """
+    if n == 1.0 and not params.shading_step_stability_changing_light:
         return params
-    return params.replace(lam_albedo_smooth=params.lam_albedo_smooth / n,
-                          lam_albedo_sparsity=params.lam_albedo_sparsity / n)
+    changes = {}
+    if n != 1.0:
+        changes.update(lam_albedo_smooth=params.lam_albedo_smooth / n,
+                       lam_albedo_sparsity=params.lam_albedo_sparsity / n)
+    if params.shading_step_stability_changing_light and n <= 1.0:
+        changes.update(shading_step_stability=0.0)
+    return params.replace(**changes) if changes else params

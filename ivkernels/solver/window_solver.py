@@ -19,7 +19,7 @@ import numpy as np
 from ivkernels.params import Params
 from ivkernels.solver.coarse_basis import CoarseBasisProblem, coarse_spacings
 from ivkernels.solver.energy import ConstrainedEnergy, WindowEnergy
-from ivkernels.solver.independent_shadings import independent_shadings, with_albedo_priors_divided
+from ivkernels.solver.independent_shadings import independent_shadings, window_params
 from ivkernels.solver.lbfgs import LBFGS
 from ivkernels.solver.motion_maps import resample_mask
 from ivkernels.solver.pyramid import (coarse_to_fine, image_pyramid, level_shapes, resize,
@@ -130,8 +130,9 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
                                       params.log_floor,
                                       n_frames=T if carried is None else max(T, int(params.window)))
     log.shadings.append((window_index, n_shadings))
-    # One albedo, n independent shadings: the albedo priors count once per scene point.
-    params = with_albedo_priors_divided(params, n_shadings)
+    # One albedo, n independent shadings: the albedo priors count once per scene point,
+    # and Weiss's cue is read only where the light changes (n > 1).
+    params = window_params(params, n_shadings)
 
     def make_energy(level, shape):
         t = time.perf_counter()
