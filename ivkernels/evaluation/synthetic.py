@@ -1207,11 +1207,11 @@ def render_sequence(kind: str, n_frames: int = 8, size: tuple[int, int] = (240, 
     seed : int
         Seed of ``numpy.random.default_rng`` for the scene and motion.
     palette : ``"colour"`` (random RGB), ``"grey"`` (achromatic and
-        near-achromatic: grey checkerboards, stripes, print, dark materials)
+        near-achromatic: grey checkerboards, stripes, print, dark materials),
         ``"mixed"`` (a grey checkerboard floor and a dark grey object among
         coloured surfaces) or ``"ground"`` (the grey palette on a floor of a
-        pale path across a dark, uniform ground).  The scene's geometry, motion and light positions
-        do not depend on it.
+        pale path across a dark, uniform ground).  The scene's geometry,
+        motion and light positions do not depend on it.
     light : ``"soft"`` (disc lamps, a fill and an ambient term) or ``"hard"``
         (bare point bulbs, hard cast shadows, ambient ``HARD_AMBIENT``).
     light_colour : None (white), ``"random"`` or a triple: one colour for every
