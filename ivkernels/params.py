@@ -136,7 +136,9 @@ class Params:
         the cue read everywhere (ground_turning_soft, a still lamp over a
         dark lawn); every held-out kind chooses it, the MIT objects are
         unchanged, grey_rotating_hard and grey_turning_hard lose (0.60 ->
-        0.95, 0.60 -> 0.71).
+        0.95, 0.60 -> 0.71).  Chosen at the default solver budget; run to
+        convergence, the ground kind it helps loses instead (one sequence
+        checked).
     shading_gate_chroma
         With the gate on and this > 0, a contrast change where the input's
         log chromaticity changes by about this much is not taken for a
