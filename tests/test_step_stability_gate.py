@@ -9,7 +9,7 @@ import numpy as np
 
 import ivkernels as iv
 from ivkernels.backends import get_backend
-from ivkernels.solver.independent_shadings import independent_shadings
+from ivkernels.solver.independent_shadings import independent_shadings, window_params
 
 #: Small and fast: one window of four frames at 36x44, two pyramid levels.
 FAST = dict(pyramid_min_size=18, lbfgs_iterations=10, lbfgs_iterations_coarse=20)
@@ -64,7 +64,6 @@ def test_a_changing_light_keeps_weiss_cue():
 
 
 def test_window_params_divide_the_priors_and_drop_the_cue_only_at_one_shading():
-    from ivkernels.solver.independent_shadings import window_params
     p = iv.Params()
     one = window_params(p, 1.0)
     assert one.shading_step_stability == 0.0 and one.lam_albedo_smooth == p.lam_albedo_smooth

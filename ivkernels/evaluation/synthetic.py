@@ -907,14 +907,12 @@ def _restyle(scene: _Scene, style: dict, rng) -> None:
     """
     palette, light = style.get("palette", "colour"), style.get("light", "soft")
     floor, wall, objs = scene.objects[0], scene.objects[1], scene.objects[2:]
-    if palette == "ground":
-        floor.texture = _Texture("path", rng, 1.0, grey=True, planar=True)
-        for o in objs:
-            if o.texture.kind == "uniform":
-                o.texture = _Texture("uniform", rng, grey=True)
-    if palette in ("grey", "mixed"):
-        floor.texture = _Texture("checker" if palette == "mixed" or rng.uniform() < 0.7 else "stripes",
-                                 rng, 2.4, grey=True, planar=True)
+    if palette in ("grey", "mixed", "ground"):
+        if palette == "ground":
+            floor.texture = _Texture("path", rng, 1.0, grey=True, planar=True)
+        else:
+            floor.texture = _Texture("checker" if palette == "mixed" or rng.uniform() < 0.7 else "stripes",
+                                     rng, 2.4, grey=True, planar=True)
         dark = [o for o in objs if o.texture.kind == "uniform"]
         for o in dark:
             o.texture = _Texture("uniform", rng, grey=True)

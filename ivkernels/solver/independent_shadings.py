@@ -160,8 +160,6 @@ def window_params(params, n: float):
     contrast the flow's errors or a moving shadow change for light.
     Unchanged at ``n = 1`` with the switch off.
     """
-    if n == 1.0 and not params.shading_step_stability_changing_light:
-        return params
     changes = {}
     if n != 1.0:
         changes.update(lam_albedo_smooth=params.lam_albedo_smooth / n,
