@@ -39,7 +39,7 @@ from ivkernels.backends.registry import get_backend
 from ivkernels.priors import load_albedo_prior
 from ivkernels.solver.energy import ConstrainedEnergy, WindowEnergy
 from ivkernels.solver.independent_shadings import independent_shadings, window_params
-from ivkernels.solver.motion_maps import motion_maps
+from ivkernels.solver.motion_maps import motion_maps, window_occlusion
 from ivkernels.solver.window_solver import log_and_weight
 
 TERMS = ConstrainedEnergy.TERMS
@@ -48,12 +48,14 @@ TERMS = ConstrainedEnergy.TERMS
 def finest_energy(be, frames, flow, params, prior) -> WindowEnergy:
     """The finest level's :class:`WindowEnergy` of a one-window decomposition,
     with the window's settings as the solve makes them (:func:`window_params`: the albedo
-    priors divided by its independent shadings, Weiss's cue only where its light changes)."""
+    priors divided by its independent shadings, Weiss's cue only where its light changes, the
+    brightness test of :func:`window_occlusion` where it does not)."""
     frames_be = be.asarray(frames)
     flow_be = be.asarray(flow)
     occlusion, boundary = motion_maps(be, frames_be, flow_be, params)
     n = independent_shadings(be, frames_be, flow_be, params.independent_shading_gain, params.log_floor)
     params = window_params(params, n)
+    occlusion = window_occlusion(be, frames_be, flow_be, occlusion, params, n)
     log_image, w_lum = log_and_weight(be, frames_be, params)
     return WindowEnergy(be, log_image, w_lum, flow_be, occlusion, boundary, params, prior)
 

@@ -155,6 +155,63 @@ def test_chroma_consistency_bad_input(kernel_backend):
                                                occ, 0.1)
 
 
+# ------------------------------------------------ brightness along the flow near flow jumps
+def luminance_check(be, log_image, flow, near, offsets, occ, max_change):
+    out = be.asarray(occ.copy())
+    be.maps.luminance_consistency(be.asarray(log_image), be.asarray(flow), be.asarray(near),
+                                  be.asarray(np.asarray(offsets, np.float32)), out, max_change)
+    return be.numpy(out).copy()
+
+
+def test_luminance_consistency_hand_cases(kernel_backend):
+    """A grey scene under a global exposure change keeps w_occ; a flow from a dark grey
+    surface onto a light grey one clears it where ``near`` is set, and only there."""
+    t, h, w = 2, 9, 12
+    img = np.empty((t, h, w, 3), np.float32)
+    img[:, :, :6] = np.log(0.05)                              # dark grey
+    img[:, :, 6:] = np.log(0.6)                               # light grey
+    img[1] += 0.3                                             # the exposure rises by 0.3 log units
+    occ = np.ones((t - 1, h, w), np.float32)
+    occ[0, 0, 0] = 0.0
+    near = np.ones((t - 1, h, w), np.float32)
+    still = np.zeros((t - 1, h, w, 2), np.float32)
+    np.testing.assert_array_equal(luminance_check(kernel_backend, img, still, near, [0.3], occ, 0.1), occ)
+    assert not luminance_check(kernel_backend, img, still, near, [0.0], occ, 0.1).any()   # no offset: all change
+    right = np.zeros((t - 1, h, w, 2), np.float32)
+    right[..., 0] = 3.0
+    got = luminance_check(kernel_backend, img, right, near, [0.3], occ, 0.1)
+    assert not got[:, :, 3:6].any()                           # dark at x lands on light at x + 3
+    np.testing.assert_array_equal(got[:, :, :3], occ[:, :, :3])
+    np.testing.assert_array_equal(got[:, :, 6:], occ[:, :, 6:])   # light stays light (clamped border)
+    far = near.copy()
+    far[:, :, 3:5] = 0.0                                      # not near a flow jump: not tested
+    got = luminance_check(kernel_backend, img, right, far, [0.3], occ, 0.1)
+    np.testing.assert_array_equal(got[:, :, 3:5], occ[:, :, 3:5])
+    assert not got[:, :, 5].any()
+    half = np.zeros((t - 1, h, w, 2), np.float32)
+    half[..., 0] = 0.25                                       # x = 5.25: a quarter of the way into light
+    D, _ = ref.log_change(img, half)
+    change = abs(D[0, 0, 5] - 0.3)
+    assert 0.1 < change < 1.0
+    assert luminance_check(kernel_backend, img, half, near, [0.3], occ, change * 1.01)[0, 0, 5] == 1.0
+    assert luminance_check(kernel_backend, img, half, near, [0.3], occ, change * 0.99)[0, 0, 5] == 0.0
+
+
+def test_luminance_consistency_bad_input(kernel_backend):
+    be = kernel_backend
+    img = be.asarray(np.zeros((2, 4, 4, 3), np.float32))
+    flow = be.asarray(np.zeros((1, 4, 4, 2), np.float32))
+    near = be.asarray(np.ones((1, 4, 4), np.float32))
+    offsets = be.asarray(np.zeros(1, np.float32))
+    occ = be.asarray(np.zeros((1, 4, 4), np.float32))
+    with pytest.raises(ValueError, match="occ must have shape"):
+        be.maps.luminance_consistency(img, flow, near, offsets, be.asarray(np.zeros((2, 4, 4), np.float32)), 0.1)
+    with pytest.raises(ValueError, match="offsets"):
+        be.maps.luminance_consistency(img, flow, near, be.asarray(np.zeros(2, np.float32)), occ, 0.1)
+    with pytest.raises(ValueError, match="max_change"):
+        be.maps.luminance_consistency(img, flow, near, offsets, occ, 0.0)
+
+
 def test_motion_boundary_workspace_reused_across_shapes(kernel_backend, rng):
     mags = [rng.random(shape, dtype=np.float32) ** 8 for shape in ((T, H, W), (1, 9, 11))]
     ws = Workspace()

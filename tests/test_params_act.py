@@ -36,6 +36,8 @@ MOVES = {
     "occlusion_threshold": (0.99, {}, "truth"),
     "warp_spread_max": (0.001, {}, "truth"),
     "chroma_change_max": (0.01, {}, "truth"),
+    "luminance_change_max": (0.01, {}, "truth"),
+    "luminance_change_radius": (1, {}, "truth"),
     "boundary_threshold": (0.01, {}, "truth"),
     "boundary_radius": (0, {}, "truth"),
     "lam_shading_local": (1.0, {}, "truth"),

@@ -109,3 +109,56 @@ def shading_cut_gate(be, flow, threshold: float, n_frames: int):
     touched[:-1] |= cut         # the pair t -> t+1 starts on frame t
     touched[1:] |= cut          # ... and ends on frame t+1
     return be.asarray((~touched).astype(np.float32))
+
+
+def brightness_consistency(be, frames_linear, flow, occlusion, params: Params):
+    """``occlusion`` with the brightness test of a window whose light holds still.
+
+    Under a still light a surface keeps its brightness along the flow, up to
+    a global change of exposure; near a flow jump, where parallax hides and
+    uncovers surfaces, a pixel whose brightness changes is not the same
+    surface in the two frames (``maps.luminance_consistency``).  Used only
+    for a window of one independent shading (``Params.luminance_change_max``;
+    :mod:`ivkernels.solver.independent_shadings`): where the light moves,
+    brightness changes on every surface.
+
+    Parameters
+    ----------
+    be : backend.
+    frames_linear : (T, H, W, 3) backend array, linear RGB in [0, 1].
+    flow : (T-1, H, W, 2) backend array, forward flow in pixels.
+    occlusion : (T-1, H, W) backend array, w_occ of :func:`motion_maps`; not changed.
+    params : ``luminance_change_max`` (> 0), ``luminance_change_radius``,
+        ``boundary_threshold``, ``log_floor``.
+
+    Returns
+    -------
+    (T-1, H, W) backend array, a new w_occ: 0 where ``occlusion`` is 0 or the test fails.
+    """
+    T, H, W, _ = frames_linear.shape
+    n = T - 1
+    log_image = be.empty((T, H, W, 3))
+    be.colour.log_floor(frames_linear, log_image, params.log_floor)
+    # Each pair's global change of the mean log: its median over the pixels that stay in the image.
+    warped, inside = be.empty((n, H, W, 3)), be.empty((n, H, W))
+    be.sampling.warp_bilinear(log_image[1:], flow, warped, inside)
+    change = (be.numpy(warped) - be.numpy(log_image)[:-1]).mean(axis=3)
+    valid = be.numpy(inside) > 0.5
+    offsets = np.array([np.median(change[t][valid[t]]) if valid[t].any() else 0.0 for t in range(n)],
+                       np.float32)
+    sobel, near = be.empty((n, H, W)), be.empty((n, H, W))
+    be.derivatives.flow_sobel_magnitude(flow, sobel)
+    be.maps.motion_boundary(sobel, near, params.boundary_threshold, int(params.luminance_change_radius))
+    out = be.empty((n, H, W))
+    be.vecops.copy(occlusion.reshape((n * H * W,)), out.reshape((n * H * W,)))
+    be.maps.luminance_consistency(log_image, flow, near, be.asarray(offsets), out, params.luminance_change_max)
+    return out
+
+
+def window_occlusion(be, frames_linear, flow, occlusion, params: Params, n_shadings: float):
+    """The w_occ a window's temporal terms use: ``occlusion``, with :func:`brightness_consistency`
+    where the window holds one independent shading (``n_shadings <= 1``) and
+    ``Params.luminance_change_max`` > 0."""
+    if flow is None or occlusion is None or n_shadings > 1.0 or params.luminance_change_max <= 0.0:
+        return occlusion
+    return brightness_consistency(be, frames_linear, flow, occlusion, params)

@@ -21,7 +21,7 @@ from ivkernels.solver.coarse_basis import CoarseBasisProblem, coarse_spacings
 from ivkernels.solver.energy import ConstrainedEnergy, WindowEnergy
 from ivkernels.solver.independent_shadings import independent_shadings, window_params
 from ivkernels.solver.lbfgs import LBFGS
-from ivkernels.solver.motion_maps import resample_mask
+from ivkernels.solver.motion_maps import resample_mask, window_occlusion
 from ivkernels.solver.pyramid import (coarse_to_fine, image_pyramid, level_shapes, resize,
                                       resize_flow)
 
@@ -133,6 +133,8 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
     # One albedo, n independent shadings: the albedo priors count once per scene point,
     # and Weiss's cue is read only where the light changes (n > 1).
     params = window_params(params, n_shadings)
+    # Under a still light, brightness along the flow also tells where it joins two surfaces.
+    occlusion = window_occlusion(be, frames_linear, flow, occlusion, params, n_shadings)
 
     def make_energy(level, shape):
         t = time.perf_counter()

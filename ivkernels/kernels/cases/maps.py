@@ -82,6 +82,32 @@ def _chroma(max_change, static):
                 updates=("occ",), tol=EXACT, ignore=tied)
 
 
+def _luminance(max_change, static):
+    def make(rng, T, H, W):
+        img = normal(rng, (1, H, W, 1), -1.0, 0.3) + normal(rng, (T, 1, 1, 1), 0.0, 0.2)  # still, exposure changes
+        img = np.repeat(img, 3, axis=3)
+        img[1:, H // 3: H // 2 + 1, W // 3:] += normal(rng, (pairs(T), H // 2 + 1 - H // 3, W - W // 3, 1), 0.0, 0.5)
+        f = np.zeros((pairs(T), H, W, 2), F32) if static else flow(rng, pairs(T), H, W)
+        return {"log_image": img.astype(F32), "flow": f, "near": mask(rng, (pairs(T), H, W), 0.7),
+                "offsets": normal(rng, (pairs(T),), 0.0, 0.2), "occ": mask(rng, (pairs(T), H, W), 0.8),
+                "max_change": max_change}
+
+    def reference(v):
+        return {"occ": ref.luminance_consistency(v["log_image"], v["flow"], v["near"], v["offsets"], v["occ"],
+                                                 v["max_change"])}
+
+    def tied(v):
+        """Changes within float32 rounding of ``max_change``."""
+        D, _ = ref.log_change(v["log_image"], v["flow"])
+        return {"occ": np.abs(np.abs(D - np.asarray(v["offsets"], np.float64)[:, None, None])
+                              - v["max_change"]) <= 1e-4}
+
+    return Case("maps", "luminance_consistency", make,
+                ("log_image", "flow", "near", "offsets", "occ", "max_change"), ("occ",), reference,
+                variant=f"max_change={max_change:g},{'static' if static else 'moving'}",
+                updates=("occ",), tol=EXACT, ignore=tied)
+
+
 def _boundary(radius):
     def make(rng, T, H, W):
         P = pairs(T)
@@ -115,6 +141,8 @@ CASES = (
     _reliability(0.3),
     _chroma(0.3, False),
     _chroma(0.05, True),
+    _luminance(0.2, False),
+    _luminance(0.05, True),
     _boundary(0),
     _boundary(1),
     _boundary(3),

@@ -28,6 +28,11 @@ FAMILY.declare("warp_reliability(log_image, flow, occ, max_spread)",
 FAMILY.declare("chroma_consistency(log_image, flow, occ, max_change)",
                "Clear occ where the log chromaticity of log_image changes along flow; ``max_change > 0``.",
                log_image="T H W 3", flow="T-1 H W 2", occ=Out("T-1 H W"), max_change=Positive)
+FAMILY.declare("luminance_consistency(log_image, flow, near, offsets, occ, max_change)",
+               "Clear occ where near is set and the mean log of log_image changes along flow by max_change "
+               "or more beyond the pair's offset; ``max_change > 0``.",
+               log_image="T H W 3", flow="T-1 H W 2", near="T-1 H W", offsets="T-1", occ=Out("T-1 H W"),
+               max_change=Positive)
 FAMILY.declare("shading_gate(log_image, flow, gate, tau, tau_chroma=0.0)",
                "Gate of Eq. 9's local term from the input's log change along the flow; ``tau > 0``.",
                log_image="T H W 3", flow="T-1 H W 2", gate=Out("T H W"), tau=Positive, tau_chroma=NonNegative,
@@ -89,6 +94,15 @@ def chroma_change(log_image, flow) -> np.ndarray:
 def chroma_consistency(log_image, flow, occ, max_change: float) -> np.ndarray:
     """``occ`` with 0 where :func:`chroma_change` reaches ``max_change``."""
     return np.where(chroma_change(log_image, flow) >= max_change, 0.0, np.asarray(occ, np.float64))
+
+
+def luminance_consistency(log_image, flow, near, offsets, occ, max_change: float) -> np.ndarray:
+    """``occ`` with 0 where ``near >= 0.5`` and ``|D - offsets[t]| >= max_change``, ``D`` of
+    :func:`log_change` (the change of the mean log along the flow)."""
+    D, _ = log_change(log_image, flow)
+    change = np.abs(D - np.asarray(offsets, np.float64)[:, None, None])
+    clear = (np.asarray(near) >= 0.5) & (change >= max_change)
+    return np.where(clear, 0.0, np.asarray(occ, np.float64))
 
 
 def motion_boundary(sobel_mag, threshold: float, radius: int) -> np.ndarray:

@@ -17,6 +17,7 @@ from ivkernels.kernels.workspace import scratch_buffer
 
 host = implements(FAMILY, FRONT)
 
+nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
 
@@ -129,6 +130,19 @@ def log_change_at(img: ti.template(), flow: ti.template(), p, y, x):
     for c in ti.static(range(3)):
         d += bilinear_at(img, p + 1, c, x0, x1, fx, y0, y1, fy) - img[p, y, x, c]
     return d / 3.0, inside_image(px, py, height, width)
+
+
+@ti.kernel
+def luminance_consistency_rows(img: nd4, flow: nd4, near: nd3, offsets: nd1, occ: nd3, max_change: ti.f32):
+    height = flow.shape[1]
+    for r in range(flow.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for x in range(flow.shape[2]):
+            if near[t, y, x] >= 0.5:
+                d, inside = log_change_at(img, flow, t, y, x)
+                if ti.abs(d - offsets[t]) >= max_change:
+                    occ[t, y, x] = 0.0
 
 
 @ti.func
@@ -262,6 +276,14 @@ def chroma_consistency(log_image, flow, occ, max_change: float) -> None:
     """Clear ``occ`` where the log chromaticity changes along the flow; see
     :func:`ivkernels.kernels.warp.maps.chroma_consistency`."""
     _clear_occlusion_where(chroma_consistency_rows, log_image, flow, occ, max_change)
+
+
+@host("luminance_consistency")
+def luminance_consistency(log_image, flow, near, offsets, occ, max_change: float) -> None:
+    """Clear ``occ`` where the brightness changes along the flow near a flow jump; see
+    :func:`ivkernels.kernels.warp.maps.luminance_consistency`."""
+    if occ.size:
+        luminance_consistency_rows(log_image, flow, near, offsets, occ, max_change)
 
 
 @host("shading_gate")

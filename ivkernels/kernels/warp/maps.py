@@ -163,6 +163,21 @@ def log_change_at(img: wp.array4d(dtype=float), flow: wp.array4d(dtype=float), p
     return d / 3.0, inside_image(px, py, height, width)
 
 
+@wp.kernel
+def luminance_consistency_rows(row_begin: int, img: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
+                               near: wp.array3d(dtype=float), offsets: wp.array1d(dtype=float),
+                               occ: wp.array3d(dtype=float), max_change: float):
+    r = row_begin + wp.tid()
+    height = flow.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(flow.shape[2]):
+        if near[t, y, x] >= 0.5:
+            d, inside = log_change_at(img, flow, t, y, x)
+            if wp.abs(d - offsets[t]) >= max_change:
+                occ[t, y, x] = 0.0
+
+
 @wp.func
 def chroma_distance(img: wp.array4d(dtype=float), t: int, y: int, x: int, yy: int, xx: int):
     """``|C(x) - C(y)|`` (Euclidean), ``C`` the log chromaticity (log image minus its channel mean)."""
@@ -356,6 +371,33 @@ def chroma_consistency(log_image, flow, occ, max_change: float) -> None:
     max_change : change of log chromaticity from which the pixels differ, > 0.
     """
     _clear_occlusion_where(chroma_consistency_rows, log_image, flow, occ, max_change)
+
+
+@host("luminance_consistency")
+def luminance_consistency(log_image, flow, near, offsets, occ, max_change: float) -> None:
+    """Clear ``occ`` where a surface's brightness changes along the flow near a flow jump.
+
+    Where the light holds still, a surface keeps its brightness from frame to
+    frame: ``L_{t+1}(x + u) = L_t(x)`` up to the pair's global change of
+    exposure, ``L`` the mean over channels of the log image.  Near a motion
+    boundary, where parallax hides and uncovers surfaces, a pixel whose
+    ``|L_{t+1}(x + u) - L_t(x) - offsets[t]|`` reaches ``max_change`` is
+    not the same surface in the two frames; ``occ`` is set to 0 there.  The
+    chromaticity test (:func:`chroma_consistency`) misses such a pixel when
+    both surfaces are grey.
+
+    Parameters
+    ----------
+    log_image : wp.array float32 (T, H, W, 3), log input image.
+    flow : wp.array float32 (T-1, H, W, 2), forward flow in pixels.
+    near : wp.array float32 (T-1, H, W), 1 where the test applies (0/1).
+    offsets : wp.array float32 (T-1,), each pair's global change of the mean log.
+    occ : wp.array float32 (T-1, H, W), ``w_occ``, updated in place.
+    max_change : change of log brightness from which the pixels differ, > 0.
+    """
+    t, h, w, _ = log_image.shape
+    launch_rows(luminance_consistency_rows, (t - 1) * h, [log_image, flow, near, offsets, occ, float(max_change)],
+                device=log_image.device)
 
 
 @host("shading_gate")
