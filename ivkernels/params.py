@@ -76,7 +76,7 @@ class Params:
         ``shading_step_share_radius`` at 0.1 the worst training kind is
         the noisy grey free camera, 0.968 without the test and 1.002 with
         it, so the worst-kind rule would switch it off; it is kept on for
-        the grey orbit, lawn and turning kinds (13-17% each; perf/RESULTS.md,
+        the grey orbit, lawn and turning kinds (15%, 17%, 5%; perf/RESULTS.md,
         "The brightness test checked again with the share at 0.1").
     boundary_threshold, boundary_radius
         w_bnd (Sec. 3.3): flow Sobel magnitude (pixels / pixel) above the
