@@ -257,11 +257,12 @@ def occlusion_binary(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: fl
         occlusion_binary_rows(lab, flow, div_neg, out, sigma_e, sigma_d, float(threshold))
 
 
-def _clear_occlusion_where(kernel, log_image, flow, occ, threshold: float) -> None:
+def _clear_occlusion_where(kernel, log_image, flow, occ, threshold: float, inputs=()) -> None:
     """Run ``kernel``, a test that clears ``occ`` from ``log_image`` sampled along ``flow``,
-    with the positive ``threshold`` (see the Warp module)."""
+    with the positive ``threshold``; further ``inputs`` come between ``flow`` and ``occ``
+    (see the Warp module)."""
     if occ.size:
-        kernel(log_image, flow, occ, threshold)
+        kernel(log_image, flow, *inputs, occ, threshold)
 
 
 @host("warp_reliability")
@@ -282,8 +283,7 @@ def chroma_consistency(log_image, flow, occ, max_change: float) -> None:
 def luminance_consistency(log_image, flow, near, offsets, occ, max_change: float) -> None:
     """Clear ``occ`` where the brightness changes along the flow near a flow jump; see
     :func:`ivkernels.kernels.warp.maps.luminance_consistency`."""
-    if occ.size:
-        luminance_consistency_rows(log_image, flow, near, offsets, occ, max_change)
+    _clear_occlusion_where(luminance_consistency_rows, log_image, flow, occ, max_change, (near, offsets))
 
 
 @host("shading_gate")

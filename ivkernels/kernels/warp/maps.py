@@ -316,12 +316,13 @@ def occlusion_binary(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: fl
                 [lab, flow, div_neg, out, sigma_e, sigma_d, float(threshold)], device=lab.device)
 
 
-def _clear_occlusion_where(kernel, log_image, flow, occ, threshold: float) -> None:
+def _clear_occlusion_where(kernel, log_image, flow, occ, threshold: float, inputs=()) -> None:
     """Launch ``kernel``, a test that clears ``occ`` (T-1, H, W) from ``log_image``
-    (T, H, W, 3) sampled along ``flow`` (T-1, H, W, 2), with the positive ``threshold``."""
+    (T, H, W, 3) sampled along ``flow`` (T-1, H, W, 2), with the positive ``threshold``;
+    the kernel's further ``inputs`` come between ``flow`` and ``occ``."""
     t, h, w, _ = log_image.shape
     dev = log_image.device
-    launch_rows(kernel, (t - 1) * h, [log_image, flow, occ, threshold], device=dev)
+    launch_rows(kernel, (t - 1) * h, [log_image, flow, *inputs, occ, float(threshold)], device=dev)
 
 
 @host("warp_reliability")
@@ -395,9 +396,7 @@ def luminance_consistency(log_image, flow, near, offsets, occ, max_change: float
     occ : wp.array float32 (T-1, H, W), ``w_occ``, updated in place.
     max_change : change of log brightness from which the pixels differ, > 0.
     """
-    t, h, w, _ = log_image.shape
-    launch_rows(luminance_consistency_rows, (t - 1) * h, [log_image, flow, near, offsets, occ, float(max_change)],
-                device=log_image.device)
+    _clear_occlusion_where(luminance_consistency_rows, log_image, flow, occ, max_change, (near, offsets))
 
 
 @host("shading_gate")
