@@ -135,8 +135,55 @@ def _timed(fn) -> float:
     return time.perf_counter() - t0
 
 
-def measure_roof(threads: int) -> dict:
-    """STREAM-like triad bandwidth, FMA peaks and launch costs on this machine."""
+@wp.kernel
+def _triad_flat(a: wp.array(dtype=wp.float32), b: wp.array(dtype=wp.float32),
+                c: wp.array(dtype=wp.float32), s: float):
+    i = wp.tid()
+    a[i] = b[i] + s * c[i]
+
+
+def measure_roof_cuda(device: str) -> dict:
+    """The same roof on a CUDA device: a one-element-per-thread triad (coalesced), FMA
+    chains on 2^20 threads, the host cost of one empty launch (no wait), and one
+    launch followed by a wait (a round trip, as a ``.numpy()`` after a launch costs)."""
+    n = 1 << 26                                    # 64 Mi floats, 256 MiB per array
+    a = wp.zeros(n, dtype=wp.float32, device=device)
+    b = wp.ones(n, dtype=wp.float32, device=device)
+    c = wp.ones(n, dtype=wp.float32, device=device)
+
+    def synced(fn):
+        def inner():
+            fn()
+            wp.synchronize_device(device)
+        return inner
+    t = _best(synced(lambda: wp.launch(_triad_flat, dim=n, inputs=[a, b, c, 2.0], device=device)), 5)
+    stream = 12.0 * n / t
+    n_iter, frows = 2000, 1 << 20
+    out = wp.zeros(frows, dtype=wp.float32, device=device)
+    t = _best(synced(lambda: wp.launch(_fma_chains, dim=frows, inputs=[0, out, n_iter], device=device)), 3)
+    fma_peak = 2.0 * 8 * n_iter * frows / t
+    small = [wp.zeros(4, dtype=wp.float32, device=device) for _ in range(8)]
+    reps = 2000
+    synced(lambda: wp.launch(_empty8, dim=1, inputs=[0, *small, 1.0], device=device))()
+    t0 = time.perf_counter()
+    for _ in range(reps):
+        wp.launch(_empty8, dim=1, inputs=[0, *small, 1.0], device=device)
+    launch_s = (time.perf_counter() - t0) / reps
+    wp.synchronize_device(device)
+    t0 = time.perf_counter()
+    for _ in range(reps // 4):
+        wp.launch(_empty8, dim=1, inputs=[0, *small, 1.0], device=device)
+        wp.synchronize_device(device)
+    round_trip = (time.perf_counter() - t0) / (reps // 4)
+    return {"stream_Bps": stream, "fma_flops": fma_peak, "blas_flops": 0.0,
+            "launch_s": launch_s, "split_launch_s": round_trip, "threads": 1, "device": device}
+
+
+def measure_roof(threads: int, device: str = "cpu") -> dict:
+    """STREAM-like triad bandwidth, FMA peaks and launch costs on this machine
+    (on a CUDA ``device``: :func:`measure_roof_cuda`)."""
+    if device != "cpu":
+        return measure_roof_cuda(device)
     width, rows = 4096, 4096                      # 16 Mi floats, 64 MiB per array
     n = width * rows
     a = wp.zeros(n, dtype=wp.float32, device="cpu")
@@ -165,7 +212,7 @@ def measure_roof(threads: int) -> dict:
         launch_rows(_empty8, 480, [*big, 1.0])
     split_s = (time.perf_counter() - t0) / (reps // 4)
     return {"stream_Bps": stream, "fma_flops": fma_peak, "blas_flops": blas_peak,
-            "launch_s": launch_s, "split_launch_s": split_s, "threads": threads}
+            "launch_s": launch_s, "split_launch_s": split_s, "threads": threads, "device": "cpu"}
 
 
 # --------------------------------------------------------------- instrumentation
@@ -198,7 +245,9 @@ class Recorder:
 
     STAGES = ("flow pass 1", "guide solve", "flow pass 2+", "maps", "full solve", "other")
 
-    def __init__(self):
+    def __init__(self, device: str = "cpu"):
+        #: a CUDA device to wait on around every timed call (launches there return at once)
+        self.sync_device = None if device == "cpu" else device
         self.stack: list[str] = []
         self.stage_s = defaultdict(float)
         self.kernels = defaultdict(lambda: [0, 0.0, 0, 0, 0.0])   # calls, s, launches, bytes, flops
@@ -206,6 +255,7 @@ class Recorder:
         self.launches = defaultdict(int)                          # stage -> launches
         self.pool_launches = defaultdict(int)
         self.evaluations = defaultdict(int)
+        self.launch_dims = defaultdict(lambda: [0, 0])            # kernel name -> launches, threads
         self.depth = threading.local()
         self.main = threading.get_ident()
         self.lock = threading.Lock()
@@ -223,12 +273,19 @@ class Recorder:
                 self.stack.pop()
             return
         self.stack.append(name)
+        self.wait()
         t0 = time.perf_counter()
         try:
             yield
         finally:
+            self.wait()
             self.stage_s[name] += time.perf_counter() - t0
             self.stack.pop()
+
+    def wait(self) -> None:
+        """On a CUDA device, wait for the queued kernels (so their time lands where they ran)."""
+        if self.sync_device is not None:
+            wp.synchronize_device(self.sync_device)
 
 
 def _wrap_family(rec: Recorder, family: str, module):
@@ -259,10 +316,12 @@ def _wrap_family(rec: Recorder, family: str, module):
             rec.depth.n = 1
             stage = rec.stage()
             before = rec.launches[stage]
+            rec.wait()
             t0 = time.perf_counter()
             try:
                 return __fn(*args, **kwargs)
             finally:
+                rec.wait()
                 dt = time.perf_counter() - t0
                 rec.depth.n = 0
                 row = rec.kernels[(stage, family, __name)]
@@ -315,8 +374,13 @@ def instrumented(rec: Recorder, be):
 
     def launch(*args, **kwargs):
         stage = rec.stage()
+        dim = kwargs.get("dim", args[1] if len(args) > 1 else 1)
+        kernel = kwargs.get("kernel", args[0] if args else None)
         with rec.lock:
             rec.launches[stage] += 1
+            row = rec.launch_dims[getattr(kernel, "key", "?")]
+            row[0] += 1
+            row[1] += int(np.prod(dim)) if not isinstance(dim, int) else dim
             if threading.get_ident() != rec.main:
                 rec.pool_launches[stage] += 1
         return original_launch(*args, **kwargs)
@@ -377,14 +441,14 @@ _MISSING = object()
 
 def run(args, params, rec: Recorder | None = None, profiler=None) -> tuple[float, object]:
     seq = synthetic.render_sequence(args.kind, n_frames=args.frames, size=tuple(args.size), seed=args.seed)
-    be = get_backend(args.backend, "cpu")
+    be = get_backend(args.backend, args.device)
     ctx = instrumented(rec, be) if rec is not None else contextlib.nullcontext()
     with ctx:
         if profiler is not None:
             profiler.enable()
         t0 = time.perf_counter()
         video = iv.decompose(seq.frames, backend=args.backend, params=params, threads=args.threads,
-                             flow_passes=args.flow_passes)
+                             flow_passes=args.flow_passes, device=args.device)
         total = time.perf_counter() - t0
         if profiler is not None:
             profiler.disable()
@@ -400,7 +464,7 @@ def run_flow(args, rec: Recorder | None = None, profiler=None) -> tuple[float, o
     flow_pkg = importlib.import_module("ivkernels.flow")
     options = parse_settings(args.flow_set)
     pairs = list(middlebury_pairs(default_data_dir(), args.pairs))
-    be = get_backend(args.backend, "cpu")
+    be = get_backend(args.backend, args.device)
     ctx = instrumented(rec, be) if rec is not None else contextlib.nullcontext()
     total = 0.0
     with ctx:
@@ -409,7 +473,7 @@ def run_flow(args, rec: Recorder | None = None, profiler=None) -> tuple[float, o
                 profiler.enable()
             t0 = time.perf_counter()
             flow_pkg.estimate_flow(frames, method=args.flow, backend=args.backend, threads=args.threads,
-                                   **options)
+                                   device=args.device, **options)
             total += time.perf_counter() - t0
             if profiler is not None:
                 profiler.disable()
@@ -440,6 +504,14 @@ def wrapper_overhead() -> float:
 
 
 def print_roof(roof: dict) -> None:
+    if roof["device"] != "cpu":
+        print(f"\n== device roof ({roof['device']}: {wp.get_device(roof['device']).name}, "
+              f"{wp.get_device(roof['device']).sm_count} SMs)")
+        print(f"  triad, one element per thread          {roof['stream_Bps'] / 1e9:8.1f} GB/s")
+        print(f"  FMA chains, 2^20 threads               {roof['fma_flops'] / 1e9:8.1f} GFLOP/s")
+        print(f"  one empty launch, host side (no wait)  {roof['launch_s'] * 1e6:8.1f} us")
+        print(f"  one launch and a wait (round trip)     {roof['split_launch_s'] * 1e6:8.1f} us")
+        return
     print(f"\n== machine roof ({roof['threads']} launch threads, cores {os.cpu_count()}, "
           f"load {os.getloadavg()[0]:.2f})")
     print(f"  STREAM-like triad (Warp kernel)        {roof['stream_Bps'] / 1e9:8.2f} GB/s")
@@ -527,6 +599,20 @@ def print_kernels(rec: Recorder, total: float, roof: dict, top: int) -> None:
           "  GFLOP: counted per element from the kernel source (perf/profile.py FLOPS_PER_ELEMENT).")
 
 
+def print_launch_widths(rec: Recorder, roof: dict, top: int) -> None:
+    """Threads per launch of the most launched kernels, against what the device holds at once."""
+    if roof["device"] == "cpu":
+        return
+    dev = wp.get_device(roof["device"])
+    resident = dev.sm_count * 2048
+    print(f"\n== threads per launch (top {top} kernels by launches; {dev.sm_count} SMs hold "
+          f"{resident} threads at once)")
+    print(f"  {'kernel':<44}{'launches':>9}{'threads/launch':>15}{'of resident':>12}")
+    for key, (n, threads) in sorted(rec.launch_dims.items(), key=lambda kv: -kv[1][0])[:top]:
+        mean = threads / max(n, 1)
+        print(f"  {str(key)[:44]:<44}{n:9d}{mean:15.0f}{100 * mean / resident:11.1f}%")
+
+
 def _category(key) -> str:
     filename, _, func = key
     if filename == "~":
@@ -571,6 +657,8 @@ def main(argv=None) -> None:
     ap.add_argument("--frames", type=int, default=8)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--backend", default="warp", choices=("warp",))
+    ap.add_argument("--device", default="cpu",
+                    help="'cpu' or 'cuda[:N]': on CUDA every timed call waits for its kernels")
     ap.add_argument("--kind", default="objects_camera")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--flow-passes", type=int, default=DEFAULT_FLOW_PASSES)
@@ -604,9 +692,10 @@ def main(argv=None) -> None:
           f"{args.threads} threads, flow_passes {args.flow_passes}" + (f", {fields}" if fields else ""))
     tiny = synthetic.render_sequence("objects_camera", n_frames=3, size=(32, 40), seed=1)
     t0 = time.perf_counter()
-    iv.decompose(tiny.frames, backend=args.backend, threads=args.threads)
+    iv.decompose(tiny.frames, backend=args.backend, threads=args.threads, device=args.device)
+    wp.force_load(device=args.device)       # every module the package imported, also those tiny frames skip
     print(f"warm-up (kernel compile / load) {time.perf_counter() - t0:.1f} s")
-    roof = measure_roof(args.threads)
+    roof = measure_roof(args.threads, args.device)
     print_roof(roof)
     print(f"  wrapper overhead per family call       {wrapper_overhead() * 1e6:8.1f} us")
     plain = None
@@ -614,11 +703,12 @@ def main(argv=None) -> None:
         (lambda rec=None, profiler=None: run(args, params, rec, profiler))
     if args.plain:
         plain, _ = job()
-    rec = Recorder()
+    rec = Recorder(args.device)
     total, video = job(rec)
     print_stages(rec, total, roof, video.diagnostics["seconds"] if video is not None else {}, plain)
     print_families(rec, total)
     print_kernels(rec, total, roof, args.top)
+    print_launch_widths(rec, roof, args.top)
     if args.cprofile:
         profiler = cProfile.Profile()
         ptotal, _ = job(None, profiler)

@@ -427,3 +427,15 @@ def test_long_video_refuses_too_few_frames():
     proc = subprocess.run([sys.executable, str(PERF / "long_video.py"), "--frames", "1"],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode != 0 and "--frames must be >= 2" in proc.stderr
+
+
+@pytest.mark.slow
+def test_stream_fps_prints_each_window_and_the_rate():
+    proc = subprocess.run([sys.executable, str(PERF / "stream_fps.py"), "--frames", "10", "--size", "40", "48",
+                           "--set", "lbfgs_iterations=5", "outer_iterations=1"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    out = proc.stdout
+    assert "10 frames at 48x40 on cpu" in out
+    assert "    0    0-7 " in out and "    1    2-9 " in out
+    assert "after the first window: 2 frames in" in out and "frames/s" in out

@@ -54,8 +54,13 @@ stride arithmetic of a Warp array access: a loop over one offset's pairs
 along a row ran 2.8x faster as a snippet even unvectorised.  Where the two
 pixels of the offset lie in different row slots (``dy > 0``) one loop adds
 both halves; within a row (``dy = 0``) the other halves land on other lanes'
-pixels, so they go through a scratch row and a second loop.  On a GPU the
-same code runs one thread per band of :data:`CUDA_BAND_ROWS` rows.
+pixels, so they go through a scratch row and a second loop.
+
+On a GPU a band per thread leaves all but a few hundred of the device's
+threads idle, so there the term runs one thread per pixel
+(:func:`gsm_pixels`): each pixel visits its whole window (24 look-ups instead
+of 12, no atomics), adds its gradient, writes its energy, and a second kernel
+sums each row's energies (:func:`energy_row_sums`).
 Measurements (640x480, 8 frames, radius 2): ``perf/RESULTS.md``.
 """
 from __future__ import annotations
@@ -358,8 +363,63 @@ def gsm_bands(band_begin: int, band_rows: int, radius: int, A: wp.array4d(dtype=
             energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
 
 
-#: Rows per band on a GPU (one thread per band; not measured on a GPU).
+#: Rows per band on a GPU where the band kernel runs there (tests); the term itself
+#: runs one thread per pixel there (:func:`gsm_pixels`).
 CUDA_BAND_ROWS = 4
+
+
+@wp.func
+def cell_lookup(coef: wp.array(dtype=float), cells_per_root: float, r2: float):
+    """``(g, g')`` at ``r2`` from the cell coefficients (as :func:`pair_row` reads them)."""
+    n_cells = coef.shape[0] // 4
+    u = wp.min(wp.sqrt(r2) * cells_per_root, float(n_cells - 1))
+    i = int(u)
+    g = coef[i] + coef[n_cells + i] * r2
+    dg = coef[2 * n_cells + i] + coef[3 * n_cells + i] * r2
+    return g, dg
+
+
+@wp.kernel
+def gsm_pixels(radius: int, A: wp.array4d(dtype=float), sigma_inv: wp.array2d(dtype=float),
+               coef: wp.array(dtype=float), cells_per_root: float, lam: float,
+               gA: wp.array4d(dtype=float), pixel_energy: wp.array3d(dtype=float)):
+    """The GPU form of the term: one thread per pixel ``x`` visits all its
+    neighbours ``y`` (each unordered pair is looked up from both of its pixels,
+    24 look-ups per pixel instead of 12, with no atomics), adds
+    ``4 lam L^T sum_y g'(r2) (B(x) - B(y))`` to ``gA(x)`` and writes
+    ``sum_y g(r2)`` to ``pixel_energy(t*H + y, x)`` (row sums: :func:`energy_row_sums`)."""
+    t, y, x = wp.tid()
+    height = A.shape[1]
+    width = A.shape[2]
+    L = precision_factor(sigma_inv)
+    b = L * wp.vec3(A[t, y, x, 0], A[t, y, x, 1], A[t, y, x, 2])
+    acc = wp.vec3(0.0, 0.0, 0.0)
+    e = float(0.0)
+    for yy in range(wp.max(y - radius, 0), wp.min(y + radius + 1, height)):
+        for xx in range(wp.max(x - radius, 0), wp.min(x + radius + 1, width)):
+            if yy != y or xx != x:
+                d = b - L * wp.vec3(A[t, yy, xx, 0], A[t, yy, xx, 1], A[t, yy, xx, 2])
+                g, dg = cell_lookup(coef, cells_per_root, wp.dot(d, d))
+                e += g
+                acc += dg * d
+    v = (4.0 * lam) * (wp.transpose(L) * acc)
+    gA[t, y, x, 0] = gA[t, y, x, 0] + v[0]
+    gA[t, y, x, 1] = gA[t, y, x, 1] + v[1]
+    gA[t, y, x, 2] = gA[t, y, x, 2] + v[2]
+    pixel_energy[t, y, x] = e
+
+
+@wp.kernel
+def energy_row_sums(pixel_energy: wp.array3d(dtype=float), lam: float, energy_rows: wp.array(dtype=wp.float64)):
+    """``energy_rows[t*H + y] += lam * sum_x pixel_energy(t, y, x)`` (float64), one thread per row."""
+    r = wp.tid()
+    height = pixel_energy.shape[1]
+    t = r // height
+    y = r - t * height
+    e = wp.float64(0.0)
+    for x in range(pixel_energy.shape[2]):
+        e += wp.float64(pixel_energy[t, y, x])
+    energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
 
 #: Bands per launch thread on the CPU: enough that a thread held up by
 #: another process leaves its share to the others.
@@ -367,6 +427,12 @@ BANDS_PER_THREAD = 16
 
 #: Fewest rows of a band on the CPU.
 MIN_BAND_ROWS = 32
+
+
+def pixel_threads(device) -> bool:
+    """Whether the term runs one thread per pixel on ``device`` (a GPU:
+    :func:`gsm_pixels`) rather than one per band of rows (the CPU: :func:`gsm_bands`)."""
+    return not wp.get_device(device).is_cpu
 
 
 def band_rows_for(n_rows: int, device) -> int:
@@ -424,6 +490,15 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
     coef = _scratch(workspace, "cell_coefficients", (4 * n,), float, dev)
     wp.launch(cell_coefficients, dim=n, inputs=[table_g, table_dg, float(r2_max), float(cells_per_root), coef],
               device=dev)
+    if pixel_threads(dev):
+        # a GPU: one thread per pixel (a band per thread leaves all but a few hundred of its
+        # threads idle: 103 ms a call at 640x480x8 on an H200, perf/RESULTS.md)
+        energy = _scratch(workspace, "pixel_energy", (T, H, W), float, dev)
+        wp.launch(gsm_pixels, dim=(T, H, W),
+                  inputs=[int(radius), A, sigma_inv, coef, float(cells_per_root), float(lam), gA, energy],
+                  device=dev)
+        wp.launch(energy_row_sums, dim=T * H, inputs=[energy, float(lam), energy_rows], device=dev)
+        return
     slots = n_bands * (radius + 1)
     whitened = _scratch(workspace, "whitened_rows", (slots * 3 * W,), float, dev)
     sums = _scratch(workspace, "pixel_sums", (slots * 4 * W,), float, dev)

@@ -2,9 +2,10 @@
 
 The solver stacks its unknowns (albedo and shading of every frame) into one
 flat float32 vector of length ``n``; these functions are the vector algebra of
-the optimiser on it.  The vector is cut into chunks of :data:`CHUNK` elements,
-one kernel thread per chunk, launched through :func:`launch_rows` so two CPU
-threads share the work.
+the optimiser on it.  The vector is cut into chunks of :data:`CHUNK` elements
+on the CPU, one kernel thread per chunk, launched through :func:`launch_rows`
+so two CPU threads share the work; on a GPU the chunks are
+:data:`CUDA_CHUNK` elements (:data:`CUDA_REDUCTION_CHUNK` for reductions).
 
 :func:`dots` and :func:`combine` work on a basis of vectors stored as the
 rows of one (k, n) array: all dot products of a vector with chosen rows, and
@@ -36,8 +37,15 @@ host = implements(FAMILY, FRONT)
 
 wp.set_module_options({"enable_backward": False})
 
-#: Elements per kernel thread.
+#: Elements per kernel thread on the CPU.
 CHUNK = 4096
+
+#: Elements per kernel thread on a GPU: one ``vec4`` for the element-wise
+#: operations (a warp's loads are then contiguous), more for the reductions so
+#: their partial results stay few (the CPU's 4096 leave a 640x480x8 vector to
+#: a few hundred threads: 0.1 % of an H200, perf/RESULTS.md).
+CUDA_CHUNK = 4
+CUDA_REDUCTION_CHUNK = 256
 
 
 # ----------------------------------------------------------------------------
@@ -225,8 +233,16 @@ def basis_combine_chunks(row_begin: int, out: wp.array(dtype=float), basis: wp.a
 # Host functions
 # ----------------------------------------------------------------------------
 
-def _chunks(n: int) -> int:
-    return (n + CHUNK - 1) // CHUNK
+def _chunk(device, reduction: bool = False) -> int:
+    """Elements per thread on ``device`` (a multiple of 4): :data:`CHUNK` on the CPU,
+    :data:`CUDA_CHUNK` or, for a reduction, :data:`CUDA_REDUCTION_CHUNK` on a GPU."""
+    if wp.get_device(device).is_cpu:
+        return CHUNK
+    return CUDA_REDUCTION_CHUNK if reduction else CUDA_CHUNK
+
+
+def _chunks(n: int, chunk: int = CHUNK) -> int:
+    return (n + chunk - 1) // chunk
 
 
 _VIEW_CACHE_SIZE = 64
@@ -270,33 +286,33 @@ def dot(a, b) -> float:
 
     ``a``, ``b``: 1-D float32 wp.arrays of equal length n >= 1.
     """
-    n = a.shape[0]
-    partial = wp.empty(_chunks(n), dtype=wp.float64, device=a.device)
-    launch_rows(dot_chunks, _chunks(n), [a, b, *_vec4(a, b), partial, CHUNK], device=a.device)
+    n, chunk = a.shape[0], _chunk(a.device, reduction=True)
+    partial = wp.empty(_chunks(n, chunk), dtype=wp.float64, device=a.device)
+    launch_rows(dot_chunks, _chunks(n, chunk), [a, b, *_vec4(a, b), partial, chunk], device=a.device)
     return float(partial.numpy().sum())
 
 
 @host("norm_inf")
 def norm_inf(x) -> float:
     """``max |x|`` as a Python float.  ``x``: 1-D float32 wp.array, n >= 1."""
-    n = x.shape[0]
-    partial = wp.empty(_chunks(n), dtype=wp.float32, device=x.device)
-    launch_rows(max_abs_chunks, _chunks(n), [x, *_vec4(x), partial, CHUNK], device=x.device)
+    n, chunk = x.shape[0], _chunk(x.device, reduction=True)
+    partial = wp.empty(_chunks(n, chunk), dtype=wp.float32, device=x.device)
+    launch_rows(max_abs_chunks, _chunks(n, chunk), [x, *_vec4(x), partial, chunk], device=x.device)
     return float(partial.numpy().max())
 
 
 @host("axpy")
 def axpy(alpha: float, x, y) -> None:
     """``y += alpha * x`` (float32).  ``x``, ``y``: 1-D float32 wp.arrays of equal length."""
-    n = x.shape[0]
-    launch_rows(axpy_chunks, _chunks(n), [float(alpha), x, y, *_vec4(x, y), CHUNK], device=x.device)
+    n, chunk = x.shape[0], _chunk(x.device)
+    launch_rows(axpy_chunks, _chunks(n, chunk), [float(alpha), x, y, *_vec4(x, y), chunk], device=x.device)
 
 
 @host("scale")
 def scale(alpha: float, x) -> None:
     """``x *= alpha`` (float32).  ``x``: 1-D float32 wp.array."""
-    n = x.shape[0]
-    launch_rows(scale_chunks, _chunks(n), [float(alpha), x, *_vec4(x), CHUNK], device=x.device)
+    n, chunk = x.shape[0], _chunk(x.device)
+    launch_rows(scale_chunks, _chunks(n, chunk), [float(alpha), x, *_vec4(x), chunk], device=x.device)
 
 
 @host("lincomb")
@@ -305,23 +321,23 @@ def lincomb(out, a: float, x, b: float, y) -> None:
 
     ``out``, ``x``, ``y``: 1-D float32 wp.arrays of equal length.
     """
-    n = out.shape[0]
-    launch_rows(lincomb_chunks, _chunks(n), [out, float(a), x, float(b), y, *_vec4(out, x, y), CHUNK],
+    n, chunk = out.shape[0], _chunk(out.device)
+    launch_rows(lincomb_chunks, _chunks(n, chunk), [out, float(a), x, float(b), y, *_vec4(out, x, y), chunk],
                 device=out.device)
 
 
 @host("copy")
 def copy(src, dst) -> None:
     """``dst[:] = src``.  1-D float32 wp.arrays of equal length."""
-    n = src.shape[0]
-    launch_rows(copy_chunks, _chunks(n), [src, dst, *_vec4(src, dst), CHUNK], device=src.device)
+    n, chunk = src.shape[0], _chunk(src.device)
+    launch_rows(copy_chunks, _chunks(n, chunk), [src, dst, *_vec4(src, dst), chunk], device=src.device)
 
 
 @host("fill")
 def fill(x, value: float) -> None:
     """``x[:] = value``.  ``x``: 1-D float32 wp.array."""
-    n = x.shape[0]
-    launch_rows(fill_chunks, _chunks(n), [x, *_vec4(x), float(value), CHUNK], device=x.device)
+    n, chunk = x.shape[0], _chunk(x.device)
+    launch_rows(fill_chunks, _chunks(n, chunk), [x, *_vec4(x), float(value), chunk], device=x.device)
 
 
 def _basis_vec4(basis, n4: int):
@@ -356,12 +372,12 @@ def dots(basis, x, rows=None) -> np.ndarray:
     Returns (len(rows),) float64 NumPy array, ``basis[rows] @ x``, each with
     float64 products and sums per chunk (as :func:`dot`).
     """
-    n = x.shape[0]
+    n, chunk = x.shape[0], _chunk(x.device, reduction=True)
     basis, rows_wp = _basis_rows(basis, rows)
-    partial = wp.empty((rows_wp.shape[0], _chunks(n)), dtype=wp.float64, device=x.device)
+    partial = wp.empty((rows_wp.shape[0], _chunks(n, chunk)), dtype=wp.float64, device=x.device)
     x4, = _vec4(x)
-    launch_rows(basis_dots_chunks, _chunks(n), [basis, x, _basis_vec4(basis, x4.shape[0]), x4, rows_wp,
-                                                partial, CHUNK], device=x.device)
+    launch_rows(basis_dots_chunks, _chunks(n, chunk), [basis, x, _basis_vec4(basis, x4.shape[0]), x4, rows_wp,
+                                                       partial, chunk], device=x.device)
     return partial.numpy().sum(axis=1)
 
 
@@ -373,8 +389,8 @@ def combine(out, basis, rows, coeffs) -> None:
     basis : (k, n) float32 wp.array (copied first if not contiguous).
     rows, coeffs : row indices and their (finite) coefficients, equal lengths.
     """
-    n = out.shape[0]
+    n, chunk = out.shape[0], _chunk(out.device)
     basis, rows_wp, coeffs_wp = _basis_rows(basis, rows, coeffs)
     out4, = _vec4(out)
-    launch_rows(basis_combine_chunks, _chunks(n), [out, basis, out4, _basis_vec4(basis, out4.shape[0]),
-                                                   rows_wp, coeffs_wp, CHUNK], device=out.device)
+    launch_rows(basis_combine_chunks, _chunks(n, chunk), [out, basis, out4, _basis_vec4(basis, out4.shape[0]),
+                                                          rows_wp, coeffs_wp, chunk], device=out.device)
