@@ -26,6 +26,14 @@ minimum is counted in elements rather than rows.
 
 The number of threads N is kept in :mod:`ivkernels.kernels.thread_count`
 (re-exported here).
+
+On a GPU one thread per row leaves all but a few thousand of the device's
+threads idle, so the kernels whose pixels are independent also take a
+``tiles`` argument (:func:`row_tiles`) and are launched over ``rows * tiles``
+threads, each covering one tile of a row (``warp.row_tiles.row_span``): one
+tile per row on the CPU (the same loops, the same results), one pixel per
+tile on a GPU.  :func:`gpu_layout` says which layout a device gets; tests set
+:data:`FORCE_GPU_LAYOUT_TILES` to run the GPU's layouts on the CPU.
 """
 from __future__ import annotations
 
@@ -47,6 +55,28 @@ MIN_BAND_ELEMENTS = 16384
 #: Middlebury pairs, 2 threads): 1 thread / N threads 1.53 with one band per
 #: thread, 1.73 / 1.76 / 1.81 / 1.79 with 2 / 4 / 8 / 16 chunks per thread.
 BALANCE_CHUNKS_PER_THREAD = 8
+
+#: Tests set this to run the GPU's layouts on the CPU: rows cut into this many
+#: tiles (at most one per pixel), the other kernels' GPU forms (``gpu_layout``).
+FORCE_GPU_LAYOUT_TILES: int | None = None
+
+
+def gpu_layout(device) -> bool:
+    """Whether kernels take their GPU layout on ``device``: on a CUDA device, or
+    everywhere while :data:`FORCE_GPU_LAYOUT_TILES` is set."""
+    return FORCE_GPU_LAYOUT_TILES is not None or not wp.get_device(device).is_cpu
+
+
+def row_tiles(width: int, device, pixels_per_tile: int = 1) -> int:
+    """Tiles per row of ``width`` pixels on ``device``: 1 on the CPU, on a GPU one
+    per ``pixels_per_tile`` pixels (more than 1 where each thread needs scratch of
+    its own); ``FORCE_GPU_LAYOUT_TILES`` (at most ``width``) when set."""
+    if FORCE_GPU_LAYOUT_TILES is not None:
+        return max(1, min(int(FORCE_GPU_LAYOUT_TILES), int(width)))
+    if wp.get_device(device).is_cpu:
+        return 1
+    return max(1, -(-int(width) // int(pixels_per_tile)))
+
 
 _pool: ThreadPoolExecutor | None = None
 _pool_workers = 0

@@ -38,9 +38,10 @@ import warp as wp
 
 from ivkernels.kernels.contract import implements
 from ivkernels.kernels.host import MAX_EXPONENT, grid_shape
-from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.coarse_basis import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.warp.row_tiles import row_span
 
 host = implements(FAMILY, FRONT)
 
@@ -89,11 +90,12 @@ def coarse_weights_rows(row_begin: int, A: wp.array4d(dtype=float), weights: wp.
 
 
 @wp.kernel
-def prolong_add_rows(row_begin: int, z: wp.array3d(dtype=float), weights: wp.array4d(dtype=float),
+def prolong_add_rows(row_begin: int, tiles: int, z: wp.array3d(dtype=float), weights: wp.array4d(dtype=float),
                      out: wp.array3d(dtype=float), spacing: int):
     # The pixels of a row between two node columns share their 4 x 4 nodes: read them
     # once per run of ``spacing`` pixels (clamped reads; off-grid taps have weight 0).
-    r = row_begin + wp.tid()
+    # A row's runs are cut into ``tiles`` tiles (one per row on the CPU).
+    r, run_begin, run_end = row_span(row_begin + wp.tid(), tiles, (out.shape[2] - 1) // spacing + 1)
     height = out.shape[1]
     width = out.shape[2]
     grid_h = z.shape[1]
@@ -101,7 +103,7 @@ def prolong_add_rows(row_begin: int, z: wp.array3d(dtype=float), weights: wp.arr
     t = r // height
     y = r - t * height
     j0 = y // spacing
-    for i0 in range((width - 1) // spacing + 1):
+    for i0 in range(run_begin, run_end):
         nodes = wp.mat44()
         for iy in range(4):
             j = wp.clamp(j0 + iy - 1, 0, grid_h - 1)
@@ -116,11 +118,11 @@ def prolong_add_rows(row_begin: int, z: wp.array3d(dtype=float), weights: wp.arr
 
 
 @wp.kernel
-def restrict_add_rows(row_begin: int, values: wp.array3d(dtype=float), weights: wp.array4d(dtype=float),
-                      out: wp.array3d(dtype=float), spacing: int):
+def restrict_add_rows(row_begin: int, tiles: int, values: wp.array3d(dtype=float),
+                      weights: wp.array4d(dtype=float), out: wp.array3d(dtype=float), spacing: int):
     # Each run of ``spacing`` pixels between two node columns sums its 16 node
-    # contributions locally and adds them to the nodes once.
-    r = row_begin + wp.tid()
+    # contributions locally and adds them to the nodes once (runs cut into tiles as above).
+    r, run_begin, run_end = row_span(row_begin + wp.tid(), tiles, (values.shape[2] - 1) // spacing + 1)
     height = values.shape[1]
     width = values.shape[2]
     grid_h = out.shape[1]
@@ -128,7 +130,7 @@ def restrict_add_rows(row_begin: int, values: wp.array3d(dtype=float), weights: 
     t = r // height
     y = r - t * height
     j0 = y // spacing
-    for i0 in range((width - 1) // spacing + 1):
+    for i0 in range(run_begin, run_end):
         sums = wp.mat44()
         for x in range(i0 * spacing, wp.min((i0 + 1) * spacing, width)):
             v = values[t, y, x]
@@ -181,7 +183,8 @@ def prolong_add(z, weights, out, spacing: int) -> None:
     spacing : pixels between nodes, as for the weights.
     """
     t, h, w, _ = weights.shape
-    launch_rows(prolong_add_rows, t * h, [z, weights, out, spacing], device=weights.device)
+    tiles = row_tiles((w - 1) // spacing + 1, weights.device)
+    launch_rows(prolong_add_rows, t * h * tiles, [tiles, z, weights, out, spacing], device=weights.device)
 
 
 @host("restrict_add")
@@ -197,4 +200,6 @@ def restrict_add(values, weights, out, spacing: int) -> None:
     spacing : pixels between nodes, as for the weights.
     """
     t, h, w, _ = weights.shape
-    launch_rows(restrict_add_rows, t * h, [values, weights, out, spacing], device=weights.device, align=h)
+    tiles = row_tiles((w - 1) // spacing + 1, weights.device)
+    launch_rows(restrict_add_rows, t * h * tiles, [tiles, values, weights, out, spacing], device=weights.device,
+                align=h * tiles)

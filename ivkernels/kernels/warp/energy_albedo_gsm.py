@@ -70,7 +70,7 @@ import math
 import warp as wp
 
 from ivkernels.kernels.contract import implements
-from ivkernels.kernels.launch import get_threads, launch_rows
+from ivkernels.kernels.launch import get_threads, gpu_layout, launch_rows
 from ivkernels.kernels.reference.energy_albedo_gsm import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
 from ivkernels.kernels.workspace import scratch_buffer
@@ -429,12 +429,6 @@ BANDS_PER_THREAD = 16
 MIN_BAND_ROWS = 32
 
 
-def pixel_threads(device) -> bool:
-    """Whether the term runs one thread per pixel on ``device`` (a GPU:
-    :func:`gsm_pixels`) rather than one per band of rows (the CPU: :func:`gsm_bands`)."""
-    return not wp.get_device(device).is_cpu
-
-
 def band_rows_for(n_rows: int, device) -> int:
     """Rows per band: on the CPU about :data:`BANDS_PER_THREAD` bands per launch
     thread (handed out in turn, :func:`launch_rows` ``balance=True``), at
@@ -490,7 +484,7 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
     coef = _scratch(workspace, "cell_coefficients", (4 * n,), float, dev)
     wp.launch(cell_coefficients, dim=n, inputs=[table_g, table_dg, float(r2_max), float(cells_per_root), coef],
               device=dev)
-    if pixel_threads(dev):
+    if gpu_layout(dev):
         # a GPU: one thread per pixel (a band per thread leaves all but a few hundred of its
         # threads idle: 103 ms a call at 640x480x8 on an H200, perf/RESULTS.md)
         energy = _scratch(workspace, "pixel_energy", (T, H, W), float, dev)

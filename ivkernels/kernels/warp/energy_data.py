@@ -15,9 +15,10 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.contract import implements
-from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.energy_data import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.warp.row_tiles import row_span
 
 host = implements(FAMILY, FRONT)
 
@@ -31,16 +32,16 @@ def charbonnier(z: float, eps: float):
 
 
 @wp.kernel
-def data_term_rows(row_begin: int, I: wp.array4d(dtype=float), A: wp.array4d(dtype=float),
+def data_term_rows(row_begin: int, tiles: int, I: wp.array4d(dtype=float), A: wp.array4d(dtype=float),
                    S: wp.array3d(dtype=float), w_lum: wp.array3d(dtype=float),
                    gA: wp.array4d(dtype=float), gS: wp.array3d(dtype=float),
                    energy_rows: wp.array(dtype=wp.float64), lam: float, eps: float):
-    r = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, S.shape[2])
     height = S.shape[1]
     t = r // height
     y = r - t * height
     e = wp.float64(0.0)
-    for x in range(S.shape[2]):
+    for x in range(x_begin, x_end):
         w = w_lum[t, y, x]
         s = S[t, y, x]
         g_s = float(0.0)
@@ -52,7 +53,7 @@ def data_term_rows(row_begin: int, I: wp.array4d(dtype=float), A: wp.array4d(dty
             gA[t, y, x, c] = gA[t, y, x, c] + g
             g_s += g
         gS[t, y, x] = gS[t, y, x] + g_s
-    energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
+    wp.atomic_add(energy_rows, r, wp.float64(lam) * e)
 
 
 @host("data_term")
@@ -75,31 +76,32 @@ def data_term(I, A, S, w_lum, gA, gS, energy_rows, lam: float = 10.0, eps: float
     """
     t, h, w, _ = I.shape
     dev = I.device
-    launch_rows(data_term_rows, t * h, [I, A, S, w_lum, gA, gS, energy_rows, float(lam), float(eps)],
-                device=dev)
+    tiles = row_tiles(w, dev)
+    launch_rows(data_term_rows, t * h * tiles,
+                [tiles, I, A, S, w_lum, gA, gS, energy_rows, float(lam), float(eps)], device=dev)
 
 
 @wp.kernel
-def constrained_albedo_rows(row_begin: int, I: wp.array4d(dtype=float), S: wp.array3d(dtype=float),
-                            A: wp.array4d(dtype=float)):
-    r = row_begin + wp.tid()
+def constrained_albedo_rows(row_begin: int, tiles: int, I: wp.array4d(dtype=float),
+                            S: wp.array3d(dtype=float), A: wp.array4d(dtype=float)):
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, S.shape[2])
     height = S.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(S.shape[2]):
+    for x in range(x_begin, x_end):
         s = S[t, y, x]
         for c in range(3):
             A[t, y, x, c] = I[t, y, x, c] - s
 
 
 @wp.kernel
-def constrained_gradient_rows(row_begin: int, gA: wp.array4d(dtype=float), gS: wp.array3d(dtype=float),
-                              out: wp.array3d(dtype=float)):
-    r = row_begin + wp.tid()
+def constrained_gradient_rows(row_begin: int, tiles: int, gA: wp.array4d(dtype=float),
+                              gS: wp.array3d(dtype=float), out: wp.array3d(dtype=float)):
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, gS.shape[2])
     height = gS.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(gS.shape[2]):
+    for x in range(x_begin, x_end):
         out[t, y, x] = gS[t, y, x] - (gA[t, y, x, 0] + gA[t, y, x, 1] + gA[t, y, x, 2])
 
 
@@ -115,7 +117,8 @@ def constrained_albedo(I, S, A) -> None:
     """
     t, h, w, _ = I.shape
     dev = I.device
-    launch_rows(constrained_albedo_rows, t * h, [I, S, A], device=dev)
+    tiles = row_tiles(w, dev)
+    launch_rows(constrained_albedo_rows, t * h * tiles, [tiles, I, S, A], device=dev)
 
 
 @host("constrained_gradient")
@@ -128,4 +131,5 @@ def constrained_gradient(gA, gS, out) -> None:
     """
     t, h, w, _ = gA.shape
     dev = gA.device
-    launch_rows(constrained_gradient_rows, t * h, [gA, gS, out], device=dev)
+    tiles = row_tiles(w, dev)
+    launch_rows(constrained_gradient_rows, t * h * tiles, [tiles, gA, gS, out], device=dev)

@@ -14,9 +14,10 @@ import functools
 import warp as wp
 
 from ivkernels.kernels.contract import implements
-from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.energy_shading import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.warp.row_tiles import row_span
 from ivkernels.kernels.warp.energy_data import charbonnier
 
 host = implements(FAMILY, FRONT)
@@ -46,19 +47,19 @@ def _local_kernel_for(gated: bool):
     G = 1 if gated else 0
 
     @wp.kernel(module="unique")
-    def shading_smoothness_rows(row_begin: int, S: wp.array3d(dtype=float), gate: wp.array3d(dtype=float),
+    def shading_smoothness_rows(row_begin: int, tiles: int, S: wp.array3d(dtype=float), gate: wp.array3d(dtype=float),
                                 gS: wp.array3d(dtype=float), energy_rows: wp.array(dtype=wp.float64),
                                 lam: float, eps: float):
         """Eq. 9's local term; gated: each pair is weighted by the mean of its two
         ``gate`` values (``gate`` is not read otherwise)."""
-        r = row_begin + wp.tid()
+        r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, S.shape[2])
         height = S.shape[1]
         width = S.shape[2]
         t = r // height
         y = r - t * height
         e = wp.float64(0.0)
         inside_rows = y >= 1 and y + 1 < height
-        for x in range(width):
+        for x in range(x_begin, x_end):
             s = S[t, y, x]
             gx = float(1.0)
             if wp.static(G != 0):
@@ -89,26 +90,26 @@ def _local_kernel_for(gated: bool):
                                 g += pg
             # S(x) appears in the pair (x, y) and in (y, x): twice the derivative
             gS[t, y, x] = gS[t, y, x] + 2.0 * lam * g
-        energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
+        wp.atomic_add(energy_rows, r, wp.float64(lam) * e)
 
     return shading_smoothness_rows
 
 
 @wp.kernel
-def coupling_rows(row_begin: int, S: wp.array3d(dtype=float), S_tilde: wp.array3d(dtype=float),
+def coupling_rows(row_begin: int, tiles: int, S: wp.array3d(dtype=float), S_tilde: wp.array3d(dtype=float),
                   w_bnd: wp.array3d(dtype=float), gS: wp.array3d(dtype=float),
                   energy_rows: wp.array(dtype=wp.float64), lam: float):
-    r = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, S.shape[2])
     height = S.shape[1]
     t = r // height
     y = r - t * height
     e = wp.float64(0.0)
-    for x in range(S.shape[2]):
+    for x in range(x_begin, x_end):
         w = w_bnd[t, y, x]
         d = S[t, y, x] - S_tilde[t, y, x]
         e += wp.float64(w * d * d)
         gS[t, y, x] = gS[t, y, x] + 2.0 * lam * w * d
-    energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
+    wp.atomic_add(energy_rows, r, wp.float64(lam) * e)
 
 
 @host("shading_smoothness")
@@ -155,8 +156,9 @@ def shading_smoothness_gated(S, gate, gS, energy_rows, lam: float = 2.0, eps: fl
 def _local_term(S, gate, gS, energy_rows, lam: float, eps: float) -> None:
     """Launch of Eq. 9's local term (arguments checked), gated unless ``gate`` is None."""
     t, h, w = S.shape
-    launch_rows(_local_kernel_for(gate is not None), t * h,
-                [S, S if gate is None else gate, gS, energy_rows, float(lam), float(eps)], device=S.device)
+    tiles = row_tiles(w, S.device)
+    launch_rows(_local_kernel_for(gate is not None), t * h * tiles,
+                [tiles, S, S if gate is None else gate, gS, energy_rows, float(lam), float(eps)], device=S.device)
 
 
 @host("coupling_term")
@@ -176,4 +178,6 @@ def coupling_term(S, S_tilde, w_bnd, gS, energy_rows, lam: float = 10.0) -> None
     """
     t, h, w = S.shape
     dev = S.device
-    launch_rows(coupling_rows, w_bnd.shape[0] * h, [S, S_tilde, w_bnd, gS, energy_rows, float(lam)], device=dev)
+    tiles = row_tiles(w, dev)
+    launch_rows(coupling_rows, w_bnd.shape[0] * h * tiles, [tiles, S, S_tilde, w_bnd, gS, energy_rows, float(lam)],
+                device=dev)

@@ -33,9 +33,10 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.contract import implements
-from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.energy_temporal import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.warp.row_tiles import row_span
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners
 from ivkernels.kernels.workspace import scratch_buffer
 
@@ -79,19 +80,19 @@ def gather_channel(X: wp.array4d(dtype=float), gX: wp.array4d(dtype=float), weig
 
 
 @wp.kernel
-def temporal_gather_rows(row_begin: int, X: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
+def temporal_gather_rows(row_begin: int, tiles: int, X: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
                          occ: wp.array3d(dtype=float), gX: wp.array4d(dtype=float),
                          weight: wp.array4d(dtype=float), energy_rows: wp.array(dtype=wp.float64),
                          lam: float, alpha: float):
     """Energy of frame ``t`` rows and the gradient in ``X_t`` (rows of frames 0 .. T-2);
     stores ``weight = lam occ rho'(d)`` per pixel and channel for the splat."""
-    r = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, X.shape[2])
     height = X.shape[1]
     width = X.shape[2]
     t = r // height
     y = r - t * height
     e = wp.float64(0.0)
-    for x in range(width):
+    for x in range(x_begin, x_end):
         o = occ[t, y, x]
         if o == 0.0:
             continue
@@ -99,7 +100,7 @@ def temporal_gather_rows(row_begin: int, X: wp.array4d(dtype=float), flow: wp.ar
         y0, y1, fy = clamped_corners(float(y) + flow[t, y, x, 1], height)
         for c in range(X.shape[3]):
             e += wp.float64(gather_channel(X, gX, weight, c, t, y, x, c, x0, x1, fx, y0, y1, fy, o, lam, alpha))
-    energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
+    wp.atomic_add(energy_rows, r, wp.float64(lam) * e)
 
 
 @wp.func
@@ -113,16 +114,16 @@ def splat_corners(gX: wp.array4d(dtype=float), t: int, c: int, x0: int, x1: int,
 
 
 @wp.kernel
-def temporal_splat_rows(row_begin: int, flow: wp.array4d(dtype=float), occ: wp.array3d(dtype=float),
+def temporal_splat_rows(row_begin: int, tiles: int, flow: wp.array4d(dtype=float), occ: wp.array3d(dtype=float),
                         weight: wp.array4d(dtype=float), gX: wp.array4d(dtype=float)):
     """Gradient in ``X_{t+1}``: splat the stored ``lam occ rho'(d)`` onto the
     corners of ``x + u_t(x)``."""
-    r = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, gX.shape[2])
     height = gX.shape[1]
     width = gX.shape[2]
     t = r // height
     y = r - t * height
-    for x in range(width):
+    for x in range(x_begin, x_end):
         if occ[t, y, x] == 0.0:
             continue
         x0, x1, fx = clamped_corners(float(x) + flow[t, y, x, 0], width)
@@ -134,21 +135,21 @@ def temporal_splat_rows(row_begin: int, flow: wp.array4d(dtype=float), occ: wp.a
 
 
 @wp.kernel
-def temporal_pair_gather_rows(row_begin: int, A: wp.array4d(dtype=float), S: wp.array4d(dtype=float),
+def temporal_pair_gather_rows(row_begin: int, tiles: int, A: wp.array4d(dtype=float), S: wp.array4d(dtype=float),
                               flow: wp.array4d(dtype=float), occ: wp.array3d(dtype=float),
                               gA: wp.array4d(dtype=float), gS: wp.array4d(dtype=float),
                               weight: wp.array4d(dtype=float), energy_rows: wp.array(dtype=wp.float64),
                               lam_albedo: float, lam_shading: float, alpha: float):
     """:func:`temporal_gather_rows` for the albedo (3 channels) and the shading
     (1) at once; ``weight`` holds 4 channels, the albedo's then the shading's."""
-    r = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, A.shape[2])
     height = A.shape[1]
     width = A.shape[2]
     t = r // height
     y = r - t * height
     e_albedo = wp.float64(0.0)
     e_shading = wp.float64(0.0)
-    for x in range(width):
+    for x in range(x_begin, x_end):
         o = occ[t, y, x]
         if o == 0.0:
             continue
@@ -159,20 +160,22 @@ def temporal_pair_gather_rows(row_begin: int, A: wp.array4d(dtype=float), S: wp.
                                                   lam_albedo, alpha))
         e_shading += wp.float64(gather_channel(S, gS, weight, 3, t, y, x, 0, x0, x1, fx, y0, y1, fy, o,
                                                lam_shading, alpha))
-    energy_rows[r] = energy_rows[r] + wp.float64(lam_albedo) * e_albedo + wp.float64(lam_shading) * e_shading
+    # two adds, in the order of the one-thread-per-row sum ``(rows + albedo) + shading``
+    wp.atomic_add(energy_rows, r, wp.float64(lam_albedo) * e_albedo)
+    wp.atomic_add(energy_rows, r, wp.float64(lam_shading) * e_shading)
 
 
 @wp.kernel
-def temporal_pair_splat_rows(row_begin: int, flow: wp.array4d(dtype=float), occ: wp.array3d(dtype=float),
+def temporal_pair_splat_rows(row_begin: int, tiles: int, flow: wp.array4d(dtype=float), occ: wp.array3d(dtype=float),
                              weight: wp.array4d(dtype=float), gA: wp.array4d(dtype=float),
                              gS: wp.array4d(dtype=float)):
     """:func:`temporal_splat_rows` for the albedo and the shading at once."""
-    r = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, gA.shape[2])
     height = gA.shape[1]
     width = gA.shape[2]
     t = r // height
     y = r - t * height
-    for x in range(width):
+    for x in range(x_begin, x_end):
         if occ[t, y, x] == 0.0:
             continue
         x0, x1, fx = clamped_corners(float(x) + flow[t, y, x, 0], width)
@@ -236,9 +239,11 @@ def temporal_term(X, flow, occ, gX, energy_rows, lam: float, alpha: float = 5.0,
     shape = (t - 1, h, w, c)
     weight = scratch_buffer(workspace, f"{__name__}.splat_weight", shape, float,
                             lambda: wp.empty(shape, dtype=float, device=dev), dev)
-    launch_rows(temporal_gather_rows, (t - 1) * h,
-                [X, flow, occ, gX, weight, energy_rows, float(lam), float(alpha)], device=dev)
-    launch_rows(temporal_splat_rows, (t - 1) * h, [flow, occ, weight, gX], device=dev, align=h)
+    tiles = row_tiles(w, dev)
+    launch_rows(temporal_gather_rows, (t - 1) * h * tiles,
+                [tiles, X, flow, occ, gX, weight, energy_rows, float(lam), float(alpha)], device=dev)
+    launch_rows(temporal_splat_rows, (t - 1) * h * tiles, [tiles, flow, occ, weight, gX], device=dev,
+                align=h * tiles)
 
 
 @host("temporal_terms")
@@ -271,7 +276,9 @@ def temporal_terms(A, S, flow, occ, gA, gS, energy_rows, lam_albedo: float, lam_
     weight = scratch_buffer(workspace, f"{__name__}.pair_splat_weight", shape, float,
                             lambda: wp.empty(shape, dtype=float, device=dev), dev)
     S4, gS4 = with_channel_axis(S), with_channel_axis(gS)
-    launch_rows(temporal_pair_gather_rows, (t - 1) * h,
-                [A, S4, flow, occ, gA, gS4, weight, energy_rows, float(lam_albedo), float(lam_shading),
+    tiles = row_tiles(w, dev)
+    launch_rows(temporal_pair_gather_rows, (t - 1) * h * tiles,
+                [tiles, A, S4, flow, occ, gA, gS4, weight, energy_rows, float(lam_albedo), float(lam_shading),
                  float(alpha)], device=dev)
-    launch_rows(temporal_pair_splat_rows, (t - 1) * h, [flow, occ, weight, gA, gS4], device=dev, align=h)
+    launch_rows(temporal_pair_splat_rows, (t - 1) * h * tiles, [tiles, flow, occ, weight, gA, gS4], device=dev,
+                align=h * tiles)

@@ -35,9 +35,10 @@ from ivkernels.kernels.cache import cached
 from ivkernels.kernels.contract import implements
 from ivkernels.kernels.host import (KMEANS_ITERATIONS, MIN_SEPARATION, flow_scratch_shape,  # noqa: F401
                                     median_network, shading_scratch_shape, spatial_weights)
-from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.median import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.warp.row_tiles import row_span
 from ivkernels.kernels.workspace import scratch_buffer
 
 host = implements(FAMILY, FRONT)
@@ -420,11 +421,14 @@ def weighted_median_shading_rows(row_begin: int, S: wp.array3d(dtype=float), flo
 
 
 @wp.kernel
-def weighted_median_flow_rows(row_begin: int, flow: wp.array4d(dtype=float), lab: wp.array4d(dtype=float),
-                              occ: wp.array3d(dtype=float), mask: wp.array3d(dtype=float),
-                              out: wp.array4d(dtype=float), scratch: wp.array2d(dtype=wp.vec3),
-                              spatial: wp.array(dtype=float), radius: int, sigma_i: float):
-    r = row_begin + wp.tid()
+def weighted_median_flow_rows(row_begin: int, tiles: int, flow: wp.array4d(dtype=float),
+                              lab: wp.array4d(dtype=float), occ: wp.array3d(dtype=float),
+                              mask: wp.array3d(dtype=float), out: wp.array4d(dtype=float),
+                              scratch: wp.array2d(dtype=wp.vec3), spatial: wp.array(dtype=float), radius: int,
+                              sigma_i: float):
+    # thread ``slot`` covers one tile of row ``r`` (the whole row on the CPU), with scratch row ``slot``
+    slot = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(slot, tiles, flow.shape[2])
     height = flow.shape[1]
     width = flow.shape[2]
     t = r // height
@@ -434,7 +438,7 @@ def weighted_median_flow_rows(row_begin: int, flow: wp.array4d(dtype=float), lab
     last_u = float(0.0)   # the answers at the previous pixel when it had them (has_last = 1):
     last_v = float(0.0)   # the first pivots tried, as neighbouring windows share most pixels
     has_last = int(0)
-    for x in range(width):
+    for x in range(x_begin, x_end):
         u0 = flow[t, y, x, 0]
         v0 = flow[t, y, x, 1]
         out[t, y, x, 0] = u0
@@ -458,12 +462,12 @@ def weighted_median_flow_rows(row_begin: int, flow: wp.array4d(dtype=float), lab
                 e2 = lab[t, yy, xx, 2] - l2
                 w = wp.exp(-spatial[k] - (e0 * e0 + e1 * e1 + e2 * e2) * inv_i)
                 w = w * occ[t, yy, xx]
-                scratch[r, n] = wp.vec3(flow[t, yy, xx, 0], flow[t, yy, xx, 1], w)
+                scratch[slot, n] = wp.vec3(flow[t, yy, xx, 0], flow[t, yy, xx, 1], w)
                 n += wp.where(w > 0.0, 1, 0)
                 k += 1
         # u first, keeping every (u, v, w) triple for v
-        last_u = l1_quadratic_select(scratch, r, n, 0, 2, 1, u0, 0.0, last_u, has_last)
-        last_v = l1_quadratic_select(scratch, r, n, 1, 2, 0, v0, 0.0, last_v, has_last)
+        last_u = l1_quadratic_select(scratch, slot, n, 0, 2, 1, u0, 0.0, last_u, has_last)
+        last_v = l1_quadratic_select(scratch, slot, n, 1, 2, 0, v0, 0.0, last_v, has_last)
         has_last = 1
         out[t, y, x, 0] = last_u
         out[t, y, x, 1] = last_v
@@ -472,6 +476,12 @@ def weighted_median_flow_rows(row_begin: int, flow: wp.array4d(dtype=float), lab
 # ----------------------------------------------------------------------------
 # Host functions
 # ----------------------------------------------------------------------------
+
+#: Pixels per thread of the flow's weighted median on a GPU: each thread keeps its
+#: own window of (u, v, weight) triples, 12 (2 radius + 1)^2 bytes, so one thread
+#: per pixel would hold a frame stack's windows at once (6.6 GB at 640x480x8).
+FLOW_MEDIAN_PIXELS_PER_TILE = 32
+
 
 def _cached_table(key: tuple, make, dtype, device):
     """A small read-only table (``make()`` as a NumPy array) kept per key and device in the
@@ -589,12 +599,16 @@ def weighted_median_flow(flow, lab, occ, mask, out, radius: int = 7, sigma_x: fl
     out : wp.array float32 (T, H, W, 2), written.  Must not overlap ``flow``.
     workspace : optional :class:`ivkernels.kernels.workspace.Workspace` that
         keeps the float32 scratch of shape :func:`flow_scratch_shape` between
-        calls; without one it is allocated for this call.
+        calls (its rows times :func:`row_tiles` on a GPU, one window per
+        thread); without one it is allocated for this call.
     """
     t, h, w, _ = flow.shape
-    buf = _scratch(workspace, "flow_window", flow_scratch_shape(flow.shape, radius), flow.device)
+    tiles = row_tiles(w, flow.device, FLOW_MEDIAN_PIXELS_PER_TILE)
+    rows, width = flow_scratch_shape(flow.shape, radius)
+    buf = _scratch(workspace, "flow_window", (rows * tiles, width), flow.device)
     triples = _as_vectors(buf, wp.vec3)
     spatial = _cached_table(("spatial_exponent", radius, sigma_x), lambda: spatial_exponent(radius, sigma_x),
                             wp.float32, flow.device)
-    launch_rows(weighted_median_flow_rows, t * h,
-                [flow, lab, occ, mask, out, triples, spatial, radius, sigma_i], device=flow.device, balance=True)
+    launch_rows(weighted_median_flow_rows, t * h * tiles,
+                [tiles, flow, lab, occ, mask, out, triples, spatial, radius, sigma_i], device=flow.device,
+                balance=True)

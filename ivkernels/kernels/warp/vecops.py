@@ -29,7 +29,7 @@ import numpy as np
 import warp as wp
 
 from ivkernels.kernels.contract import implements
-from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.launch import gpu_layout, launch_rows
 from ivkernels.kernels.reference.vecops import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
 
@@ -236,7 +236,7 @@ def basis_combine_chunks(row_begin: int, out: wp.array(dtype=float), basis: wp.a
 def _chunk(device, reduction: bool = False) -> int:
     """Elements per thread on ``device`` (a multiple of 4): :data:`CHUNK` on the CPU,
     :data:`CUDA_CHUNK` or, for a reduction, :data:`CUDA_REDUCTION_CHUNK` on a GPU."""
-    if wp.get_device(device).is_cpu:
+    if not gpu_layout(device):
         return CHUNK
     return CUDA_REDUCTION_CHUNK if reduction else CUDA_CHUNK
 

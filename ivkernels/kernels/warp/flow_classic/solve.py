@@ -18,9 +18,10 @@ import numpy as np
 import warp as wp
 
 from ivkernels.kernels.contract import implements
-from ivkernels.kernels.launch import get_threads, launch_rows, min_band_rows, row_bands
+from ivkernels.kernels.launch import get_threads, gpu_layout, launch_rows, min_band_rows, row_bands, row_tiles
 from ivkernels.kernels.reference.flow_classic import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.warp.row_tiles import row_span
 
 host = implements(FAMILY, FRONT)
 
@@ -124,9 +125,18 @@ def sor_relax_row(du: wp.array4d(dtype=float), system: wp.array4d(dtype=float), 
 
 
 @wp.kernel
-def sor_sweep_rows(row_begin: int, du: wp.array4d(dtype=float), system: wp.array4d(dtype=float),
+def sor_sweep_rows(row_begin: int, tiles: int, du: wp.array4d(dtype=float), system: wp.array4d(dtype=float),
                    smooth: wp.array4d(dtype=float), lam: float, omega: float, parity: int):
-    sor_relax_row(du, system, smooth, lam, omega, row_begin + wp.tid(), parity)
+    """The pixels of colour ``parity`` in one tile of a stack row (the whole row
+    with one tile per row: :func:`sor_relax_row`'s order), left to right."""
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, du.shape[2])
+    height = du.shape[1]
+    t = r // height
+    y = r - t * height
+    x = x_begin + (parity + y + x_begin) % 2
+    while x < x_end:
+        sor_relax(du, system, smooth, lam, omega, t, y, x)
+        x += 2
 
 
 @wp.kernel
@@ -226,7 +236,9 @@ def sor_sweep(du, system, smooth, lam: float, omega: float, parity: int) -> None
     """
     t, h, w, _ = du.shape
     dev = du.device
-    launch_rows(sor_sweep_rows, t * h, [du, system, smooth, float(lam), float(omega), int(parity)], dev)
+    tiles = row_tiles(w, dev, pixels_per_tile=2)        # on a GPU one pixel of the colour per thread
+    launch_rows(sor_sweep_rows, t * h * tiles, [tiles, du, system, smooth, float(lam), float(omega), int(parity)],
+                dev)
 
 
 @host("sor_full_sweep")
@@ -251,7 +263,7 @@ def sor_full_sweep(du, system, smooth, lam: float, omega: float) -> None:
     """
     t, h, w, _ = du.shape
     dev = du.device
-    if not dev.is_cpu:
+    if gpu_layout(dev):
         sor_sweep(du, system, smooth, lam, omega, 0)
         sor_sweep(du, system, smooth, lam, omega, 1)
         return
