@@ -18,6 +18,8 @@ wp.set_module_options({"enable_backward": False})
 def row_span(k: int, tiles: int, width: int):
     """Row ``r`` and columns ``[x0, x1)`` of thread ``k`` when each row is cut into
     ``tiles`` tiles of (as near as possible) equal width."""
+    if tiles == 1:
+        return k, 0, width
     r = k // tiles
     j = k - r * tiles
     return r, (j * width) // tiles, ((j + 1) * width) // tiles
