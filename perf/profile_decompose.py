@@ -35,6 +35,12 @@ wrappers' overhead only (a few microseconds per call, printed).
 
     python perf/profile.py                                  # 8 frames at 640x480, 2 threads
     python perf/profile.py --size 240 320 --frames 8 --no-cprofile
+    python perf/profile.py --device cuda --no-cprofile      # on a GPU: every timed call waits for it
+
+On a CUDA device the roof is the device's (a one-element-per-thread triad,
+FMA chains, a launch with and without a wait), and a last table gives the
+threads per launch of the most launched kernels against the threads the
+device holds at once.
 
 (``perf/profile.py`` runs this module's :func:`main`.)
 """
