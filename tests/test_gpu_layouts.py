@@ -52,7 +52,7 @@ def assert_close(cpu, gpu, rtol=1e-5):
         np.testing.assert_allclose(b, a, rtol=rtol, atol=rtol * scale)
 
 
-def test_row_tiles_cover_every_pixel_once(monkeypatch):
+def test_row_tiles_per_device_and_forced(monkeypatch):
     assert launch.row_tiles(17, "cpu") == 1 and not launch.gpu_layout("cpu")
     monkeypatch.setattr(launch, "FORCE_GPU_LAYOUT_TILES", 4)
     assert launch.gpu_layout("cpu")

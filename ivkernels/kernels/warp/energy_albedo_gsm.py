@@ -363,11 +363,6 @@ def gsm_bands(band_begin: int, band_rows: int, radius: int, A: wp.array4d(dtype=
             energy_rows[r] = energy_rows[r] + wp.float64(lam) * e
 
 
-#: Rows per band on a GPU where the band kernel runs there (tests); the term itself
-#: runs one thread per pixel there (:func:`gsm_pixels`).
-CUDA_BAND_ROWS = 4
-
-
 @wp.func
 def cell_lookup(coef: wp.array(dtype=float), cells_per_root: float, r2: float):
     """``(g, g')`` at ``r2`` from the cell coefficients (as :func:`pair_row` reads them)."""
@@ -429,14 +424,12 @@ BANDS_PER_THREAD = 16
 MIN_BAND_ROWS = 32
 
 
-def band_rows_for(n_rows: int, device) -> int:
-    """Rows per band: on the CPU about :data:`BANDS_PER_THREAD` bands per launch
-    thread (handed out in turn, :func:`launch_rows` ``balance=True``), at
-    least :data:`MIN_BAND_ROWS` rows each, so the ``radius`` rows each band
+def band_rows_for(n_rows: int) -> int:
+    """Rows per band of the CPU's band kernel: about :data:`BANDS_PER_THREAD` bands
+    per launch thread (handed out in turn, :func:`launch_rows` ``balance=True``),
+    at least :data:`MIN_BAND_ROWS` rows each, so the ``radius`` rows each band
     walks above itself (1.25 rows' pairs for the 5x5 window) cost a few
-    percent at most; on a GPU :data:`CUDA_BAND_ROWS`."""
-    if not wp.get_device(device).is_cpu:
-        return CUDA_BAND_ROWS
+    percent at most (a GPU runs :func:`gsm_pixels` instead)."""
     return max(MIN_BAND_ROWS, -(-n_rows // (BANDS_PER_THREAD * get_threads())))
 
 
@@ -477,9 +470,7 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
     dev = A.device
     n = table_g.shape[0]
     cells_per_root = (n - 1) / math.sqrt(r2_max)
-    band_rows = band_rows_for(T * H, dev)
-    n_bands = -(-T * H // band_rows)
-    if n_bands == 0 or W == 0:
+    if T * H == 0 or W == 0:
         return
     coef = _scratch(workspace, "cell_coefficients", (4 * n,), float, dev)
     wp.launch(cell_coefficients, dim=n, inputs=[table_g, table_dg, float(r2_max), float(cells_per_root), coef],
@@ -493,6 +484,8 @@ def gsm_smoothness(A, sigma_inv, table_g, table_dg, r2_max: float, gA, energy_ro
                   device=dev)
         wp.launch(energy_row_sums, dim=T * H, inputs=[energy, float(lam), energy_rows], device=dev)
         return
+    band_rows = band_rows_for(T * H)
+    n_bands = -(-T * H // band_rows)
     slots = n_bands * (radius + 1)
     whitened = _scratch(workspace, "whitened_rows", (slots * 3 * W,), float, dev)
     sums = _scratch(workspace, "pixel_sums", (slots * 4 * W,), float, dev)

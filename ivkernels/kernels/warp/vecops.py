@@ -241,7 +241,7 @@ def _chunk(device, reduction: bool = False) -> int:
     return CUDA_REDUCTION_CHUNK if reduction else CUDA_CHUNK
 
 
-def _chunks(n: int, chunk: int = CHUNK) -> int:
+def _chunks(n: int, chunk: int) -> int:
     return (n + chunk - 1) // chunk
 
 
