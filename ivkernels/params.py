@@ -168,6 +168,20 @@ class Params:
         0.95, 0.60 -> 0.71).  Chosen at the default solver budget; run to
         convergence, the ground kind it helps loses instead (one sequence
         checked).
+    shading_stable_gain, shading_stable_spread, shading_stable_floor
+        Weiss's cue on the pairs across a step (:mod:`ivkernels.solver.
+        step_evidence`, :func:`~ivkernels.solver.step_evidence.stable_pair_weights`):
+        in a window whose light changes (``n > 1``), a horizontal or vertical
+        pair that holds still and whose log-luminance step keeps its contrast
+        over the frames (median step ``m`` against ``shading_step_tau``,
+        median absolute deviation against ``spread``; steps of 1 log unit or
+        more left out; evidence under ``floor`` set to 0, the small stable
+        steps a camera's noise gives every pair) adds
+        ``lam_shading_local * gain * e * rho(S(x + d) - S(x))`` to Eq. 9's
+        local term: the shading across a step that stays under every light
+        pays more, so the step goes to the albedo, as in Weiss's median.
+        Gain 0 (default): off; see perf/RESULTS.md, "Weiss's cue on the pairs
+        across a stable step, as kernels".
     shading_gate_chroma
         With the gate on and this > 0, a contrast change where the input's
         log chromaticity changes by about this much is not taken for a
@@ -285,6 +299,9 @@ class Params:
     shading_step_share_radius: float = 0.1
     shading_step_static_flow: float = 1.0
     shading_step_stability_changing_light: bool = True
+    shading_stable_gain: float = 0.0
+    shading_stable_spread: float = 0.05
+    shading_stable_floor: float = 0.3
     shading_gate_chroma: float = 0.0
     lam_shading_nonlocal: float = 10000.0
     lam_coupling: float = 10.0
@@ -390,4 +407,8 @@ _RULES = {
     "shading_step_share_radius": Range(float, 0.0, 1.0, why="a fraction of the frame's shorter side; "
                                        "0: the share of the whole video"),
     "shading_gate_chroma": Range(float, 0.0, why="a log-chromaticity change; 0: the gate ignores colour"),
+    "shading_stable_gain": Range(float, 0.0, why="a weight factor on Eq. 9's local weight; 0 switches the "
+                                                 "stable-step pairs off"),
+    "shading_stable_spread": Range(float, 0.0, low_open=True, why="a median absolute deviation of a log step"),
+    "shading_stable_floor": Range(float, 0.0, 1.0, why="an evidence in [0, 1)"),
 }

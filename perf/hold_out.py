@@ -155,6 +155,9 @@ def report(rows: dict) -> None:
     for i, label in enumerate(labels):
         print(f"  {i}: {label:{width}s}")
 
+    if len(kinds) < 2:
+        print("\nOne kind only: nothing to hold out.")
+        return
     print("\nLeave one kind out: the setting chosen on the other kinds, and the held-out kind's ratio")
     held = {}
     for k in kinds:

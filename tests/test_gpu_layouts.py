@@ -63,14 +63,15 @@ def test_row_tiles_per_device_and_forced(monkeypatch):
 def test_per_pixel_terms_in_tiles_match_the_cpu_layout(be, monkeypatch, shape):
     rng = np.random.default_rng(sum(shape))
     t, h, w = shape
-    I = rng.normal(-1, 0.5, (t, h, w, 3)).astype(np.float32)
+    # steps that mostly hold from frame to frame, and a flow that mostly holds still: stable pairs
+    I = (rng.normal(-1, 0.5, (1, h, w, 3)) + rng.normal(0, 0.05, (t, h, w, 3))).astype(np.float32)
     A = rng.normal(-1, 0.5, (t, h, w, 3)).astype(np.float32)
     S = rng.normal(0, 0.5, (t, h, w)).astype(np.float32)
     S_tilde = rng.normal(0, 0.5, (t, h, w)).astype(np.float32)
     w_lum = rng.uniform(0.01, 1, (t, h, w)).astype(np.float32)
     gate = rng.uniform(0, 1, (t, h, w)).astype(np.float32)
     w_bnd = rng.uniform(0, 1, (max(t - 1, 1), h, w)).astype(np.float32)
-    flow = rng.normal(0, 1.5, (max(t - 1, 1), h, w, 2)).astype(np.float32)
+    flow = rng.normal(0, 0.8, (max(t - 1, 1), h, w, 2)).astype(np.float32)
     occ = (rng.uniform(0, 1, (max(t - 1, 1), h, w)) > 0.2).astype(np.float32)
     a = be.asarray
 
@@ -81,6 +82,11 @@ def test_per_pixel_terms_in_tiles_match_the_cpu_layout(be, monkeypatch, shape):
         be.energy_shading.shading_smoothness_gated(a(S), a(gate), gS, rows, lam=3.0, eps=1e-3)
         be.energy_shading.coupling_term(a(S), a(S_tilde), a(w_bnd[: t - 1] if t > 1 else w_bnd[:0]), gS, rows,
                                         lam=5.0)
+        pairs = be.empty((h, w, 2))
+        be.step_evidence.stable_pairs(a(I), a(flow[: t - 1] if t > 1 else flow[:0]), pairs, 0.3, 0.4, 0.1, 1.0)
+        if h * w > 20:
+            assert (be.numpy(pairs) > 0).sum() > 2          # the pair term is not all zero
+        be.energy_shading.shading_pair_smoothness(a(S), pairs, gS, rows, lam=4.0, eps=1e-3)
         if t > 1:
             be.energy_temporal.temporal_terms(a(A), a(S), a(flow), a(occ), gA, gS, rows, lam_albedo=10.0,
                                               lam_shading=1.0, alpha=0.5, workspace=Workspace())
@@ -88,7 +94,7 @@ def test_per_pixel_terms_in_tiles_match_the_cpu_layout(be, monkeypatch, shape):
         out, A2 = be.empty((t, h, w)), be.empty((t, h, w, 3))
         be.energy_data.constrained_gradient(gA, gS, out)
         be.energy_data.constrained_albedo(a(I), a(S), A2)
-        return [be.numpy(x).copy() for x in (gA, gS, rows, out, A2)]
+        return [be.numpy(x).copy() for x in (gA, gS, rows, out, A2, pairs)]
 
     assert_close(*both_layouts(monkeypatch, terms))
 

@@ -15,7 +15,10 @@ temporal shading           Eq. 8        once (``temporal_term`` on A or S alone)
 local shading smoothness   Eq. 9        ``energy_shading.shading_smoothness`` (``_gated``
                                         with the cut at flow jumps, ``motion_maps.
                                         shading_cut_gate``, ``maps.shading_gate`` and
-                                        the step evidence, ``step_evidence.step_gate``)
+                                        the step evidence, ``step_evidence.step_gate``),
+                                        and ``energy_shading.shading_pair_smoothness`` on
+                                        the stable steps' pairs (``step_evidence.
+                                        stable_pairs``)
 coupling to S~             Eq. 13       ``energy_shading.coupling_term``
 albedo GSM smoothness      Eq. 11       ``energy_albedo_gsm.gsm_smoothness``
 albedo global sparsity     Eq. 12       ``energy_albedo_entropy.entropy_term``
@@ -41,7 +44,7 @@ from ivkernels.kernels.workspace import Workspace
 from ivkernels.params import Params
 from ivkernels.priors import entropy_blur_weights
 from ivkernels.solver.motion_maps import shading_cut_gate
-from ivkernels.solver.step_evidence import multiply_step_gate
+from ivkernels.solver.step_evidence import multiply_step_gate, stable_pair_weights
 
 
 class WindowEnergy:
@@ -84,6 +87,7 @@ class WindowEnergy:
         self.gA, self.gS = self.G[: 3 * n].reshape((T, h, w, 3)), self.G[3 * n:].reshape((T, h, w))
         self.S_tilde = be.empty((T, h, w))
         self.gate = self._local_shading_gate()
+        self.stable_pairs = self._stable_pairs()
         self.workspace = Workspace()        # the kernels' scratch buffers, freed with this energy
         self._rows_shape = (T * h,)
         self._gsm = None
@@ -138,6 +142,22 @@ class WindowEnergy:
                                share_radius=params.shading_step_share_radius)
         return gate
 
+    def _stable_pairs(self):
+        """Weights of the stable steps' pairs (``Params.shading_stable_gain``), or ``None``.
+
+        Weiss's cue on the horizontal and vertical pairs: a step that keeps
+        its contrast under every light of the window is an albedo edge, and
+        the shading across it pays ``gain`` times Eq. 9's local weight more
+        (:func:`ivkernels.solver.step_evidence.stable_pair_weights`).  Needs the
+        flow; the window's light must change (``window_params`` sets the gain to
+        0 where it finds one shading).
+        """
+        p = self.params
+        if not (self.temporal and p.shading_stable_gain > 0 and p.lam_shading_local > 0):
+            return None
+        return stable_pair_weights(self.be, self.I, self.flow, p.shading_step_tau, p.shading_stable_spread,
+                                   p.shading_stable_floor, p.shading_step_static_flow)
+
     # ------------------------------------------------------------------ terms
     def _add_terms(self, rows, terms=None) -> None:
         """Add every term's gradient into G and energy into ``rows``."""
@@ -174,6 +194,10 @@ class WindowEnergy:
             else:
                 be.energy_shading.shading_smoothness_gated(self.S, self.gate, self.gS, rows,
                                                            lam=p.lam_shading_local, eps=p.eps_shading)
+            if self.stable_pairs is not None:
+                be.energy_shading.shading_pair_smoothness(self.S, self.stable_pairs, self.gS, rows,
+                                                          lam=p.lam_shading_local * p.shading_stable_gain,
+                                                          eps=p.eps_shading)
         if want("albedo_smooth") and self._gsm is not None:
             sigma_inv, table_g, table_dg, r2_max = self._gsm
             be.energy_albedo_gsm.gsm_smoothness(self.A, sigma_inv, table_g, table_dg, r2_max,

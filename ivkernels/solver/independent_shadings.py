@@ -157,8 +157,10 @@ def window_params(params, n: float):
     ``Params.shading_step_stability_changing_light``, a window with no new
     shading (``n = 1``) does not read Weiss's cue (``shading_step_stability``
     0): with no light change to read, the cue would take a step whose
-    contrast the flow's errors or a moving shadow change for light.
-    Unchanged at ``n = 1`` with the switch off.
+    contrast the flow's errors or a moving shadow change for light.  For the
+    same reason such a window has no stable-step pairs
+    (``shading_stable_gain`` 0).  Unchanged at ``n = 1`` with the switch off
+    and no stable-step pairs.
     """
     changes = {}
     if n != 1.0:
@@ -166,4 +168,6 @@ def window_params(params, n: float):
                        lam_albedo_sparsity=params.lam_albedo_sparsity / n)
     if params.shading_step_stability_changing_light and n <= 1.0:
         changes.update(shading_step_stability=0.0)
+    if n <= 1.0 and params.shading_stable_gain > 0:
+        changes.update(shading_stable_gain=0.0)
     return params.replace(**changes) if changes else params

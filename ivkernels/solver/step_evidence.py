@@ -28,6 +28,16 @@ scales the gain by ``(1 - chromatic_share)^2`` (or, with
 read around each pixel, :func:`local_chromatic_share`) and, where the scene
 holds still, the evidence by Weiss's stability cue.
 
+Weiss's cue is also read on the pairs themselves (:func:`stable_pair_weights`,
+``Params.shading_stable_gain``): a horizontal or vertical pair whose step
+keeps its contrast under every light of a window whose light changes
+(``n > 1``) and whose scene holds still gets an extra term of Eq. 9's kind,
+``lambda_Ss * gain * sum_t e sqrt((S(x + d) - S(x))^2 + eps^2)``, with ``e``
+the pair's evidence (:func:`ivkernels.kernels.reference.step_evidence.stable_pairs`).
+On the pair, not on its pixels: a per-pixel weight also stiffens the pairs
+along the edge, and the shading's smooth variation along a printed edge then
+goes into the albedo (perf/RESULTS.md, "What teabag2 loses to Weiss").
+
 The formula is computed by the kernels of the ``step_evidence`` family on
 the backend's arrays (:mod:`ivkernels.kernels.warp.step_evidence`, the
 Taichi mirror, and the NumPy reference
@@ -46,7 +56,7 @@ from ivkernels.kernels.reference.step_evidence import AXIS_NEIGHBOURS, DARK_OFFS
 from ivkernels.params import Params
 
 __all__ = ["chromatic_share", "local_chromatic_share", "grey_step_gate", "multiply_step_gate", "share_radius_pixels",
-           "step_evidence", "step_gate", "DARK_OFFSET", "SHARE_PRIOR_STEPS", "STATIC_FLOW"]
+           "stable_pair_weights", "step_evidence", "step_gate", "DARK_OFFSET", "SHARE_PRIOR_STEPS", "STATIC_FLOW"]
 
 #: Flow (pixels) below which a pixel counts as holding still for Weiss's cue:
 #: the default of ``Params.shading_step_static_flow``, read from there.
@@ -191,3 +201,28 @@ def multiply_step_gate(be, log_image, gate, gain: float, tau: float, tau_chroma:
         counts = be.empty((T * h, 2), np.int32)
         kernels.step_counts(offset, counts, tau, tau_chroma)
     kernels.step_gate(offset, counts, weight, gate, gain, tau, tau_chroma)
+
+
+def stable_pair_weights(be, log_image, flow, tau: float, stability: float, floor: float,
+                        static_flow: float = STATIC_FLOW):
+    """Weiss's stable-step evidence of each pixel's right and lower pair, on the backend's arrays.
+
+    ``(1 - exp(-(m / tau)^2)) exp(-(MAD / stability)^2)`` of the median ``m``
+    and median absolute deviation of the pair's log-luminance step over the
+    window's frames, read on ``log(i + DARK_OFFSET)``; 0 under ``floor``, for
+    steps of ``MAX_STABLE_STEP`` log units or more, and where either pixel's
+    flow moves ``static_flow`` px or more (kernel ``step_evidence.stable_pairs``).
+
+    be : backend.
+    log_image : (T, h, w, 3) backend array, ``I = log i``.
+    flow : (T-1, h, w, 2) backend array.
+    tau, stability : log units, > 0; floor : >= 0; static_flow : pixels, > 0.
+
+    Returns the (h, w, 2) backend array of pair weights in [0, 1).
+    """
+    T, h, w, _ = log_image.shape
+    offset = be.empty((T, h, w, 3))
+    be.step_evidence.offset_log(log_image, offset, DARK_OFFSET)
+    pairs = be.empty((h, w, 2))
+    be.step_evidence.stable_pairs(offset, flow, pairs, tau, stability, floor, static_flow)
+    return pairs

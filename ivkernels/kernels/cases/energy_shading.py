@@ -1,5 +1,5 @@
 """Cases of :mod:`ivkernels.kernels.warp.energy_shading` (Eq. 9 local smoothness, ungated and gated,
-Eq. 13 coupling)."""
+the weighted axis pairs of the stable steps, Eq. 13 coupling)."""
 from __future__ import annotations
 
 from ivkernels.kernels.cases import Case, Gradient, Tol
@@ -26,6 +26,18 @@ def _smoothness_gated_reference(v):
     return {"energy_rows": v["energy_rows"] + er, "gS": v["gS"] + gS}
 
 
+def _pair_smoothness(rng, T, H, W):
+    weights = uniform(rng, (H, W, 2))
+    weights[rng.uniform(size=(H, W, 2)) < 0.4] = 0.0            # most pairs carry no weight
+    return {"S": normal(rng, (T, H, W), -0.5, 0.5), "pairs": weights, "gS": normal(rng, (T, H, W)),
+            "energy_rows": rng.normal(size=T * H), "lam": 40.0, "eps": 0.01}
+
+
+def _pair_smoothness_reference(v):
+    er, gS = ref.shading_pair_smoothness(v["S"], v["pairs"], v["lam"], v["eps"])
+    return {"energy_rows": v["energy_rows"] + er, "gS": v["gS"] + gS}
+
+
 def _coupling(frames_with_flow):
     def make(rng, T, H, W):
         t_flow = frames_with_flow(T)
@@ -49,6 +61,10 @@ CASES = (
     Case("energy_shading", "shading_smoothness_gated", _smoothness_gated, ("S", "gate", "gS", "energy_rows"),
          ("gS", "energy_rows"), _smoothness_gated_reference, keywords=("lam", "eps"), updates=("gS", "energy_rows"),
          tol=_TOL, no_alias=(("S", "gS"), ("gate", "gS")), gradients=(Gradient("S", "gS", overrides={"eps": 0.05}),)),
+    Case("energy_shading", "shading_pair_smoothness", _pair_smoothness, ("S", "pairs", "gS", "energy_rows"),
+         ("gS", "energy_rows"), _pair_smoothness_reference, keywords=("lam", "eps"), updates=("gS", "energy_rows"),
+         tol=_TOL, no_alias=(("S", "gS"),),
+         gradients=(Gradient("S", "gS", overrides={"eps": 0.05}),)),
     *(Case("energy_shading", "coupling_term", _coupling(t_flow), ("S", "S_tilde", "w_bnd", "gS", "energy_rows"),
            ("gS", "energy_rows"), _coupling_reference, variant=variant, keywords=("lam",),
            updates=("gS", "energy_rows"), tol=_TOL, gradients=(Gradient("S", "gS"),))

@@ -1,6 +1,6 @@
 """Cases of :mod:`ivkernels.kernels.warp.step_evidence` (the offset log, the step counts of the
 chromatic share per row and per pixel, the share read around each pixel, the step gate of Eq. 9's
-local term, Weiss's stability cue where the scene holds still)."""
+local term, Weiss's stability cue where the scene holds still, and the stable pairs)."""
 from __future__ import annotations
 
 import numpy as np
@@ -160,6 +160,46 @@ def _still(tau, static_flow):
                 variant=f"tau={tau:g},static_flow={static_flow:g}", tol=Tol(1e-4, 1e-5), ignore=tied)
 
 
+def _stable(T_steps, floor):
+    """Pairs of every kind over the frames: stable grey steps, steps whose contrast changes with the
+    light, a silhouette over ``MAX_STABLE_STEP``, flat pairs, and a moving patch."""
+    def make(rng, T, H, W):
+        yy, xx = np.mgrid[0:H, 0:W]
+        base = np.where(((yy // 3) + (xx // 4)) % 2 == 0, -0.4, -0.75)           # stable steps of 0.35
+        img = np.repeat(base[None, :, :, None], 3, axis=-1).repeat(T, axis=0)
+        light = normal(rng, (T, 1, W, 1), 0.0, 0.25)                             # contrast changing per column
+        img[:, H // 2:] += np.cumsum(light, axis=2)[:, :, : W] * (yy[None, H // 2:, :, None] % 2)
+        img[:, :, W - 2:] -= 3.0                                                  # a dark border: big steps
+        img = img + normal(rng, (T, H, W, 3), 0.0, T_steps) + normal(rng, (T, 1, 1, 1), 0.0, 0.1)
+        f = normal(rng, (pairs(T), H, W, 2), 0.0, 0.2)
+        f[:, : H // 3, : W // 3] += 3.0                                            # a moving patch
+        return {"log_image": img.astype(F32), "flow": f, "pairs": nans((H, W, 2)), "tau": 0.1,
+                "stability": 0.05, "floor": floor, "static_flow": 1.0}
+
+    def tied(v):
+        """Pairs whose evidence, median step or speed lies within a band of a threshold: float32 and
+        float64 may decide them differently."""
+        L, _ = ref.luminance_chroma(v["log_image"])
+        speed = np.sqrt((np.asarray(v["flow"], np.float64) ** 2).sum(axis=-1))
+        near_speed = (np.abs(speed - v["static_flow"]) < TIE).any(axis=0)
+        out = np.zeros((*L.shape[1:], 2), bool)
+        for k, (dy, dx) in enumerate(ref.AXIS_NEIGHBOURS):
+            a, b = ref.pair_slices(L.shape, dy, dx)
+            steps = L[b] - L[a]
+            m = np.median(steps, axis=0)
+            mad = np.median(np.abs(steps - m), axis=0)
+            ev = (1.0 - np.exp(-(m / v["tau"]) ** 2)) * np.exp(-(mad / v["stability"]) ** 2)
+            out[a[1], a[2], k] = ((np.abs(np.abs(m) - ref.MAX_STABLE_STEP) < 1e-4)
+                                  | (np.abs(ev - v["floor"]) < 1e-4) | near_speed[a[1:]] | near_speed[b[1:]])
+        return {"pairs": out}
+
+    return Case("step_evidence", "stable_pairs", make,
+                ("log_image", "flow", "pairs", "tau", "stability", "floor", "static_flow"), ("pairs",),
+                lambda v: {"pairs": ref.stable_pairs(v["log_image"], v["flow"], v["tau"], v["stability"],
+                                                     v["floor"], v["static_flow"])},
+                variant=f"noise={T_steps:g},floor={floor:g}", tol=Tol(1e-4, 1e-4), ignore=tied)
+
+
 CASES = (
     _offset_log(ref.DARK_OFFSET),
     _offset_log(0.5),
@@ -176,4 +216,6 @@ CASES = (
     _gate(0.25, 0.0, "none"),
     _still(0.3, 0.25),
     _still(0.1, 1.0),
+    _stable(0.01, 0.3),
+    _stable(0.03, 0.0),
 )

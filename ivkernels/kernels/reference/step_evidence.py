@@ -29,6 +29,16 @@ share is that of a square window of the pixel's frame with ``prior_steps``
 steps of the whole video's share added (:func:`pixel_counts` per pixel,
 :func:`local_share` of their window sums), and ``(1 - s)^2`` goes into the
 weight (:func:`share_weight`) while the gain stays unscaled.
+
+Weiss's cue also gives a second, separate weight (:func:`stable_pairs`), on
+the horizontal and vertical pairs themselves rather than on pixels: over the
+window's frames, the step ``s_t = L(t, x + d) - L(t, x)`` of a pair that
+holds still, its median ``m`` and median absolute deviation ``MAD``, and the
+pair's evidence ``(1 - exp(-(m / tau)^2)) exp(-(MAD / stability)^2)``: a step
+that keeps its contrast under every light of the window is an albedo edge
+(Weiss, ICCV 2001).  Steps of :data:`MAX_STABLE_STEP` log units or more (an
+object's outline against a black background) and evidence under ``floor``
+(the small, stable steps a camera's noise gives every pair) get 0.
 """
 from __future__ import annotations
 
@@ -55,6 +65,11 @@ HALF_NEIGHBOURS = ((0, 1), (1, 0), (1, 1), (1, -1))
 #: The horizontal and vertical pairs, over which the chromatic share is counted;
 #: a pair is counted in the row of its first pixel (the left or upper one).
 AXIS_NEIGHBOURS = ((0, 1), (1, 0))
+
+#: Largest median log-luminance step (log units) a stable pair may have
+#: (:func:`stable_pairs`): larger steps are an outline against a black
+#: background or a deep shadow's edge, which the cue cannot vouch for.
+MAX_STABLE_STEP = 1.0
 
 
 def _finite_gain(sizes, args):
@@ -92,6 +107,17 @@ FAMILY.declare("still_stability(log_image, flow, weight, tau, static_flow)",
                tau=Positive, static_flow=Positive,
                separate=(("weight", "log_image", "the weight is written while log_image is read"),
                          ("weight", "flow", "the weight is written while flow is read")))
+FAMILY.declare("stable_pairs(log_image, flow, pairs, tau, stability, floor, static_flow)",
+               "Weiss's stable-step evidence of each pixel's right and lower pair over the frames: "
+               "``(1 - exp(-(m / tau)^2)) exp(-(MAD / stability)^2)`` of the median ``m`` and median absolute "
+               "deviation of the pair's log-luminance step, 0 under ``floor``, for ``|m|`` of "
+               "``MAX_STABLE_STEP`` or more, or where the flow of either pixel moves ``static_flow`` px or more.",
+               log_image="T H W 3", flow=Array("T-1 H W 2", layout="(T-1, H, W, 2)"),
+               pairs=Out("H W 2", layout="(H, W, 2)"), tau=FinitePositive, stability=FinitePositive,
+               floor=NonNegative, static_flow=Positive,
+               separate=(("pairs", "log_image", "the pairs are written while log_image is read"),
+                         ("pairs", "flow", "the pairs are written while flow is read")))
+
 
 
 # ----------------------------------------------------------------------------- the references
@@ -230,3 +256,30 @@ def still_stability(log_image, flow, tau: float, static_flow: float) -> np.ndarr
     (a step whose contrast changes from frame to frame is light, not albedo)."""
     log_image = np.asarray(log_image, np.float64)
     return np.where(moving(flow, log_image.shape[0], static_flow), 1.0, ref_maps.shading_gate(log_image, flow, tau))
+
+
+def stable_pairs(log_image, flow, tau: float, stability: float, floor: float, static_flow: float) -> np.ndarray:
+    """(H, W, 2) float64: Weiss's stable-step evidence of the pairs ``(x, x + (0, 1))`` (channel 0)
+    and ``(x, x + (1, 0))`` (channel 1), 0 for a pair leaving the image.
+
+    log_image : (T, H, W, 3), ``I'`` (:func:`offset_log`); ``L = mean_c I'``.
+    flow : (T-1, H, W, 2); a pair holds still when neither pixel's flow in any frame pair
+        is ``static_flow`` px or longer.
+    The evidence of a still pair with median step ``m`` over the ``T`` frames (the mean of the
+    middle two for even ``T``) and median absolute deviation ``MAD``:
+    ``(1 - exp(-(m / tau)^2)) exp(-(MAD / stability)^2)``, 0 when ``|m| >= MAX_STABLE_STEP``
+    or when it is under ``floor``.
+    """
+    L, _ = luminance_chroma(log_image)
+    flow = np.asarray(flow, np.float64)
+    moves = (np.sqrt((flow ** 2).sum(axis=-1)) >= static_flow).any(axis=0)       # (H, W)
+    out = np.zeros((*L.shape[1:], 2))
+    for k, (dy, dx) in enumerate(AXIS_NEIGHBOURS):
+        a, b = pair_slices(L.shape, dy, dx)
+        steps = L[b] - L[a]                                                      # (T, h', w')
+        m = np.median(steps, axis=0)
+        mad = np.median(np.abs(steps - m), axis=0)
+        ev = (1.0 - np.exp(-(m / tau) ** 2)) * np.exp(-(mad / stability) ** 2)
+        ev[(np.abs(m) >= MAX_STABLE_STEP) | (ev < floor) | moves[a[1:]] | moves[b[1:]]] = 0.0
+        out[a[1], a[2], k] = ev
+    return out

@@ -1,5 +1,5 @@
 """Taichi mirror of :mod:`ivkernels.kernels.warp.energy_shading` (Eq. 9 local
-smoothness, ungated and gated, Eq. 13 coupling): same host functions and signatures, NumPy arrays
+smoothness, ungated and gated, the weighted axis pairs, Eq. 13 coupling): same host functions and signatures, NumPy arrays
 passed as ``ti.types.ndarray()``.  The outermost loop runs over rows in parallel.
 The local term's Charbonnier penalty is the data term's (:mod:`ivkernels.kernels.taichi.energy_data`).
 """
@@ -88,6 +88,55 @@ def _local_term(S, gate, gS, energy_rows, lam: float, eps: float) -> None:
         return
     shading_smoothness_rows(S, S if gate is None else gate, gate is not None, gS, energy_rows,
                             float(lam), float(eps))
+
+
+@ti.kernel
+def pair_smoothness_rows(S: nd3, pairs: nd3, gS: nd3, energy_rows: nd1_f64, lam: ti.f32, eps: ti.f32):
+    """The weighted axis pairs (see the Warp module): each pixel adds its right and lower pairs'
+    energy to its row and gathers the derivative of its four axis pairs."""
+    height = S.shape[1]
+    width = S.shape[2]
+    for r in range(S.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        e = ti.f64(0.0)
+        for x in range(width):
+            s = S[t, y, x]
+            g = 0.0
+            if x + 1 < width:
+                wgt = pairs[y, x, 0]
+                if wgt > 0.0:
+                    d = S[t, y, x + 1] - s
+                    rho = charbonnier(d, eps)
+                    e += ti.cast(wgt * rho, ti.f64)
+                    g -= wgt * d / rho
+            if y + 1 < height:
+                wgt = pairs[y, x, 1]
+                if wgt > 0.0:
+                    d = S[t, y + 1, x] - s
+                    rho = charbonnier(d, eps)
+                    e += ti.cast(wgt * rho, ti.f64)
+                    g -= wgt * d / rho
+            if x >= 1:
+                wgt = pairs[y, x - 1, 0]
+                if wgt > 0.0:
+                    d = s - S[t, y, x - 1]
+                    g += wgt * d / charbonnier(d, eps)
+            if y >= 1:
+                wgt = pairs[y - 1, x, 1]
+                if wgt > 0.0:
+                    d = s - S[t, y - 1, x]
+                    g += wgt * d / charbonnier(d, eps)
+            gS[t, y, x] += lam * g
+        energy_rows[r] += ti.cast(lam, ti.f64) * e
+
+
+@host("shading_pair_smoothness")
+def shading_pair_smoothness(S, pairs, gS, energy_rows, lam: float, eps: float = 0.001) -> None:
+    """Add a term of Eq. 9's kind on weighted axis pairs, and its gradient; see
+    :func:`ivkernels.kernels.warp.energy_shading.shading_pair_smoothness`."""
+    if S.size:
+        pair_smoothness_rows(S, pairs, gS, energy_rows, float(lam), float(eps))
 
 
 @host("coupling_term")

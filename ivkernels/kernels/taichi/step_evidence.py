@@ -11,7 +11,7 @@ from ivkernels.kernels.contract import implements
 from ivkernels.kernels.ndarray_checks import FRONT
 from ivkernels.kernels.taichi.maps import log_change_at
 from ivkernels.kernels.reference import step_evidence as ref
-from ivkernels.kernels.reference.step_evidence import FAMILY, share
+from ivkernels.kernels.reference.step_evidence import FAMILY, MAX_STABLE_STEP, share
 
 host = implements(FAMILY, FRONT)
 
@@ -299,6 +299,89 @@ def still_stability_rows(flow: nd4, change: nd4, weight: nd3, tau: ti.f32, stati
                 weight[t, y, x] = ti.exp(-q * q)
 
 
+@ti.kernel
+def luminance_steps_rows(img: nd4, steps: nd4):
+    """``steps[t, y, x, k] = L(t, x + d_k) - L(t, x)`` (right, lower), 0 outside (see the Warp module)."""
+    height = img.shape[1]
+    width = img.shape[2]
+    for r in range(img.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for x in range(width):
+            here = (img[t, y, x, 0] + img[t, y, x, 1] + img[t, y, x, 2]) / 3.0
+            right = 0.0
+            below = 0.0
+            if x + 1 < width:
+                right = (img[t, y, x + 1, 0] + img[t, y, x + 1, 1] + img[t, y, x + 1, 2]) / 3.0 - here
+            if y + 1 < height:
+                below = (img[t, y + 1, x, 0] + img[t, y + 1, x, 1] + img[t, y + 1, x, 2]) / 3.0 - here
+            steps[t, y, x, 0] = right
+            steps[t, y, x, 1] = below
+
+
+@ti.func
+def moves(flow: nd4, y, x, static_flow):
+    """1 when the flow of ``(y, x)`` in any frame pair is ``static_flow`` px or longer, else 0."""
+    out = 0
+    for p in range(flow.shape[0]):
+        fx = flow[p, y, x, 0]
+        fy = flow[p, y, x, 1]
+        if ti.sqrt(fx * fx + fy * fy) >= static_flow:
+            out = 1
+    return out
+
+
+@ti.func
+def middle_of(values: nd4, y, x, k, centre, absolute: ti.template()):
+    """The median over ``t`` of ``values[t, y, x, k] - centre`` (its absolute value with
+    ``absolute``), by ranks (see the Warp module)."""
+    n = values.shape[0]
+    lo = 0.0
+    hi = 0.0
+    for i in range(n):
+        v = values[i, y, x, k] - centre
+        if ti.static(absolute):
+            v = ti.abs(v)
+        rank = 0
+        for j in range(n):
+            u = values[j, y, x, k] - centre
+            if ti.static(absolute):
+                u = ti.abs(u)
+            if u < v or (u == v and j < i):
+                rank += 1
+        if rank == (n - 1) // 2:
+            lo = v
+        if rank == n // 2:
+            hi = v
+    return 0.5 * (lo + hi)
+
+
+@ti.kernel
+def stable_pairs_rows(steps: nd4, flow: nd4, pairs: nd3, tau: ti.f32, stability: ti.f32, floor: ti.f32,
+                      static_flow: ti.f32):
+    """The stable-step evidence of each pixel's right and lower pair (see the Warp module)."""
+    height = pairs.shape[0]
+    width = pairs.shape[1]
+    for y in range(height):
+        for x in range(width):
+            here = moves(flow, y, x, static_flow)
+            for k in ti.static(range(2)):
+                yy = y + k
+                xx = x + 1 - k
+                ev = 0.0
+                if yy < height and xx < width:
+                    if here == 0 and moves(flow, yy, xx, static_flow) == 0:
+                        m = middle_of(steps, y, x, k, 0.0, False)
+                        if ti.abs(m) < MAX_STABLE_STEP:
+                            mad = middle_of(steps, y, x, k, m, True)
+                            q = m / tau
+                            qs = mad / stability
+                            ev = (1.0 - ti.exp(-q * q)) * ti.exp(-qs * qs)
+                            if ev < floor:
+                                ev = 0.0
+                pairs[y, x, k] = ev
+
+
 @host("offset_log")
 def offset_log(log_image, out, offset: float) -> None:
     """``out = log(exp(log_image) + offset)``; see :func:`ivkernels.kernels.warp.step_evidence.offset_log`."""
@@ -360,3 +443,15 @@ def still_stability(log_image, flow, weight, tau: float, static_flow: float) -> 
         change = np.empty((t - 1, h, w, 2), np.float32)
         log_change_rows(log_image, flow, change)
         still_stability_rows(flow, change, weight, tau, static_flow)
+
+
+@host("stable_pairs")
+def stable_pairs(log_image, flow, pairs, tau: float, stability: float, floor: float, static_flow: float) -> None:
+    """Weiss's stable-step evidence of each pixel's right and lower pair; see
+    :func:`ivkernels.kernels.warp.step_evidence.stable_pairs`."""
+    t, h, w, _ = log_image.shape
+    if pairs.size == 0:
+        return
+    steps = np.empty((t, h, w, 2), np.float32)
+    luminance_steps_rows(log_image, steps)
+    stable_pairs_rows(steps, flow, pairs, tau, stability, floor, static_flow)

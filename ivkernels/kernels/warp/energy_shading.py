@@ -1,5 +1,6 @@
 """Shading terms of the intrinsic-video energy, log domain: the local
-smoothness of Eq. 9 and the coupling to S~ of Eq. 13.
+smoothness of Eq. 9, the same penalty on the weighted axis pairs of the
+stable steps, and the coupling to S~ of Eq. 13.
 
 Energy conventions as in :mod:`ivkernels.kernels`: gradients are *added* into
 ``gS``, energies *added* per row into ``energy_rows`` (float64, row ``t*H + y``).
@@ -112,6 +113,49 @@ def coupling_rows(row_begin: int, tiles: int, S: wp.array3d(dtype=float), S_tild
     wp.atomic_add(energy_rows, r, wp.float64(lam) * e)
 
 
+@wp.kernel
+def pair_smoothness_rows(row_begin: int, tiles: int, S: wp.array3d(dtype=float), pairs: wp.array3d(dtype=float),
+                         gS: wp.array3d(dtype=float), energy_rows: wp.array(dtype=wp.float64), lam: float,
+                         eps: float):
+    """The weighted axis pairs: each pixel adds its right and lower pairs' energy to its row and
+    gathers the derivative of its four axis pairs (no atomics on ``gS``)."""
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, S.shape[2])
+    height = S.shape[1]
+    width = S.shape[2]
+    t = r // height
+    y = r - t * height
+    e = wp.float64(0.0)
+    for x in range(x_begin, x_end):
+        s = S[t, y, x]
+        g = float(0.0)
+        if x + 1 < width:
+            wgt = pairs[y, x, 0]
+            if wgt > 0.0:
+                d = S[t, y, x + 1] - s
+                rho = charbonnier(d, eps)
+                e += wp.float64(wgt * rho)
+                g -= wgt * d / rho
+        if y + 1 < height:
+            wgt = pairs[y, x, 1]
+            if wgt > 0.0:
+                d = S[t, y + 1, x] - s
+                rho = charbonnier(d, eps)
+                e += wp.float64(wgt * rho)
+                g -= wgt * d / rho
+        if x >= 1:
+            wgt = pairs[y, x - 1, 0]
+            if wgt > 0.0:
+                d = s - S[t, y, x - 1]
+                g += wgt * d / charbonnier(d, eps)
+        if y >= 1:
+            wgt = pairs[y - 1, x, 1]
+            if wgt > 0.0:
+                d = s - S[t, y - 1, x]
+                g += wgt * d / charbonnier(d, eps)
+        gS[t, y, x] = gS[t, y, x] + lam * g
+    wp.atomic_add(energy_rows, r, wp.float64(lam) * e)
+
+
 @host("shading_smoothness")
 def shading_smoothness(S, gS, energy_rows, lam: float = 2.0, eps: float = 0.001) -> None:
     """Add the local shading smoothness of Eq. 9 and its gradient.
@@ -159,6 +203,31 @@ def _local_term(S, gate, gS, energy_rows, lam: float, eps: float) -> None:
     tiles = row_tiles(w, S.device)
     launch_rows(_local_kernel_for(gate is not None), t * h * tiles,
                 [tiles, S, S if gate is None else gate, gS, energy_rows, float(lam), float(eps)], device=S.device)
+
+
+@host("shading_pair_smoothness")
+def shading_pair_smoothness(S, pairs, gS, energy_rows, lam: float, eps: float = 0.001) -> None:
+    """Add a term of Eq. 9's kind on weighted axis pairs, and its gradient.
+
+    ``E = lam * sum_t sum_x sum_k pairs[x, k] sqrt((S(t, x + d_k) - S(t, x))^2 + eps^2)``
+    with ``d_0 = (0, 1)``, ``d_1 = (1, 0)``: each pair once, the same weight in every
+    frame; pairs of weight 0 cost nothing.  The weights are the stable-step
+    evidence (:func:`ivkernels.kernels.warp.step_evidence.stable_pairs`): a
+    pair across a step that holds its contrast under every light of the
+    window, whose shading should not change there.
+
+    Parameters
+    ----------
+    S : wp.array float32 (T, H, W), log shading.
+    pairs : wp.array float32 (H, W, 2), weight of the right (0) and lower (1) pair of each pixel.
+    gS : wp.array float32 (T, H, W), accumulated.  Must not overlap ``S`` or ``pairs``.
+    energy_rows : wp.array float64 (T*H,), accumulated (a pair in the row of its first pixel).
+    lam : weight.  eps : Charbonnier epsilon.
+    """
+    t, h, w = S.shape
+    tiles = row_tiles(w, S.device)
+    launch_rows(pair_smoothness_rows, t * h * tiles, [tiles, S, pairs, gS, energy_rows, float(lam), float(eps)],
+                device=S.device)
 
 
 @host("coupling_term")

@@ -11,6 +11,9 @@
   ``s`` summed from the counts on the device (no host round trip),
 * :func:`still_stability`: Weiss's stability cue (``maps.shading_gate``) where
   the scene holds still, 1 where it moves.
+* :func:`stable_pairs`: Weiss's stable-step evidence of each pixel's right and
+  lower pair over the window's frames (median and median absolute deviation
+  of the pair's step), where the pair holds still.
 
 The formula, its constants and the NumPy reference:
 :mod:`ivkernels.kernels.reference.step_evidence`; its use in the energy:
@@ -22,10 +25,11 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.contract import implements
-from ivkernels.kernels.launch import launch_rows
-from ivkernels.kernels.reference.step_evidence import FAMILY
+from ivkernels.kernels.launch import launch_rows, row_tiles
+from ivkernels.kernels.reference.step_evidence import FAMILY, MAX_STABLE_STEP
 from ivkernels.kernels.warp._checks import FRONT
 from ivkernels.kernels.warp.maps import log_change_at
+from ivkernels.kernels.warp.row_tiles import row_span
 
 host = implements(FAMILY, FRONT)
 
@@ -34,6 +38,9 @@ wp.set_module_options({"enable_backward": False})
 #: Below this argument ``exp(-a)`` and ``1 - exp(-a)`` are read from their series to ``a^3``:
 #: in a video most neighbours differ little, and an ``exp`` costs about as much as the rest of a pair.
 SERIES_BELOW = wp.constant(1.0e-3)
+
+#: :data:`ivkernels.kernels.reference.step_evidence.MAX_STABLE_STEP` on the device.
+STABLE_STEP_MAX = wp.constant(MAX_STABLE_STEP)
 
 
 # ----------------------------------------------------------------------------
@@ -388,6 +395,95 @@ def still_stability_rows(row_begin: int, flow: wp.array4d(dtype=float), change: 
             weight[t, y, x] = wp.exp(-q * q)
 
 
+@wp.kernel
+def luminance_steps_rows(row_begin: int, tiles: int, img: wp.array4d(dtype=float),
+                         steps: wp.array4d(dtype=float)):
+    """``steps[t, y, x, k] = L(t, x + d_k) - L(t, x)``, ``L`` the mean over channels, for the right
+    (k = 0) and lower (k = 1) neighbour; 0 where it lies outside."""
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, img.shape[2])
+    height = img.shape[1]
+    width = img.shape[2]
+    t = r // height
+    y = r - t * height
+    for x in range(x_begin, x_end):
+        here = (img[t, y, x, 0] + img[t, y, x, 1] + img[t, y, x, 2]) / 3.0
+        right = float(0.0)
+        below = float(0.0)
+        if x + 1 < width:
+            right = (img[t, y, x + 1, 0] + img[t, y, x + 1, 1] + img[t, y, x + 1, 2]) / 3.0 - here
+        if y + 1 < height:
+            below = (img[t, y + 1, x, 0] + img[t, y + 1, x, 1] + img[t, y + 1, x, 2]) / 3.0 - here
+        steps[t, y, x, 0] = right
+        steps[t, y, x, 1] = below
+
+
+@wp.func
+def moves(flow: wp.array4d(dtype=float), y: int, x: int, static_flow: float):
+    """1 when the flow of pixel ``(y, x)`` in any frame pair is ``static_flow`` px or longer, else 0."""
+    out = int(0)
+    for p in range(flow.shape[0]):
+        fx = flow[p, y, x, 0]
+        fy = flow[p, y, x, 1]
+        if wp.sqrt(fx * fx + fy * fy) >= static_flow:
+            out = 1
+    return out
+
+
+@wp.func
+def middle_of(values: wp.array4d(dtype=float), y: int, x: int, k: int, centre: float, absolute: int):
+    """The median over ``t`` of ``v_t = values[t, y, x, k] - centre`` (of ``|v_t|`` when
+    ``absolute``): the mean of the order statistics ``(T - 1) // 2`` and ``T // 2``, found by
+    each value's rank (ties broken by ``t``), with no buffer per thread."""
+    n = values.shape[0]
+    lo = float(0.0)
+    hi = float(0.0)
+    for i in range(n):
+        v = values[i, y, x, k] - centre
+        if absolute != 0:
+            v = wp.abs(v)
+        rank = int(0)
+        for j in range(n):
+            u = values[j, y, x, k] - centre
+            if absolute != 0:
+                u = wp.abs(u)
+            if u < v or (u == v and j < i):
+                rank += 1
+        if rank == (n - 1) // 2:
+            lo = v
+        if rank == n // 2:
+            hi = v
+    return 0.5 * (lo + hi)
+
+
+@wp.kernel
+def stable_pairs_pixels(row_begin: int, tiles: int, steps: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
+                        pairs: wp.array3d(dtype=float), tau: float, stability: float, floor: float,
+                        static_flow: float):
+    """``pairs[y, x, k]``: the stable-step evidence of the pair of ``(y, x)`` with its right (k = 0)
+    or lower (k = 1) neighbour from its ``T`` steps (:func:`luminance_steps_rows`); one row
+    ``y`` per thread (``tiles`` per row on a GPU)."""
+    y, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, pairs.shape[1])
+    height = pairs.shape[0]
+    width = pairs.shape[1]
+    for x in range(x_begin, x_end):
+        here = moves(flow, y, x, static_flow)
+        for k in range(2):
+            yy = y + k
+            xx = x + 1 - k
+            ev = float(0.0)
+            if yy < height and xx < width:
+                if here == 0 and moves(flow, yy, xx, static_flow) == 0:
+                    m = middle_of(steps, y, x, k, 0.0, 0)
+                    if wp.abs(m) < STABLE_STEP_MAX:
+                        mad = middle_of(steps, y, x, k, m, 1)
+                        q = m / tau
+                        qs = mad / stability
+                        ev = (1.0 - wp.exp(-q * q)) * wp.exp(-qs * qs)
+                        if ev < floor:
+                            ev = 0.0
+            pairs[y, x, k] = ev
+
+
 # ----------------------------------------------------------------------------
 # Host functions
 # ----------------------------------------------------------------------------
@@ -535,3 +631,33 @@ def still_stability(log_image, flow, weight, tau: float, static_flow: float) -> 
     change = wp.empty((t - 1, h, w, 2), dtype=float, device=dev)
     launch_rows(log_change_rows, (t - 1) * h, [log_image, flow, change], device=dev)
     launch_rows(still_stability_rows, t * h, [flow, change, weight, tau, static_flow], device=dev)
+
+
+@host("stable_pairs")
+def stable_pairs(log_image, flow, pairs, tau: float, stability: float, floor: float, static_flow: float) -> None:
+    """Weiss's stable-step evidence of each pixel's right and lower pair.
+
+    Over the ``T`` frames, the step of the pair's log luminance (the mean
+    over channels) ``s_t = L(t, x + d) - L(t, x)``, its median ``m`` and its
+    median absolute deviation ``MAD`` (the mean of the middle two for even
+    ``T``): ``pairs[y, x, k] = (1 - exp(-(m / tau)^2)) exp(-(MAD / stability)^2)``,
+    0 when ``|m| >= MAX_STABLE_STEP``, when under ``floor``, when the pair
+    leaves the image, or when either pixel's flow in any frame pair is
+    ``static_flow`` px or longer (:func:`ivkernels.kernels.reference.step_evidence.stable_pairs`).
+    The steps go into a (T, H, W, 2) buffer of this call; each median is
+    found by ranks, ``O(T^2)`` per pair.
+
+    log_image : wp.array float32 (T, H, W, 3), the offset log image (:func:`offset_log`).
+    flow : wp.array float32 (T-1, H, W, 2), forward flow in pixels.
+    pairs : wp.array float32 (H, W, 2), written; in [0, 1).
+    tau, stability : log units, > 0; floor : >= 0; static_flow : pixels, > 0.
+    """
+    t, h, w, _ = log_image.shape
+    dev = log_image.device
+    if pairs.size == 0:
+        return
+    steps = wp.empty((t, h, w, 2), dtype=float, device=dev)
+    tiles = row_tiles(w, dev)
+    launch_rows(luminance_steps_rows, t * h * tiles, [tiles, log_image, steps], device=dev)
+    launch_rows(stable_pairs_pixels, h * tiles, [tiles, steps, flow, pairs, tau, stability, floor, static_flow],
+                device=dev)
