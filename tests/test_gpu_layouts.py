@@ -86,7 +86,7 @@ def test_per_pixel_terms_in_tiles_match_the_cpu_layout(be, monkeypatch, shape):
         be.step_evidence.stable_pairs(a(I), a(flow[: t - 1] if t > 1 else flow[:0]), pairs, 0.3, 0.4, 0.1, 1.0)
         if h * w > 20:
             assert (be.numpy(pairs) > 0).sum() > 2          # the pair term is not all zero
-        be.energy_shading.shading_pair_smoothness(a(S), pairs, gS, rows, lam=4.0, eps=1e-3)
+        be.energy_shading.shading_smoothness_paired(a(S), a(gate), pairs, gS, rows, lam=3.0, pair_gain=4.0, eps=1e-3)
         if t > 1:
             be.energy_temporal.temporal_terms(a(A), a(S), a(flow), a(occ), gA, gS, rows, lam_albedo=10.0,
                                               lam_shading=1.0, alpha=0.5, workspace=Workspace())

@@ -15,10 +15,9 @@ temporal shading           Eq. 8        once (``temporal_term`` on A or S alone)
 local shading smoothness   Eq. 9        ``energy_shading.shading_smoothness`` (``_gated``
                                         with the cut at flow jumps, ``motion_maps.
                                         shading_cut_gate``, ``maps.shading_gate`` and
-                                        the step evidence, ``step_evidence.step_gate``),
-                                        and ``energy_shading.shading_pair_smoothness`` on
-                                        the stable steps' pairs (``step_evidence.
-                                        stable_pairs``)
+                                        the step evidence, ``step_evidence.step_gate``;
+                                        ``_paired`` with the stable steps' pairs too,
+                                        ``step_evidence.stable_pairs``)
 coupling to S~             Eq. 13       ``energy_shading.coupling_term``
 albedo GSM smoothness      Eq. 11       ``energy_albedo_gsm.gsm_smoothness``
 albedo global sparsity     Eq. 12       ``energy_albedo_entropy.entropy_term``
@@ -155,6 +154,9 @@ class WindowEnergy:
         p = self.params
         if not (self.temporal and p.shading_stable_gain > 0 and p.lam_shading_local > 0):
             return None
+        if self.gate is None:                        # the paired kernel is the gated one with pairs added
+            self.gate = self.be.empty(self.shape)
+            self.be.vecops.fill(self.gate.reshape((self.n,)), 1.0)
         return stable_pair_weights(self.be, self.I, self.flow, p.shading_step_tau, p.shading_stable_spread,
                                    p.shading_stable_floor, p.shading_step_static_flow)
 
@@ -188,16 +190,16 @@ class WindowEnergy:
                 be.energy_shading.coupling_term(self.S, self.S_tilde, self.boundary, self.gS, rows,
                                                 lam=p.lam_coupling)
         if want("shading_local") and p.lam_shading_local > 0:
-            if self.gate is None:
+            if self.stable_pairs is not None:
+                be.energy_shading.shading_smoothness_paired(self.S, self.gate, self.stable_pairs, self.gS, rows,
+                                                            lam=p.lam_shading_local, pair_gain=p.shading_stable_gain,
+                                                            eps=p.eps_shading)
+            elif self.gate is None:
                 be.energy_shading.shading_smoothness(self.S, self.gS, rows, lam=p.lam_shading_local,
                                                      eps=p.eps_shading)
             else:
                 be.energy_shading.shading_smoothness_gated(self.S, self.gate, self.gS, rows,
                                                            lam=p.lam_shading_local, eps=p.eps_shading)
-            if self.stable_pairs is not None:
-                be.energy_shading.shading_pair_smoothness(self.S, self.stable_pairs, self.gS, rows,
-                                                          lam=p.lam_shading_local * p.shading_stable_gain,
-                                                          eps=p.eps_shading)
         if want("albedo_smooth") and self._gsm is not None:
             sigma_inv, table_g, table_dg, r2_max = self._gsm
             be.energy_albedo_gsm.gsm_smoothness(self.A, sigma_inv, table_g, table_dg, r2_max,

@@ -1,5 +1,5 @@
 """Cases of :mod:`ivkernels.kernels.warp.energy_shading` (Eq. 9 local smoothness, ungated and gated,
-the weighted axis pairs of the stable steps, Eq. 13 coupling)."""
+plus the weighted axis pairs of the stable steps, Eq. 13 coupling)."""
 from __future__ import annotations
 
 from ivkernels.kernels.cases import Case, Gradient, Tol
@@ -26,15 +26,14 @@ def _smoothness_gated_reference(v):
     return {"energy_rows": v["energy_rows"] + er, "gS": v["gS"] + gS}
 
 
-def _pair_smoothness(rng, T, H, W):
+def _smoothness_paired(rng, T, H, W):
     weights = uniform(rng, (H, W, 2))
-    weights[rng.uniform(size=(H, W, 2)) < 0.4] = 0.0            # most pairs carry no weight
-    return {"S": normal(rng, (T, H, W), -0.5, 0.5), "pairs": weights, "gS": normal(rng, (T, H, W)),
-            "energy_rows": rng.normal(size=T * H), "lam": 40.0, "eps": 0.01}
+    weights[rng.uniform(size=(H, W, 2)) < 0.4] = 0.0            # many pairs carry no weight
+    return {**_smoothness_gated(rng, T, H, W), "pairs": weights, "pair_gain": 4.0}
 
 
-def _pair_smoothness_reference(v):
-    er, gS = ref.shading_pair_smoothness(v["S"], v["pairs"], v["lam"], v["eps"])
+def _smoothness_paired_reference(v):
+    er, gS = ref.shading_smoothness_paired(v["S"], v["gate"], v["pairs"], v["lam"], v["pair_gain"], v["eps"])
     return {"energy_rows": v["energy_rows"] + er, "gS": v["gS"] + gS}
 
 
@@ -61,10 +60,10 @@ CASES = (
     Case("energy_shading", "shading_smoothness_gated", _smoothness_gated, ("S", "gate", "gS", "energy_rows"),
          ("gS", "energy_rows"), _smoothness_gated_reference, keywords=("lam", "eps"), updates=("gS", "energy_rows"),
          tol=_TOL, no_alias=(("S", "gS"), ("gate", "gS")), gradients=(Gradient("S", "gS", overrides={"eps": 0.05}),)),
-    Case("energy_shading", "shading_pair_smoothness", _pair_smoothness, ("S", "pairs", "gS", "energy_rows"),
-         ("gS", "energy_rows"), _pair_smoothness_reference, keywords=("lam", "eps"), updates=("gS", "energy_rows"),
-         tol=_TOL, no_alias=(("S", "gS"),),
-         gradients=(Gradient("S", "gS", overrides={"eps": 0.05}),)),
+    Case("energy_shading", "shading_smoothness_paired", _smoothness_paired,
+         ("S", "gate", "pairs", "gS", "energy_rows"), ("gS", "energy_rows"), _smoothness_paired_reference,
+         keywords=("lam", "pair_gain", "eps"), updates=("gS", "energy_rows"), tol=_TOL,
+         no_alias=(("S", "gS"), ("gate", "gS")), gradients=(Gradient("S", "gS", overrides={"eps": 0.05}),)),
     *(Case("energy_shading", "coupling_term", _coupling(t_flow), ("S", "S_tilde", "w_bnd", "gS", "energy_rows"),
            ("gS", "energy_rows"), _coupling_reference, variant=variant, keywords=("lam",),
            updates=("gS", "energy_rows"), tol=_TOL, gradients=(Gradient("S", "gS"),))

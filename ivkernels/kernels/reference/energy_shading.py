@@ -24,12 +24,13 @@ FAMILY.declare("shading_smoothness_gated(S, gate, gS, energy_rows, lam=2.0, eps=
                S="T H W", gate="T H W", gS=Acc("T H W"), energy_rows=Acc("T*H", "float64"), lam=Real, eps=Real,
                separate=(("gS", "S", "the gradient is scattered into gS while S is read"),
                          ("gS", "gate", "the gradient is scattered into gS while gate is read")))
-FAMILY.declare("shading_pair_smoothness(S, pairs, gS, energy_rows, lam, eps=0.001)",
-               "Add ``lam sum_t sum_x sum_k pairs[x, k] sqrt((S(x + d_k) - S(x))^2 + eps^2)`` over the right "
-               "(k = 0) and lower (k = 1) pairs, and its gradient.",
-               S="T H W", pairs=Array("H W 2", layout="(H, W, 2)"), gS=Acc("T H W"),
-               energy_rows=Acc("T*H", "float64"), lam=Real, eps=Real,
+FAMILY.declare("shading_smoothness_paired(S, gate, pairs, gS, energy_rows, lam=2.0, pair_gain=1.0, eps=0.001)",
+               "The gated term plus ``lam pair_gain sum_t sum_x sum_k pairs[x, k] sqrt((S(x + d_k) - S(x))^2 + "
+               "eps^2)`` over the right (k = 0) and lower (k = 1) pairs, and its gradient.",
+               S="T H W", gate="T H W", pairs=Array("H W 2", layout="(H, W, 2)"), gS=Acc("T H W"),
+               energy_rows=Acc("T*H", "float64"), lam=Real, pair_gain=Real, eps=Real,
                separate=(("gS", "S", "the gradient is scattered into gS while S is read"),
+                         ("gS", "gate", "the gradient is scattered into gS while gate is read"),
                          ("gS", "pairs", "the gradient is scattered into gS while pairs is read")))
 FAMILY.declare("coupling_term(S, S_tilde, w_bnd, gS, energy_rows, lam=10.0)",
                "Add ``lam w_bnd (S - S~)^2`` (T' <= T boundary frames) and its gradient.",
@@ -78,30 +79,32 @@ def shading_smoothness_gated(S, gate, lam: float = 2.0, eps: float = 0.001):
     return energy.sum(axis=2).reshape(t * h), grad
 
 
-def shading_pair_smoothness(S, pairs, lam: float, eps: float = 0.001):
-    """Eq. 9's kind of term on weighted axis pairs, and its gradient.
+def shading_smoothness_paired(S, gate, pairs, lam: float = 2.0, pair_gain: float = 1.0, eps: float = 0.001):
+    """Eq. 9's gated local smoothness plus weighted axis pairs, and its gradient.
 
-    ``E = lam * sum_t sum_x sum_k pairs[x, k] sqrt((S(t, x + d_k) - S(t, x))^2 + eps^2)``,
-    ``d_0 = (0, 1)`` (right), ``d_1 = (1, 0)`` (down), each pair once, pairs leaving the
-    image skipped; a pair's energy goes to the row of its first pixel.
+    ``E = gated + lam * pair_gain * sum_t sum_x sum_k pairs[x, k] sqrt((S(t, x + d_k) - S(t, x))^2 + eps^2)``,
+    ``gated`` :func:`shading_smoothness_gated`, ``d_0 = (0, 1)`` (right), ``d_1 = (1, 0)`` (down),
+    each axis pair once with the same weight in every frame, pairs leaving the image skipped
+    (the stable steps' pairs, ``step_evidence.stable_pairs``); a pair's energy goes half to the
+    row of each of its pixels, as the local term's.
 
     Returns ``(energy_rows (T*H,), gS (T, H, W))``, float64.
     """
     S, pairs = np.asarray(S, np.float64), np.asarray(pairs, np.float64)
+    energy_rows, grad = shading_smoothness_gated(S, gate, lam, eps)
     t, h, w = S.shape
     energy = np.zeros((t, h, w))
-    grad = np.zeros((t, h, w))
     for k, (dy, dx) in enumerate(((0, 1), (1, 0))):
         a = (slice(None), slice(0, h - dy), slice(0, w - dx))
         b = (slice(None), slice(dy, h), slice(dx, w))
-        wgt = pairs[None, : h - dy, : w - dx, k]
+        wgt = lam * pair_gain * pairs[None, : h - dy, : w - dx, k]
         d = S[b] - S[a]
         rho = np.sqrt(d * d + eps * eps)
-        energy[a] += lam * wgt * rho
-        psi = lam * wgt * d / rho
-        grad[b] += psi
-        grad[a] -= psi
-    return energy.sum(axis=2).reshape(t * h), grad
+        energy[a] += 0.5 * wgt * rho                 # half in each pixel's row, as the local term's visits
+        energy[b] += 0.5 * wgt * rho
+        grad[b] += wgt * d / rho
+        grad[a] -= wgt * d / rho
+    return energy_rows + energy.sum(axis=2).reshape(t * h), grad
 
 
 def coupling_term(S, S_tilde, w_bnd, lam: float = 10.0):

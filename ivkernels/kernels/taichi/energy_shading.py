@@ -1,5 +1,5 @@
 """Taichi mirror of :mod:`ivkernels.kernels.warp.energy_shading` (Eq. 9 local
-smoothness, ungated and gated, the weighted axis pairs, Eq. 13 coupling): same host functions and signatures, NumPy arrays
+smoothness, ungated, gated, and with the weighted axis pairs, Eq. 13 coupling): same host functions and signatures, NumPy arrays
 passed as ``ti.types.ndarray()``.  The outermost loop runs over rows in parallel.
 The local term's Charbonnier penalty is the data term's (:mod:`ivkernels.kernels.taichi.energy_data`).
 """
@@ -17,11 +17,28 @@ nd1_f64 = ti.types.ndarray(dtype=ti.f64, ndim=1)
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 
 
+@ti.func
+def axis_pair_weight(pairs: ti.template(), y, x, j: ti.template(), i: ti.template()):
+    """The stable-pair weight of ``(y, x)`` with its neighbour ``(y + j - 1, x + i - 1)`` (see the
+    Warp module); diagonal pairs get 0."""
+    out = 0.0
+    if ti.static(j == 1 and i == 2):
+        out = pairs[y, x, 0]
+    if ti.static(j == 1 and i == 0):
+        out = pairs[y, x - 1, 0]
+    if ti.static(j == 2 and i == 1):
+        out = pairs[y, x, 1]
+    if ti.static(j == 0 and i == 1):
+        out = pairs[y - 1, x, 1]
+    return out
+
+
 @ti.kernel
-def shading_smoothness_rows(S: nd3, gate: nd3, gated: ti.template(), gS: nd3, energy_rows: nd1_f64,
-                            lam: ti.f32, eps: ti.f32):
+def shading_smoothness_rows(S: nd3, gate: nd3, gated: ti.template(), pairs: nd3, paired: ti.template(), gS: nd3,
+                            energy_rows: nd1_f64, lam: ti.f32, half_pair_gain: ti.f32, eps: ti.f32):
     """Eq. 9's local term; with ``gated`` (compile time) each pair is weighted by
-    the mean of its two ``gate`` values (``gate`` is not read otherwise)."""
+    the mean of its two ``gate`` values (``gate`` is not read otherwise); with ``paired`` an
+    axis pair's weight also gets ``half_pair_gain`` times its ``pairs`` weight."""
     height = S.shape[1]
     width = S.shape[2]
     for r in range(S.shape[0] * height):
@@ -42,6 +59,8 @@ def shading_smoothness_rows(S: nd3, gate: nd3, gated: ti.template(), gS: nd3, en
                                 rho = charbonnier(d, eps)
                                 if ti.static(gated):
                                     wgt = 0.5 * (gate[t, y, x] + gate[t, yy, xx])     # the pair's weight, symmetric
+                                    if ti.static(paired and (i == 1 or j == 1)):
+                                        wgt += half_pair_gain * axis_pair_weight(pairs, y, x, j, i)
                                     e += ti.cast(wgt * rho, ti.f64)
                                     g += wgt * d / rho
                                 else:
@@ -81,62 +100,22 @@ def shading_smoothness_gated(S, gate, gS, energy_rows, lam: float = 2.0, eps: fl
     _local_term(S, gate, gS, energy_rows, lam, eps)
 
 
-def _local_term(S, gate, gS, energy_rows, lam: float, eps: float) -> None:
-    """Launch of Eq. 9's local term (arguments checked), gated unless ``gate`` is None."""
+@host("shading_smoothness_paired")
+def shading_smoothness_paired(S, gate, pairs, gS, energy_rows, lam: float = 2.0, pair_gain: float = 1.0,
+                              eps: float = 0.001) -> None:
+    """Add Eq. 9's gated local smoothness with weighted axis pairs, and its gradient; see
+    :func:`ivkernels.kernels.warp.energy_shading.shading_smoothness_paired`."""
+    _local_term(S, gate, gS, energy_rows, lam, eps, pairs, pair_gain)
+
+
+def _local_term(S, gate, gS, energy_rows, lam: float, eps: float, pairs=None, pair_gain: float = 0.0) -> None:
+    """Launch of Eq. 9's local term (arguments checked), gated unless ``gate`` is None, with the
+    axis pairs' weights when ``pairs`` is given (``S`` stands in for the arrays not read)."""
     t, h, w = S.shape
     if t * h * w == 0:
         return
-    shading_smoothness_rows(S, S if gate is None else gate, gate is not None, gS, energy_rows,
-                            float(lam), float(eps))
-
-
-@ti.kernel
-def pair_smoothness_rows(S: nd3, pairs: nd3, gS: nd3, energy_rows: nd1_f64, lam: ti.f32, eps: ti.f32):
-    """The weighted axis pairs (see the Warp module): each pixel adds its right and lower pairs'
-    energy to its row and gathers the derivative of its four axis pairs."""
-    height = S.shape[1]
-    width = S.shape[2]
-    for r in range(S.shape[0] * height):
-        t = r // height
-        y = r - t * height
-        e = ti.f64(0.0)
-        for x in range(width):
-            s = S[t, y, x]
-            g = 0.0
-            if x + 1 < width:
-                wgt = pairs[y, x, 0]
-                if wgt > 0.0:
-                    d = S[t, y, x + 1] - s
-                    rho = charbonnier(d, eps)
-                    e += ti.cast(wgt * rho, ti.f64)
-                    g -= wgt * d / rho
-            if y + 1 < height:
-                wgt = pairs[y, x, 1]
-                if wgt > 0.0:
-                    d = S[t, y + 1, x] - s
-                    rho = charbonnier(d, eps)
-                    e += ti.cast(wgt * rho, ti.f64)
-                    g -= wgt * d / rho
-            if x >= 1:
-                wgt = pairs[y, x - 1, 0]
-                if wgt > 0.0:
-                    d = s - S[t, y, x - 1]
-                    g += wgt * d / charbonnier(d, eps)
-            if y >= 1:
-                wgt = pairs[y - 1, x, 1]
-                if wgt > 0.0:
-                    d = s - S[t, y - 1, x]
-                    g += wgt * d / charbonnier(d, eps)
-            gS[t, y, x] += lam * g
-        energy_rows[r] += ti.cast(lam, ti.f64) * e
-
-
-@host("shading_pair_smoothness")
-def shading_pair_smoothness(S, pairs, gS, energy_rows, lam: float, eps: float = 0.001) -> None:
-    """Add a term of Eq. 9's kind on weighted axis pairs, and its gradient; see
-    :func:`ivkernels.kernels.warp.energy_shading.shading_pair_smoothness`."""
-    if S.size:
-        pair_smoothness_rows(S, pairs, gS, energy_rows, float(lam), float(eps))
+    shading_smoothness_rows(S, S if gate is None else gate, gate is not None, S if pairs is None else pairs,
+                            pairs is not None, gS, energy_rows, float(lam), 0.5 * float(pair_gain), float(eps))
 
 
 @host("coupling_term")

@@ -1,6 +1,6 @@
 """Shading terms of the intrinsic-video energy, log domain: the local
-smoothness of Eq. 9, the same penalty on the weighted axis pairs of the
-stable steps, and the coupling to S~ of Eq. 13.
+smoothness of Eq. 9 (with the stable steps' weighted axis pairs added in
+the same pass), and the coupling to S~ of Eq. 13.
 
 Energy conventions as in :mod:`ivkernels.kernels`: gradients are *added* into
 ``gS``, energies *added* per row into ``energy_rows`` (float64, row ``t*H + y``).
@@ -27,32 +27,51 @@ wp.set_module_options({"enable_backward": False})
 
 
 @wp.func
-def local_pair(s: float, s_y: float, eps: float, gated: int, gate_x: float, gate_y: float):
+def local_pair(s: float, s_y: float, eps: float, gated: int, gate_x: float, gate_y: float, extra: float):
     """One pair of Eq. 9's local term: ``(energy, d energy / d S(x))`` of
-    ``w rho(S(x) - S(y))``, ``w = (gate(x) + gate(y)) / 2`` when ``gated``, else 1."""
+    ``w rho(S(x) - S(y))``, ``w = (gate(x) + gate(y)) / 2 + extra`` when ``gated``, else 1."""
     d = s - s_y
     rho = charbonnier(d, eps)
     if gated != 0:
-        wgt = 0.5 * (gate_x + gate_y)      # the pair's weight, symmetric
+        wgt = 0.5 * (gate_x + gate_y) + extra      # the pair's weight, symmetric
         return wgt * rho, wgt * d / rho
     return rho, d / rho
 
 
+@wp.func
+def axis_pair_weight(pairs: wp.array3d(dtype=float), y: int, x: int, j: int, i: int):
+    """The stable-pair weight of the pair of ``(y, x)`` with its neighbour ``(y + j - 1, x + i - 1)``:
+    ``pairs`` holds each pixel's right (k = 0) and lower (k = 1) pair; diagonal pairs get 0."""
+    if j == 1 and i == 2:
+        return pairs[y, x, 0]
+    if j == 1 and i == 0:
+        return pairs[y, x - 1, 0]
+    if j == 2 and i == 1:
+        return pairs[y, x, 1]
+    if j == 0 and i == 1:
+        return pairs[y - 1, x, 1]
+    return 0.0
+
+
 @functools.lru_cache(maxsize=None)
-def _local_kernel_for(gated: bool):
-    """Eq. 9's local term with ``gated`` compiled in (one module each, built on first
-    use): the 3x3 loops are unrolled, and pixels whose 8 neighbours all lie in
-    the image skip the bounds tests.  The pairs are visited in the same order
-    on both branches, so the sums are bitwise those of one general loop
-    (640x480, 8 frames, 2 threads: 39 -> 27 ms plain, 49 -> 31-38 ms gated)."""
+def _local_kernel_for(gated: bool, paired: bool = False):
+    """Eq. 9's local term with ``gated`` (and ``paired``: the stable steps' axis pairs
+    added) compiled in (one module each, built on first use): the 3x3 loops are
+    unrolled, and pixels whose 8 neighbours all lie in the image skip the bounds
+    tests.  The pairs are visited in the same order on both branches, so the sums
+    are bitwise those of one general loop (640x480, 8 frames, 2 threads: 39 -> 27 ms
+    plain, 49 -> 31-38 ms gated)."""
     G = 1 if gated else 0
+    P = 1 if paired else 0
 
     @wp.kernel(module="unique")
     def shading_smoothness_rows(row_begin: int, tiles: int, S: wp.array3d(dtype=float), gate: wp.array3d(dtype=float),
-                                gS: wp.array3d(dtype=float), energy_rows: wp.array(dtype=wp.float64),
-                                lam: float, eps: float):
+                                pairs: wp.array3d(dtype=float), gS: wp.array3d(dtype=float),
+                                energy_rows: wp.array(dtype=wp.float64), lam: float, half_pair_gain: float,
+                                eps: float):
         """Eq. 9's local term; gated: each pair is weighted by the mean of its two
-        ``gate`` values (``gate`` is not read otherwise)."""
+        ``gate`` values (``gate`` is not read otherwise); paired: an axis pair's weight
+        also gets ``half_pair_gain`` times its ``pairs`` weight (``pairs`` is not read otherwise)."""
         r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, S.shape[2])
         height = S.shape[1]
         width = S.shape[2]
@@ -73,7 +92,10 @@ def _local_kernel_for(gated: bool):
                             gy = float(1.0)
                             if wp.static(G != 0):
                                 gy = gate[t, y + j - 1, x + i - 1]
-                            pe, pg = local_pair(s, S[t, y + j - 1, x + i - 1], eps, G, gx, gy)
+                            extra = float(0.0)
+                            if wp.static(P != 0 and (i == 1 or j == 1)):
+                                extra = half_pair_gain * axis_pair_weight(pairs, y, x, j, i)
+                            pe, pg = local_pair(s, S[t, y + j - 1, x + i - 1], eps, G, gx, gy, extra)
                             e += wp.float64(pe)
                             g += pg
             else:
@@ -86,7 +108,10 @@ def _local_kernel_for(gated: bool):
                                 gy = float(1.0)
                                 if wp.static(G != 0):
                                     gy = gate[t, yy, xx]
-                                pe, pg = local_pair(s, S[t, yy, xx], eps, G, gx, gy)
+                                extra = float(0.0)
+                                if wp.static(P != 0):
+                                    extra = half_pair_gain * axis_pair_weight(pairs, y, x, j, i)
+                                pe, pg = local_pair(s, S[t, yy, xx], eps, G, gx, gy, extra)
                                 e += wp.float64(pe)
                                 g += pg
             # S(x) appears in the pair (x, y) and in (y, x): twice the derivative
@@ -110,49 +135,6 @@ def coupling_rows(row_begin: int, tiles: int, S: wp.array3d(dtype=float), S_tild
         d = S[t, y, x] - S_tilde[t, y, x]
         e += wp.float64(w * d * d)
         gS[t, y, x] = gS[t, y, x] + 2.0 * lam * w * d
-    wp.atomic_add(energy_rows, r, wp.float64(lam) * e)
-
-
-@wp.kernel
-def pair_smoothness_rows(row_begin: int, tiles: int, S: wp.array3d(dtype=float), pairs: wp.array3d(dtype=float),
-                         gS: wp.array3d(dtype=float), energy_rows: wp.array(dtype=wp.float64), lam: float,
-                         eps: float):
-    """The weighted axis pairs: each pixel adds its right and lower pairs' energy to its row and
-    gathers the derivative of its four axis pairs (no atomics on ``gS``)."""
-    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, S.shape[2])
-    height = S.shape[1]
-    width = S.shape[2]
-    t = r // height
-    y = r - t * height
-    e = wp.float64(0.0)
-    for x in range(x_begin, x_end):
-        s = S[t, y, x]
-        g = float(0.0)
-        if x + 1 < width:
-            wgt = pairs[y, x, 0]
-            if wgt > 0.0:
-                d = S[t, y, x + 1] - s
-                rho = charbonnier(d, eps)
-                e += wp.float64(wgt * rho)
-                g -= wgt * d / rho
-        if y + 1 < height:
-            wgt = pairs[y, x, 1]
-            if wgt > 0.0:
-                d = S[t, y + 1, x] - s
-                rho = charbonnier(d, eps)
-                e += wp.float64(wgt * rho)
-                g -= wgt * d / rho
-        if x >= 1:
-            wgt = pairs[y, x - 1, 0]
-            if wgt > 0.0:
-                d = s - S[t, y, x - 1]
-                g += wgt * d / charbonnier(d, eps)
-        if y >= 1:
-            wgt = pairs[y - 1, x, 1]
-            if wgt > 0.0:
-                d = s - S[t, y - 1, x]
-                g += wgt * d / charbonnier(d, eps)
-        gS[t, y, x] = gS[t, y, x] + lam * g
     wp.atomic_add(energy_rows, r, wp.float64(lam) * e)
 
 
@@ -198,35 +180,41 @@ def shading_smoothness_gated(S, gate, gS, energy_rows, lam: float = 2.0, eps: fl
 
 
 def _local_term(S, gate, gS, energy_rows, lam: float, eps: float) -> None:
-    """Launch of Eq. 9's local term (arguments checked), gated unless ``gate`` is None."""
+    """Launch of Eq. 9's local term (arguments checked), gated unless ``gate`` is None (``S`` stands
+    in for the arrays a variant does not read)."""
     t, h, w = S.shape
     tiles = row_tiles(w, S.device)
     launch_rows(_local_kernel_for(gate is not None), t * h * tiles,
-                [tiles, S, S if gate is None else gate, gS, energy_rows, float(lam), float(eps)], device=S.device)
+                [tiles, S, S if gate is None else gate, S, gS, energy_rows, float(lam), 0.0, float(eps)], device=S.device)
 
 
-@host("shading_pair_smoothness")
-def shading_pair_smoothness(S, pairs, gS, energy_rows, lam: float, eps: float = 0.001) -> None:
-    """Add a term of Eq. 9's kind on weighted axis pairs, and its gradient.
+@host("shading_smoothness_paired")
+def shading_smoothness_paired(S, gate, pairs, gS, energy_rows, lam: float = 2.0, pair_gain: float = 1.0,
+                              eps: float = 0.001) -> None:
+    """Add Eq. 9's gated local smoothness with weighted axis pairs, and its gradient.
 
-    ``E = lam * sum_t sum_x sum_k pairs[x, k] sqrt((S(t, x + d_k) - S(t, x))^2 + eps^2)``
-    with ``d_0 = (0, 1)``, ``d_1 = (1, 0)``: each pair once, the same weight in every
-    frame; pairs of weight 0 cost nothing.  The weights are the stable-step
-    evidence (:func:`ivkernels.kernels.warp.step_evidence.stable_pairs`): a
-    pair across a step that holds its contrast under every light of the
-    window, whose shading should not change there.
+    ``E = gated + lam * pair_gain * sum_t sum_x sum_k pairs[x, k] sqrt((S(t, x + d_k) - S(t, x))^2 + eps^2)``
+    with ``gated`` :func:`shading_smoothness_gated`, ``d_0 = (0, 1)``, ``d_1 = (1, 0)``:
+    each axis pair once, the same weight in every frame.  The weights are the
+    stable-step evidence (:func:`ivkernels.kernels.warp.step_evidence.stable_pairs`):
+    a pair across a step that holds its contrast under every light of the
+    window, whose shading should not change there.  One pass with the gated
+    term: an axis pair's weight becomes ``(gate(x) + gate(y)) / 2 + pair_gain
+    pairs / 2`` (the local term counts each pair twice).
 
     Parameters
     ----------
     S : wp.array float32 (T, H, W), log shading.
+    gate : wp.array float32 (T, H, W), per-pixel weight of the local term.
     pairs : wp.array float32 (H, W, 2), weight of the right (0) and lower (1) pair of each pixel.
-    gS : wp.array float32 (T, H, W), accumulated.  Must not overlap ``S`` or ``pairs``.
-    energy_rows : wp.array float64 (T*H,), accumulated (a pair in the row of its first pixel).
-    lam : weight.  eps : Charbonnier epsilon.
+    gS : wp.array float32 (T, H, W), accumulated.  Must not overlap ``S``, ``gate`` or ``pairs``.
+    energy_rows : wp.array float64 (T*H,), accumulated.
+    lam : lambda_Ss.  pair_gain : the pairs' weight relative to ``lam``.  eps : Charbonnier epsilon.
     """
     t, h, w = S.shape
     tiles = row_tiles(w, S.device)
-    launch_rows(pair_smoothness_rows, t * h * tiles, [tiles, S, pairs, gS, energy_rows, float(lam), float(eps)],
+    launch_rows(_local_kernel_for(True, True), t * h * tiles,
+                [tiles, S, gate, pairs, gS, energy_rows, float(lam), 0.5 * float(pair_gain), float(eps)],
                 device=S.device)
 
 
