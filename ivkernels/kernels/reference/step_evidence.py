@@ -283,3 +283,15 @@ def stable_pairs(log_image, flow, tau: float, stability: float, floor: float, st
         ev[(np.abs(m) >= MAX_STABLE_STEP) | (ev < floor) | moves[a[1:]] | moves[b[1:]]] = 0.0
         out[a[1], a[2], k] = ev
     return out
+
+
+def least_stable_step(tau: float, floor: float) -> float:
+    """The smallest median step whose :func:`stable_pairs` evidence can reach ``floor``, shaded
+    down by a millionth for rounding: ``1 - exp(-(m / tau)^2) < floor`` for ``|m| < tau
+    sqrt(-log(1 - floor))``, and the other factor is at most 1.  A pair none of whose steps
+    reaches it gets 0 without its medians (the kernels skip them).  0 for ``floor = 0``."""
+    if floor <= 0.0:
+        return 0.0
+    if floor >= 1.0:
+        return math.inf
+    return float(tau * math.sqrt(-math.log1p(-floor)) * (1.0 - 1e-6))

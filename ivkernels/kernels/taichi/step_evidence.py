@@ -11,7 +11,7 @@ from ivkernels.kernels.contract import implements
 from ivkernels.kernels.ndarray_checks import FRONT
 from ivkernels.kernels.taichi.maps import log_change_at
 from ivkernels.kernels.reference import step_evidence as ref
-from ivkernels.kernels.reference.step_evidence import FAMILY, MAX_STABLE_STEP, share
+from ivkernels.kernels.reference.step_evidence import FAMILY, MAX_STABLE_STEP, least_stable_step, share
 
 host = implements(FAMILY, FRONT)
 
@@ -356,10 +356,20 @@ def middle_of(values: nd4, y, x, k, centre, absolute: ti.template()):
     return 0.5 * (lo + hi)
 
 
+@ti.func
+def largest_step(values: nd4, y, x, k):
+    """``max_t |values[t, y, x, k]|``."""
+    out = 0.0
+    for i in range(values.shape[0]):
+        out = ti.max(out, ti.abs(values[i, y, x, k]))
+    return out
+
+
 @ti.kernel
 def stable_pairs_rows(steps: nd4, flow: nd4, pairs: nd3, tau: ti.f32, stability: ti.f32, floor: ti.f32,
-                      static_flow: ti.f32):
-    """The stable-step evidence of each pixel's right and lower pair (see the Warp module)."""
+                      static_flow: ti.f32, least_step: ti.f32):
+    """The stable-step evidence of each pixel's right and lower pair, skipping the medians of
+    pairs none of whose steps reaches ``least_step`` (see the Warp module)."""
     height = pairs.shape[0]
     width = pairs.shape[1]
     for y in range(height):
@@ -370,7 +380,8 @@ def stable_pairs_rows(steps: nd4, flow: nd4, pairs: nd3, tau: ti.f32, stability:
                 xx = x + 1 - k
                 ev = 0.0
                 if yy < height and xx < width:
-                    if here == 0 and moves(flow, yy, xx, static_flow) == 0:
+                    if here == 0 and largest_step(steps, y, x, k) >= least_step \
+                            and moves(flow, yy, xx, static_flow) == 0:
                         m = middle_of(steps, y, x, k, 0.0, False)
                         if ti.abs(m) < MAX_STABLE_STEP:
                             mad = middle_of(steps, y, x, k, m, True)
@@ -454,4 +465,4 @@ def stable_pairs(log_image, flow, pairs, tau: float, stability: float, floor: fl
         return
     steps = np.empty((t, h, w, 2), np.float32)
     luminance_steps_rows(log_image, steps)
-    stable_pairs_rows(steps, flow, pairs, tau, stability, floor, static_flow)
+    stable_pairs_rows(steps, flow, pairs, tau, stability, floor, static_flow, least_stable_step(tau, floor))

@@ -26,7 +26,7 @@ import warp as wp
 
 from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows, row_tiles
-from ivkernels.kernels.reference.step_evidence import FAMILY, MAX_STABLE_STEP
+from ivkernels.kernels.reference.step_evidence import FAMILY, MAX_STABLE_STEP, least_stable_step
 from ivkernels.kernels.warp._checks import FRONT
 from ivkernels.kernels.warp.maps import log_change_at
 from ivkernels.kernels.warp.row_tiles import row_span
@@ -455,13 +455,23 @@ def middle_of(values: wp.array4d(dtype=float), y: int, x: int, k: int, centre: f
     return 0.5 * (lo + hi)
 
 
+@wp.func
+def largest_step(values: wp.array4d(dtype=float), y: int, x: int, k: int):
+    """``max_t |values[t, y, x, k]|``."""
+    out = float(0.0)
+    for i in range(values.shape[0]):
+        out = wp.max(out, wp.abs(values[i, y, x, k]))
+    return out
+
+
 @wp.kernel
 def stable_pairs_pixels(row_begin: int, tiles: int, steps: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
                         pairs: wp.array3d(dtype=float), tau: float, stability: float, floor: float,
-                        static_flow: float):
+                        static_flow: float, least_step: float):
     """``pairs[y, x, k]``: the stable-step evidence of the pair of ``(y, x)`` with its right (k = 0)
     or lower (k = 1) neighbour from its ``T`` steps (:func:`luminance_steps_rows`); one row
-    ``y`` per thread (``tiles`` per row on a GPU)."""
+    ``y`` per thread (``tiles`` per row on a GPU).  A pair none of whose steps reaches
+    ``least_step`` has a median under it, so an evidence under ``floor``: 0 without the medians."""
     y, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, pairs.shape[1])
     height = pairs.shape[0]
     width = pairs.shape[1]
@@ -472,7 +482,8 @@ def stable_pairs_pixels(row_begin: int, tiles: int, steps: wp.array4d(dtype=floa
             xx = x + 1 - k
             ev = float(0.0)
             if yy < height and xx < width:
-                if here == 0 and moves(flow, yy, xx, static_flow) == 0:
+                if here == 0 and largest_step(steps, y, x, k) >= least_step \
+                        and moves(flow, yy, xx, static_flow) == 0:
                     m = middle_of(steps, y, x, k, 0.0, 0)
                     if wp.abs(m) < STABLE_STEP_MAX:
                         mad = middle_of(steps, y, x, k, m, 1)
@@ -645,7 +656,9 @@ def stable_pairs(log_image, flow, pairs, tau: float, stability: float, floor: fl
     leaves the image, or when either pixel's flow in any frame pair is
     ``static_flow`` px or longer (:func:`ivkernels.kernels.reference.step_evidence.stable_pairs`).
     The steps go into a (T, H, W, 2) buffer of this call; each median is
-    found by ranks, ``O(T^2)`` per pair.
+    found by ranks, ``O(T^2)`` per pair, and skipped where no step reaches
+    :func:`~ivkernels.kernels.reference.step_evidence.least_stable_step` (the evidence is then under ``floor`` anyway: most
+    pairs of a video, which are flat).
 
     log_image : wp.array float32 (T, H, W, 3), the offset log image (:func:`offset_log`).
     flow : wp.array float32 (T-1, H, W, 2), forward flow in pixels.
@@ -659,5 +672,6 @@ def stable_pairs(log_image, flow, pairs, tau: float, stability: float, floor: fl
     steps = wp.empty((t, h, w, 2), dtype=float, device=dev)
     tiles = row_tiles(w, dev)
     launch_rows(luminance_steps_rows, t * h * tiles, [tiles, log_image, steps], device=dev)
-    launch_rows(stable_pairs_pixels, h * tiles, [tiles, steps, flow, pairs, tau, stability, floor, static_flow],
-                device=dev)
+    launch_rows(stable_pairs_pixels, h * tiles,
+                [tiles, steps, flow, pairs, tau, stability, floor, static_flow, least_stable_step(tau, floor)], device=dev)
+
