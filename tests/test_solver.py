@@ -243,6 +243,28 @@ def test_assembled_gradient_matches_directional_difference(backend, rng):
     _assert_directional_derivatives(be, energy, x0, g, rng)
 
 
+def test_gradient_with_the_stable_pairs_matches_directional_difference(backend, rng):
+    """Eq. 9's local term with the stable steps' pairs added (``shading_stable_gain``)."""
+    T, h, w = 4, 11, 13
+    base = rng.uniform(0.05, 1.0, (1, h, w, 3))
+    light = rng.uniform(0.5, 1.0, (T, 1, 1, 1))                 # a changing light over a still scene
+    i = (base * light * rng.uniform(0.98, 1.02, (T, h, w, 3))).astype(np.float32)
+    flow = rng.uniform(-0.3, 0.3, (T - 1, h, w, 2)).astype(np.float32)
+    occ = np.ones((T - 1, h, w), np.float32)
+    lum = (i @ np.array([0.2126, 0.7152, 0.0722], np.float32)) + 0.001
+    be = backend
+    params = Params(eps_data=0.2, eps_shading=0.2, shading_stable_gain=8.0, shading_stable_floor=0.0)
+    energy = WindowEnergy(be, be.asarray(np.log(i)), be.asarray(lum.astype(np.float32)), be.asarray(flow),
+                          be.asarray(occ), be.asarray(np.zeros_like(occ)), params, load_albedo_prior())
+    assert (be.numpy(energy.stable_pairs) > 0.5).sum() > 20
+    x0 = rng.normal(0, 0.3, energy.X.shape).astype(np.float32)
+    be.vecops.copy(be.asarray(x0), energy.X)
+    be.vecops.fill(energy.S_tilde.reshape((T * h * w,)), 0.0)
+    energy(energy.X, energy.G)
+    g = be.numpy(energy.G).astype(np.float64).copy()
+    _assert_directional_derivatives(be, energy, x0, g, rng)
+
+
 def test_fixed_frames_get_no_gradient(backend, rng):
     energy, _ = _small_problem(backend, rng)
     energy.n_fixed = 1

@@ -87,6 +87,9 @@ class WindowEnergy:
         self.S_tilde = be.empty((T, h, w))
         self.gate = self._local_shading_gate()
         self.stable_pairs = self._stable_pairs()
+        if self.stable_pairs is not None and self.gate is None:
+            self.gate = be.empty((T, h, w))          # the paired kernel is the gated one with pairs added
+            be.vecops.fill(self.gate.reshape((n,)), 1.0)
         self.workspace = Workspace()        # the kernels' scratch buffers, freed with this energy
         self._rows_shape = (T * h,)
         self._gsm = None
@@ -154,9 +157,6 @@ class WindowEnergy:
         p = self.params
         if not (self.temporal and p.shading_stable_gain > 0 and p.lam_shading_local > 0):
             return None
-        if self.gate is None:                        # the paired kernel is the gated one with pairs added
-            self.gate = self.be.empty(self.shape)
-            self.be.vecops.fill(self.gate.reshape((self.n,)), 1.0)
         return stable_pair_weights(self.be, self.I, self.flow, p.shading_step_tau, p.shading_stable_spread,
                                    p.shading_stable_floor, p.shading_step_static_flow)
 
