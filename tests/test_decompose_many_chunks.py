@@ -86,7 +86,8 @@ def test_chunk_window_is_the_shortest_that_covers_a_chunk_in_the_fewest_windows(
                     assert w == window
                     continue
                 # brute force: every allowed length, the windows decompose() would lay out with it
-                counts = {length: len(window_ranges(n, length, overlap)) for length in range(window, longest + 1)}
+                counts = {length: len(window_ranges(n, length, overlap))
+                          for length in range(window, longest + 1)}
                 fewest = min(counts.values())
                 assert w == min(length for length, count in counts.items() if count == fewest), \
                     (n, window, overlap)

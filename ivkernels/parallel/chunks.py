@@ -84,7 +84,7 @@ def chunk_window(n_frames: int, window: int, overlap: int) -> int:
     The fewest windows of at most ``CHUNK_WINDOW_FACTOR * window`` frames that
     cover the chunk, sharing ``max(1, overlap)`` frames as
     :func:`ivkernels.decompose.window_ranges` lays them out, made as long as
-    that many windows need (so they come out of even length); never shorter
+    that many windows need (so they come out of about equal length); never shorter
     than ``window``.  A chunk of at most ``CHUNK_WINDOW_FACTOR * window``
     frames is one window.
 

@@ -2,13 +2,13 @@
 
 The plan: every video is one task, or, with ``chunk_frames``, one task per
 chunk (:mod:`ivkernels.parallel.chunks`; a chunk's task solves it in longer
-windows than ``Params.window``, :func:`~ivkernels.parallel.chunks.chunk_params`); the tasks run on an engine
-(:mod:`ivkernels.parallel.engines`: this process, or a Ray cluster), and a
-chunked video is stitched once all its chunks are back.  Every input is
-checked in this process before any task starts, so a bad one fails early
-and alone; paths are read here, one video at a time as tasks are submitted,
-so the workers need neither the files nor a shared file system, and at most
-:meth:`capacity` tasks' frames wait in the object store.
+windows than ``Params.window``, :func:`~ivkernels.parallel.chunks.chunk_params`);
+the tasks run on an engine (:mod:`ivkernels.parallel.engines`: this process,
+or a Ray cluster), and a chunked video is stitched once all its chunks are
+back.  Every input is checked in this process before any task starts, so a
+bad one fails early and alone; paths are read here, one video at a time as
+tasks are submitted, so the workers need neither the files nor a shared file
+system, and at most :meth:`capacity` tasks' frames wait in the object store.
 """
 from __future__ import annotations
 
