@@ -22,7 +22,15 @@ Four parts, each printing its table (``--parts``):
     along the true flow) on the frame pairs at the seams and elsewhere;
     each chunked call twice, its tasks sharing the CPUs
     (:func:`ivkernels.parallel.engines.task_cpus`) and on one CPU each (as
-    before it), side by side, ``--repeats`` times.
+    before it), side by side, ``--repeats`` times (``--shares`` picks
+    them); and with ``--chunk-windows params chunk`` each of those with the
+    chunks solved in windows of ``Params.window`` frames (as before
+    :func:`ivkernels.parallel.chunks.chunk_params`) and in the chunks'
+    longer windows (now), side by side; the "windows" column lists each
+    chunk's window ranges as its task reported them, and "CPU-s" the CPU
+    seconds of the sequential solve (this process) and of all the chunks'
+    tasks (their workers), which a load from other programs stretches less
+    than the wall-clock ratio.
 ``phases``
     Where the seconds of one chunked call go: what a fresh worker process
     pays (imports, ``warp.init``, kernel loads), then, beside the
@@ -39,6 +47,7 @@ only (seed 0 is refused).
     python perf/scale.py                          # overheads, many, chunks: ~8 minutes on 2 cores
     python perf/scale.py --parts phases --repeats 2
     python perf/scale.py --parts chunks --kinds objects_camera --overlaps 2 4
+    python perf/scale.py --parts chunks --shares task_cpus --chunk-windows params chunk
 """
 from __future__ import annotations
 
@@ -52,7 +61,7 @@ import numpy as np
 
 import ivkernels as iv
 from ivkernels.evaluation import metrics, synthetic
-from ivkernels.parallel import engines
+from ivkernels.parallel import engines, many
 from ivkernels.parallel.engines import LOCAL_CLUSTER, RayEngine
 
 NODES = (1, 10, 100, 1000)
@@ -194,40 +203,50 @@ def _pair_flicker(albedo, seq, pairs) -> float:
 def measure_chunks(args) -> None:
     import ray
 
-    print("\n| kind | seed | overlap | repeat | tasks hold | chunks | sequential s | chunked s | ratio | LMSE seq | "
-          "LMSE chunked | LMSE ratio | drift seq | drift chunked | flicker at seams seq / chunked | "
-          "flicker elsewhere seq / chunked |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("\n| kind | seed | overlap | repeat | tasks hold | chunk windows | chunks | windows | sequential s | "
+          "chunked s | ratio | CPU-s seq / chunks | LMSE seq | LMSE chunked | LMSE ratio | drift seq | drift chunked | "
+          "flicker at seams seq / chunked | flicker elsewhere seq / chunked |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     # each task on one CPU (as before engines.task_cpus), against the CPUs shared by the call's tasks
     shares = {"1 CPU (before)": lambda n_tasks, cpus, node_cpus: 1, "task_cpus": engines.task_cpus}
+    shares = {name: fn for name, fn in shares.items() if name.split()[0] in args.shares}
+    # chunks in windows of Params.window (as before chunks.chunk_params), or in the chunks' own
+    windows = {"params": lambda params, n_frames: params, "chunk": many.chunk_params}
+    runs = [(share, win) for share in shares for win in args.chunk_windows]
     for kind in args.kinds:
         seq = synthetic.render_sequence(kind, args.long_frames, size=tuple(args.size), seed=args.seed)
         frames = seq.frames
         for repeat in range(args.repeats):
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             ref = iv.decompose(frames)
-            t_seq = time.perf_counter() - t0
+            t_seq, c_seq = time.perf_counter() - t0, time.process_time() - c0
             ray.init(**LOCAL_CLUSTER)
             iv.decompose_many([frames[:3]], engine="ray")        # cluster up and workers warm, not timed
             for overlap in args.overlaps:
-                for name in (list(shares) if repeat % 2 == 0 else list(shares)[::-1]):
-                    saved, engines.task_cpus = engines.task_cpus, shares[name]
+                for name, win in (runs if repeat % 2 == 0 else runs[::-1]):
+                    saved = engines.task_cpus, many.chunk_params
+                    engines.task_cpus, many.chunk_params = shares[name], windows[win]
                     try:
                         t0 = time.perf_counter()
                         out = iv.decompose_many([frames], engine="ray", chunk_frames=args.chunk_frames,
                                                 chunk_overlap=overlap)[0]
                         t_ch = time.perf_counter() - t0
                     finally:
-                        engines.task_cpus = saved
+                        engines.task_cpus, many.chunk_params = saved
+                    solved = " ".join("+".join(f"{a}-{b}" for a, b in d["windows"])
+                                      for d in out.diagnostics["chunk_diagnostics"])
+                    # CPU seconds of the sequential solve (this process, all its threads) and of
+                    # the chunks' tasks (each in its worker): the work, whatever else loads the machine
+                    c_ch = sum(d["task"]["cpu_seconds"] for d in out.diagnostics["chunk_diagnostics"])
                     ranges = out.diagnostics["chunks"]
                     seam_pairs = sorted({t for (start, _), (_, prev_stop) in zip(ranges[1:], ranges[:-1])
                                          for t in range(max(start - 1, 0),
                                                         min(prev_stop, args.long_frames - 1))})
                     other = [t for t in range(args.long_frames - 1) if t not in seam_pairs]
                     l_seq, l_ch = metrics.lmse(ref.albedo, seq.albedo), metrics.lmse(out.albedo, seq.albedo)
-                    print(f"| {kind} | {args.seed} | {overlap} | {repeat + 1} | {name} | "
-                          f"{' '.join(f'{a}-{b}' for a, b in ranges)} | {t_seq:.1f} | {t_ch:.1f} | "
-                          f"{t_ch / t_seq:.2f} | {l_seq:.4f} | {l_ch:.4f} | {l_ch / l_seq:.3f} | "
+                    print(f"| {kind} | {args.seed} | {overlap} | {repeat + 1} | {name} | {win} | "
+                          f"{' '.join(f'{a}-{b}' for a, b in ranges)} | {solved} | {t_seq:.1f} | {t_ch:.1f} | "
+                          f"{t_ch / t_seq:.2f} | {c_seq:.1f} / {c_ch:.1f} | {l_seq:.4f} | {l_ch:.4f} | {l_ch / l_seq:.3f} | "
                           f"{_drift(ref.albedo, seq.albedo):.4f} | {_drift(out.albedo, seq.albedo):.4f} | "
                           f"{_pair_flicker(ref.albedo, seq, seam_pairs):.4f} / "
                           f"{_pair_flicker(out.albedo, seq, seam_pairs):.4f} | "
@@ -377,6 +396,11 @@ def main(argv=None) -> None:
     p.add_argument("--chunk-frames", type=int, default=12)
     p.add_argument("--overlaps", type=int, nargs="+", default=[2], help="chunk overlaps to measure")
     p.add_argument("--kinds", nargs="+", default=["static_moving_light"], choices=synthetic.KINDS)
+    p.add_argument("--shares", nargs="+", default=["1", "task_cpus"], choices=["1", "task_cpus"],
+                   help="'chunks': each task on 1 CPU (as before task_cpus), the CPUs shared (task_cpus)")
+    p.add_argument("--chunk-windows", nargs="+", default=["chunk"], choices=["params", "chunk"],
+                   help="'chunks': windows of Params.window inside a chunk (as before chunk_params), "
+                        "the chunks' own (chunk_params)")
     args = p.parse_args(argv)
     if args.seed == 0:
         p.error("seed 0 is the evaluation seed; measure on training seeds (1 and up)")

@@ -1,13 +1,15 @@
-"""decompose_many without Ray: the chunk plan, the stitching (against known gains), the
+"""decompose_many without Ray: the chunk plan, the chunks' windows (against a brute-force
+search and against decompose() on the chunk), the stitching (against known gains), the
 checks up front, per-video errors, and the local engine against decompose()."""
 import numpy as np
 import pytest
 
 import ivkernels as iv
 from ivkernels import Params
+from ivkernels.decompose import window_ranges
 from ivkernels.io import write_png_sequence
 from ivkernels.parallel import VideoError, chunk_ranges, iter_decompose_many, stitch
-from ivkernels.parallel.chunks import fit_offsets
+from ivkernels.parallel.chunks import CHUNK_WINDOW_FACTOR, chunk_params, chunk_window, fit_offsets
 from ivkernels.parallel.engines import task_cpus
 
 SMALL = Params().replace(window=4, overlap=1)
@@ -71,6 +73,32 @@ def test_chunk_frames_is_an_upper_bound_on_the_frames_a_chunk_owns():
                 ranges = chunk_ranges(T, n, overlap)
                 assert len(ranges) == -(-T // n), (T, n, overlap)
                 _check_plan(ranges, T, n, overlap)
+
+
+def test_chunk_window_is_the_shortest_that_covers_a_chunk_in_the_fewest_windows():
+    assert [chunk_window(n, 8, 2) for n in (5, 8, 12, 14, 16, 17, 26, 40)] == [8, 8, 12, 14, 16, 10, 14, 15]
+    for window in range(2, 11):
+        longest = CHUNK_WINDOW_FACTOR * window
+        for overlap in range(0, window):
+            for n in range(1, 70):
+                w = chunk_window(n, window, overlap)
+                if n <= window:                   # one window already: unchanged
+                    assert w == window
+                    continue
+                # brute force: every allowed length, the windows decompose() would lay out with it
+                counts = {length: len(window_ranges(n, length, overlap))
+                          for length in range(window, longest + 1)}
+                fewest = min(counts.values())
+                assert w == min(length for length, count in counts.items() if count == fewest), \
+                    (n, window, overlap)
+                assert window <= w <= longest
+
+
+def test_chunk_params_changes_the_window_only():
+    params = Params()
+    assert chunk_params(params, 8) is params and chunk_params(params, 3) is params
+    longer = chunk_params(params, 14)
+    assert longer.window == 14 and longer.replace(window=params.window) == params
 
 
 @pytest.mark.parametrize("n_tasks, cpus, node_cpus, expected", [
@@ -167,6 +195,31 @@ def test_local_chunked_solve_stays_near_the_sequential_one():
     l_whole = iv.metrics.lmse(whole.albedo, seq.albedo)
     l_chunk = iv.metrics.lmse(chunked.albedo, seq.albedo)
     assert l_chunk <= 1.25 * l_whole + 0.005, (l_chunk, l_whole)
+
+
+def test_each_chunk_is_decompose_of_its_frames_in_its_own_windows_then_stitched():
+    seq = _clip(6, T=12, kind="static_moving_light")
+    chunked = iv.decompose_many([seq.frames], engine="local", flow=[seq.flow], params=SMALL,
+                                chunk_frames=6)[0]
+    ranges = [(0, 6), (5, 12)]
+    assert chunked.diagnostics["chunks"] == ranges
+    # chunks of 6 and 7 frames: one window each, where Params.window (4) would give two
+    assert [d["windows"] for d in chunked.diagnostics["chunk_diagnostics"]] == [[(0, 6)], [(0, 7)]]
+    # the reference: decompose() on each chunk's frames with its window, stitched
+    alone = [iv.decompose(seq.frames[a:b], flow=seq.flow[a:b - 1], params=SMALL.replace(window=b - a),
+                          threads=1) for a, b in ranges]
+    expected = stitch(alone, ranges)
+    np.testing.assert_array_equal(chunked.albedo, expected.albedo)
+    np.testing.assert_array_equal(chunked.shading, expected.shading)
+
+
+def test_a_video_of_one_chunk_keeps_params_window_and_equals_decompose():
+    seq = _clip(7, T=6, kind="static_moving_light")
+    whole = iv.decompose(seq.frames, flow=seq.flow, params=SMALL)
+    one = iv.decompose_many([seq.frames], engine="local", flow=[seq.flow], params=SMALL, chunk_frames=8)[0]
+    assert one.diagnostics["windows"] == whole.diagnostics["windows"] == [(0, 4), (2, 6)]
+    np.testing.assert_array_equal(one.albedo, whole.albedo)
+    np.testing.assert_array_equal(one.shading, whole.shading)
 
 
 def test_paths_are_read_and_give_the_same_result(tmp_path):

@@ -64,6 +64,16 @@ def test_chunks_on_ray_equal_chunks_in_this_process(cluster):
     assert os.getpid() not in pids
 
 
+def test_chunks_on_ray_are_solved_in_their_own_windows(cluster):
+    # the chunk's Params (longer windows, chunks.chunk_params) reach the worker with its task
+    seq = _clip(6, T=12, kind="static_moving_light")
+    kwargs = dict(flow=[seq.flow], params=SMALL, chunk_frames=6)
+    local = iv.decompose_many([seq.frames], engine="local", **kwargs)[0]
+    on_ray = iv.decompose_many([seq.frames], engine="ray", **kwargs)[0]
+    assert [d["windows"] for d in on_ray.diagnostics["chunk_diagnostics"]] == [[(0, 6)], [(0, 7)]]
+    assert np.abs(on_ray.albedo - local.albedo).max() <= 1e-4
+
+
 def test_a_task_that_raises_fails_its_video_alone(cluster, tmp_path):
     seq = _clip(5, T=3)
     engine = RayEngine({"params": SMALL}, max_retries=0)

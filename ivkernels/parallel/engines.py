@@ -108,13 +108,15 @@ class LocalEngine:
     def in_flight(self) -> int:
         return len(self._queue)
 
-    def submit(self, key, frames, flow) -> None:
-        self._queue.append((key, frames, flow))
+    def submit(self, key, frames, flow, params=None) -> None:
+        """Queue a task; ``params`` (an :class:`ivkernels.Params`) replaces the options' for it."""
+        self._queue.append((key, frames, flow, params))
 
     def next_done(self):
-        key, frames, flow = self._queue.popleft()
+        key, frames, flow, params = self._queue.popleft()
+        options = self.options if params is None else dict(self.options, params=params)
         try:
-            return key, tasks.solve(frames, flow, self.options)
+            return key, tasks.solve(frames, flow, options)
         except Exception as err:            # reported per video by the caller
             return key, err
 
@@ -218,11 +220,14 @@ class RayEngine:
     def in_flight(self) -> int:
         return len(self._refs)
 
-    def submit(self, key, frames, flow) -> None:
+    def submit(self, key, frames, flow, params=None) -> None:
+        """Start a task; ``params`` (an :class:`ivkernels.Params`) replaces the options' for it
+        (a chunk's longer windows; a small object, passed with the task)."""
         ray = self.ray
         frames_ref = ray.put(frames)
         flow_ref = ray.put(flow) if flow is not None and not isinstance(flow, str) else flow
-        self._refs[self._solve.remote(frames_ref, flow_ref, self._options_ref)] = key
+        options = self._options_ref if params is None else dict(self.options, params=params)
+        self._refs[self._solve.remote(frames_ref, flow_ref, options)] = key
 
     def next_done(self):
         ray = self.ray

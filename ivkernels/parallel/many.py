@@ -1,13 +1,14 @@
 """Many videos and long videos: :func:`decompose_many` and :func:`iter_decompose_many`.
 
 The plan: every video is one task, or, with ``chunk_frames``, one task per
-chunk (:mod:`ivkernels.parallel.chunks`); the tasks run on an engine
-(:mod:`ivkernels.parallel.engines`: this process, or a Ray cluster), and a
-chunked video is stitched once all its chunks are back.  Every input is
-checked in this process before any task starts, so a bad one fails early
-and alone; paths are read here, one video at a time as tasks are submitted,
-so the workers need neither the files nor a shared file system, and at most
-:meth:`capacity` tasks' frames wait in the object store.
+chunk (:mod:`ivkernels.parallel.chunks`; a chunk's task solves it in longer
+windows than ``Params.window``, :func:`~ivkernels.parallel.chunks.chunk_params`);
+the tasks run on an engine (:mod:`ivkernels.parallel.engines`: this process,
+or a Ray cluster), and a chunked video is stitched once all its chunks are
+back.  Every input is checked in this process before any task starts, so a
+bad one fails early and alone; paths are read here, one video at a time as
+tasks are submitted, so the workers need neither the files nor a shared file
+system, and at most :meth:`capacity` tasks' frames wait in the object store.
 """
 from __future__ import annotations
 
@@ -28,7 +29,7 @@ from ivkernels.flow import FLOW_METHODS
 from ivkernels.io import probe_frames, read_frames
 from ivkernels.kernels.thread_count import check_threads
 from ivkernels.params import Params
-from ivkernels.parallel.chunks import chunk_ranges, stitch
+from ivkernels.parallel.chunks import chunk_params, chunk_ranges, stitch
 from ivkernels.parallel.engines import LocalEngine, RayEngine, import_ray
 
 #: Engines :func:`decompose_many` runs on.
@@ -282,7 +283,12 @@ def _run(failed: list, ready: deque, options: dict, overlap: int, engine_name: s
                 for c, (start, stop) in enumerate(video.ranges):
                     chunk_flow = flow[start:stop - 1] if flow is not None and not isinstance(flow, str) \
                         else flow
-                    engine.submit((video.index, c), np.ascontiguousarray(frames[start:stop]), chunk_flow)
+                    # a video cut into chunks: each solved in longer windows (chunks.chunk_params);
+                    # a whole video keeps the caller's params, so it gets decompose()'s result
+                    params = chunk_params(options["params"], stop - start) if len(video.ranges) > 1 \
+                        else None
+                    engine.submit((video.index, c), np.ascontiguousarray(frames[start:stop]), chunk_flow,
+                                  params=params)
                 del frames, flow
             if not engine.in_flight():
                 continue
@@ -342,8 +348,11 @@ def decompose_many(videos: Sequence, *, engine: str = "ray", address: str | None
         need not be there (paths are read in this process).
     chunk_frames : cut each video into chunks of at most this many frames
         of their own (``ceil(T / chunk_frames)`` chunks of equal length),
-        solved in parallel and stitched (:mod:`ivkernels.parallel.chunks`);
-        ``None`` (default): one task per video.
+        solved in parallel, each in windows of up to twice
+        ``Params.window`` frames (one window for a chunk of up to 16
+        frames at the defaults), and stitched
+        (:mod:`ivkernels.parallel.chunks`); ``None`` (default): one task
+        per video.
     chunk_overlap : frames each chunk shares with the one before (>= 1);
         default ``Params.overlap``, the frames consecutive windows share
         in the sequential solve (perf/RESULTS.md, "Many videos and long
