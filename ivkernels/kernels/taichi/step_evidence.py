@@ -299,6 +299,12 @@ def still_stability_rows(flow: nd4, change: nd4, weight: nd3, tau: ti.f32, stati
                 weight[t, y, x] = ti.exp(-q * q)
 
 
+@ti.func
+def mean_channel(img: ti.template(), t, y, x):
+    """The mean over the 3 channels of pixel ``(t, y, x)``: the log luminance ``L``."""
+    return (img[t, y, x, 0] + img[t, y, x, 1] + img[t, y, x, 2]) / 3.0
+
+
 @ti.kernel
 def luminance_steps_rows(img: nd4, steps: nd4):
     """``steps[t, y, x, k] = L(t, x + d_k) - L(t, x)`` (right, lower), 0 outside (see the Warp module)."""
@@ -308,13 +314,13 @@ def luminance_steps_rows(img: nd4, steps: nd4):
         t = r // height
         y = r - t * height
         for x in range(width):
-            here = (img[t, y, x, 0] + img[t, y, x, 1] + img[t, y, x, 2]) / 3.0
+            here = mean_channel(img, t, y, x)
             right = 0.0
             below = 0.0
             if x + 1 < width:
-                right = (img[t, y, x + 1, 0] + img[t, y, x + 1, 1] + img[t, y, x + 1, 2]) / 3.0 - here
+                right = mean_channel(img, t, y, x + 1) - here
             if y + 1 < height:
-                below = (img[t, y + 1, x, 0] + img[t, y + 1, x, 1] + img[t, y + 1, x, 2]) / 3.0 - here
+                below = mean_channel(img, t, y + 1, x) - here
             steps[t, y, x, 0] = right
             steps[t, y, x, 1] = below
 

@@ -395,6 +395,12 @@ def still_stability_rows(row_begin: int, flow: wp.array4d(dtype=float), change: 
             weight[t, y, x] = wp.exp(-q * q)
 
 
+@wp.func
+def mean_channel(img: wp.array4d(dtype=float), t: int, y: int, x: int):
+    """The mean over the 3 channels of pixel ``(t, y, x)``: the log luminance ``L``."""
+    return (img[t, y, x, 0] + img[t, y, x, 1] + img[t, y, x, 2]) / 3.0
+
+
 @wp.kernel
 def luminance_steps_rows(row_begin: int, tiles: int, img: wp.array4d(dtype=float),
                          steps: wp.array4d(dtype=float)):
@@ -406,13 +412,13 @@ def luminance_steps_rows(row_begin: int, tiles: int, img: wp.array4d(dtype=float
     t = r // height
     y = r - t * height
     for x in range(x_begin, x_end):
-        here = (img[t, y, x, 0] + img[t, y, x, 1] + img[t, y, x, 2]) / 3.0
+        here = mean_channel(img, t, y, x)
         right = float(0.0)
         below = float(0.0)
         if x + 1 < width:
-            right = (img[t, y, x + 1, 0] + img[t, y, x + 1, 1] + img[t, y, x + 1, 2]) / 3.0 - here
+            right = mean_channel(img, t, y, x + 1) - here
         if y + 1 < height:
-            below = (img[t, y + 1, x, 0] + img[t, y + 1, x, 1] + img[t, y + 1, x, 2]) / 3.0 - here
+            below = mean_channel(img, t, y + 1, x) - here
         steps[t, y, x, 0] = right
         steps[t, y, x, 1] = below
 
