@@ -174,7 +174,8 @@ class Params:
         in a window whose light changes (``n > 1``), a horizontal or vertical
         pair that holds still and whose log-luminance step keeps its contrast
         over the frames (median step ``m`` against ``shading_step_tau``,
-        median absolute deviation against ``spread``; steps of 1 log unit or
+        its largest deviation from the median over the frames against
+        ``spread``: the step must hold in every frame; steps of 1 log unit or
         more left out; evidence under ``floor`` set to 0, the small stable
         steps a camera's noise gives every pair) adds
         ``lam_shading_local * gain * e * rho(S(x + d) - S(x))`` to Eq. 9's
@@ -300,7 +301,7 @@ class Params:
     shading_step_static_flow: float = 1.0
     shading_step_stability_changing_light: bool = True
     shading_stable_gain: float = 0.0
-    shading_stable_spread: float = 0.05
+    shading_stable_spread: float = 0.1
     shading_stable_floor: float = 0.3
     shading_gate_chroma: float = 0.0
     lam_shading_nonlocal: float = 10000.0
@@ -409,6 +410,6 @@ _RULES = {
     "shading_gate_chroma": Range(float, 0.0, why="a log-chromaticity change; 0: the gate ignores colour"),
     "shading_stable_gain": Range(float, 0.0, why="a weight factor on Eq. 9's local weight; 0 switches the "
                                                  "stable-step pairs off"),
-    "shading_stable_spread": Range(float, 0.0, low_open=True, why="a median absolute deviation of a log step"),
+    "shading_stable_spread": Range(float, 0.0, low_open=True, why="a deviation of a log step from its median"),
     "shading_stable_floor": Range(float, 0.0, 1.0, why="an evidence in [0, 1)"),
 }

@@ -99,8 +99,10 @@ class LBFGS:
             if j != y:
                 G[y, j] = G[j, y] = G[cur, j] - G[prev, j]
         G[y, y] = G[y, cur] - G[y, prev]
-        sy = G[slot, y]
-        if sy > 1e-12 * G[y, y] and sy > 0.0:
+        sy, yy = G[slot, y], G[y, y]
+        # y.y from differences of float32 dots can round to 0 or below while s.y > 0;
+        # such a pair would scale the two-loop by s.y / y.y = inf
+        if yy > 0.0 and sy > 1e-12 * yy and np.isfinite(sy / yy):
             self._pairs.append((slot, 1.0 / sy))
         else:                                       # curvature condition fails: skip
             self._free.append(slot)

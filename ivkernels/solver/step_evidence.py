@@ -207,8 +207,8 @@ def stable_pair_weights(be, log_image, flow, tau: float, stability: float, floor
                         static_flow: float = STATIC_FLOW):
     """Weiss's stable-step evidence of each pixel's right and lower pair, on the backend's arrays.
 
-    ``(1 - exp(-(m / tau)^2)) exp(-(MAD / stability)^2)`` of the median ``m``
-    and median absolute deviation of the pair's log-luminance step over the
+    ``(1 - exp(-(m / tau)^2)) exp(-(D / stability)^2)`` of the median ``m``
+    and the largest deviation from it ``D`` of the pair's log-luminance step over the
     window's frames, read on ``log(i + DARK_OFFSET)``; 0 under ``floor``, for
     steps of ``MAX_STABLE_STEP`` log units or more, and where either pixel's
     flow moves ``static_flow`` px or more (kernel ``step_evidence.stable_pairs``).

@@ -174,7 +174,7 @@ def _stable(T_steps, floor):
         f = normal(rng, (pairs(T), H, W, 2), 0.0, 0.2)
         f[:, : H // 3, : W // 3] += 3.0                                            # a moving patch
         return {"log_image": img.astype(F32), "flow": f, "pairs": nans((H, W, 2)), "tau": 0.1,
-                "stability": 0.05, "floor": floor, "static_flow": 1.0}
+                "stability": 0.1, "floor": floor, "static_flow": 1.0}
 
     def tied(v):
         """Pairs whose evidence, median step or speed lies within a band of a threshold: float32 and
@@ -187,8 +187,8 @@ def _stable(T_steps, floor):
             a, b = ref.pair_slices(L.shape, dy, dx)
             steps = L[b] - L[a]
             m = np.median(steps, axis=0)
-            mad = np.median(np.abs(steps - m), axis=0)
-            ev = (1.0 - np.exp(-(m / v["tau"]) ** 2)) * np.exp(-(mad / v["stability"]) ** 2)
+            spread = np.abs(steps - m).max(axis=0)
+            ev = (1.0 - np.exp(-(m / v["tau"]) ** 2)) * np.exp(-(spread / v["stability"]) ** 2)
             out[a[1], a[2], k] = ((np.abs(np.abs(m) - ref.MAX_STABLE_STEP) < 1e-4)
                                   | (np.abs(ev - v["floor"]) < 1e-4) | near_speed[a[1:]] | near_speed[b[1:]])
         return {"pairs": out}

@@ -33,10 +33,11 @@ weight (:func:`share_weight`) while the gain stays unscaled.
 Weiss's cue also gives a second, separate weight (:func:`stable_pairs`), on
 the horizontal and vertical pairs themselves rather than on pixels: over the
 window's frames, the step ``s_t = L(t, x + d) - L(t, x)`` of a pair that
-holds still, its median ``m`` and median absolute deviation ``MAD``, and the
-pair's evidence ``(1 - exp(-(m / tau)^2)) exp(-(MAD / stability)^2)``: a step
-that keeps its contrast under every light of the window is an albedo edge
-(Weiss, ICCV 2001).  Steps of :data:`MAX_STABLE_STEP` log units or more (an
+holds still, its median ``m`` and its largest deviation from it ``D``, and
+the pair's evidence ``(1 - exp(-(m / tau)^2)) exp(-(D / stability)^2)``: a
+step that keeps its contrast under every light of the window is an albedo
+edge (Weiss, ICCV 2001); one that a shadow crosses in some frames is not,
+however many frames it holds in.  Steps of :data:`MAX_STABLE_STEP` log units or more (an
 object's outline against a black background) and evidence under ``floor``
 (the small, stable steps a camera's noise gives every pair) get 0.
 """
@@ -109,8 +110,8 @@ FAMILY.declare("still_stability(log_image, flow, weight, tau, static_flow)",
                          ("weight", "flow", "the weight is written while flow is read")))
 FAMILY.declare("stable_pairs(log_image, flow, pairs, tau, stability, floor, static_flow)",
                "Weiss's stable-step evidence of each pixel's right and lower pair over the frames: "
-               "``(1 - exp(-(m / tau)^2)) exp(-(MAD / stability)^2)`` of the median ``m`` and median absolute "
-               "deviation of the pair's log-luminance step, 0 under ``floor``, for ``|m|`` of "
+               "``(1 - exp(-(m / tau)^2)) exp(-(D / stability)^2)`` of the median ``m`` and the largest deviation "
+               "from it ``D`` of the pair's log-luminance step, 0 under ``floor``, for ``|m|`` of "
                "``MAX_STABLE_STEP`` or more, or where the flow of either pixel moves ``static_flow`` px or more.",
                log_image="T H W 3", flow=Array("T-1 H W 2", layout="(T-1, H, W, 2)"),
                pairs=Out("H W 2", layout="(H, W, 2)"), tau=FinitePositive, stability=FinitePositive,
@@ -266,8 +267,8 @@ def stable_pairs(log_image, flow, tau: float, stability: float, floor: float, st
     flow : (T-1, H, W, 2); a pair holds still when neither pixel's flow in any frame pair
         is ``static_flow`` px or longer.
     The evidence of a still pair with median step ``m`` over the ``T`` frames (the mean of the
-    middle two for even ``T``) and median absolute deviation ``MAD``:
-    ``(1 - exp(-(m / tau)^2)) exp(-(MAD / stability)^2)``, 0 when ``|m| >= MAX_STABLE_STEP``
+    middle two for even ``T``) and largest deviation from it ``D = max_t |s_t - m|``:
+    ``(1 - exp(-(m / tau)^2)) exp(-(D / stability)^2)``, 0 when ``|m| >= MAX_STABLE_STEP``
     or when it is under ``floor``.
     """
     L, _ = luminance_chroma(log_image)
@@ -278,8 +279,8 @@ def stable_pairs(log_image, flow, tau: float, stability: float, floor: float, st
         a, b = pair_slices(L.shape, dy, dx)
         steps = L[b] - L[a]                                                      # (T, h', w')
         m = np.median(steps, axis=0)
-        mad = np.median(np.abs(steps - m), axis=0)
-        ev = (1.0 - np.exp(-(m / tau) ** 2)) * np.exp(-(mad / stability) ** 2)
+        spread = np.abs(steps - m).max(axis=0)
+        ev = (1.0 - np.exp(-(m / tau) ** 2)) * np.exp(-(spread / stability) ** 2)
         ev[(np.abs(m) >= MAX_STABLE_STEP) | (ev < floor) | moves[a[1:]] | moves[b[1:]]] = 0.0
         out[a[1], a[2], k] = ev
     return out

@@ -338,21 +338,16 @@ def moves(flow: nd4, y, x, static_flow):
 
 
 @ti.func
-def middle_of(values: nd4, y, x, k, centre, absolute: ti.template()):
-    """The median over ``t`` of ``values[t, y, x, k] - centre`` (its absolute value with
-    ``absolute``), by ranks (see the Warp module)."""
+def median_of(values: nd4, y, x, k):
+    """The median over ``t`` of ``values[t, y, x, k]``, by ranks (see the Warp module)."""
     n = values.shape[0]
     lo = 0.0
     hi = 0.0
     for i in range(n):
-        v = values[i, y, x, k] - centre
-        if ti.static(absolute):
-            v = ti.abs(v)
+        v = values[i, y, x, k]
         rank = 0
         for j in range(n):
-            u = values[j, y, x, k] - centre
-            if ti.static(absolute):
-                u = ti.abs(u)
+            u = values[j, y, x, k]
             if u < v or (u == v and j < i):
                 rank += 1
         if rank == (n - 1) // 2:
@@ -363,11 +358,11 @@ def middle_of(values: nd4, y, x, k, centre, absolute: ti.template()):
 
 
 @ti.func
-def largest_step(values: nd4, y, x, k):
-    """``max_t |values[t, y, x, k]|``."""
+def largest_step(values: nd4, y, x, k, centre):
+    """``max_t |values[t, y, x, k] - centre|``."""
     out = 0.0
     for i in range(values.shape[0]):
-        out = ti.max(out, ti.abs(values[i, y, x, k]))
+        out = ti.max(out, ti.abs(values[i, y, x, k] - centre))
     return out
 
 
@@ -386,13 +381,12 @@ def stable_pairs_rows(steps: nd4, flow: nd4, pairs: nd3, tau: ti.f32, stability:
                 xx = x + 1 - k
                 ev = 0.0
                 if yy < height and xx < width:
-                    if here == 0 and largest_step(steps, y, x, k) >= least_step \
+                    if here == 0 and largest_step(steps, y, x, k, 0.0) >= least_step \
                             and moves(flow, yy, xx, static_flow) == 0:
-                        m = middle_of(steps, y, x, k, 0.0, False)
+                        m = median_of(steps, y, x, k)
                         if ti.abs(m) < MAX_STABLE_STEP:
-                            mad = middle_of(steps, y, x, k, m, True)
                             q = m / tau
-                            qs = mad / stability
+                            qs = largest_step(steps, y, x, k, m) / stability
                             ev = (1.0 - ti.exp(-q * q)) * ti.exp(-qs * qs)
                             if ev < floor:
                                 ev = 0.0

@@ -12,8 +12,8 @@
 * :func:`still_stability`: Weiss's stability cue (``maps.shading_gate``) where
   the scene holds still, 1 where it moves.
 * :func:`stable_pairs`: Weiss's stable-step evidence of each pixel's right and
-  lower pair over the window's frames (median and median absolute deviation
-  of the pair's step), where the pair holds still.
+  lower pair over the window's frames (the median of the pair's step and its
+  largest deviation from it), where the pair holds still.
 
 The formula, its constants and the NumPy reference:
 :mod:`ivkernels.kernels.reference.step_evidence`; its use in the energy:
@@ -436,22 +436,18 @@ def moves(flow: wp.array4d(dtype=float), y: int, x: int, static_flow: float):
 
 
 @wp.func
-def middle_of(values: wp.array4d(dtype=float), y: int, x: int, k: int, centre: float, absolute: int):
-    """The median over ``t`` of ``v_t = values[t, y, x, k] - centre`` (of ``|v_t|`` when
-    ``absolute``): the mean of the order statistics ``(T - 1) // 2`` and ``T // 2``, found by
-    each value's rank (ties broken by ``t``), with no buffer per thread."""
+def median_of(values: wp.array4d(dtype=float), y: int, x: int, k: int):
+    """The median over ``t`` of ``values[t, y, x, k]``: the mean of the order statistics
+    ``(T - 1) // 2`` and ``T // 2``, found by each value's rank (ties broken by ``t``), with no
+    buffer per thread."""
     n = values.shape[0]
     lo = float(0.0)
     hi = float(0.0)
     for i in range(n):
-        v = values[i, y, x, k] - centre
-        if absolute != 0:
-            v = wp.abs(v)
+        v = values[i, y, x, k]
         rank = int(0)
         for j in range(n):
-            u = values[j, y, x, k] - centre
-            if absolute != 0:
-                u = wp.abs(u)
+            u = values[j, y, x, k]
             if u < v or (u == v and j < i):
                 rank += 1
         if rank == (n - 1) // 2:
@@ -462,11 +458,11 @@ def middle_of(values: wp.array4d(dtype=float), y: int, x: int, k: int, centre: f
 
 
 @wp.func
-def largest_step(values: wp.array4d(dtype=float), y: int, x: int, k: int):
-    """``max_t |values[t, y, x, k]|``."""
+def largest_step(values: wp.array4d(dtype=float), y: int, x: int, k: int, centre: float):
+    """``max_t |values[t, y, x, k] - centre|``."""
     out = float(0.0)
     for i in range(values.shape[0]):
-        out = wp.max(out, wp.abs(values[i, y, x, k]))
+        out = wp.max(out, wp.abs(values[i, y, x, k] - centre))
     return out
 
 
@@ -488,13 +484,12 @@ def stable_pairs_pixels(row_begin: int, tiles: int, steps: wp.array4d(dtype=floa
             xx = x + 1 - k
             ev = float(0.0)
             if yy < height and xx < width:
-                if here == 0 and largest_step(steps, y, x, k) >= least_step \
+                if here == 0 and largest_step(steps, y, x, k, 0.0) >= least_step \
                         and moves(flow, yy, xx, static_flow) == 0:
-                    m = middle_of(steps, y, x, k, 0.0, 0)
+                    m = median_of(steps, y, x, k)
                     if wp.abs(m) < STABLE_STEP_MAX:
-                        mad = middle_of(steps, y, x, k, m, 1)
                         q = m / tau
-                        qs = mad / stability
+                        qs = largest_step(steps, y, x, k, m) / stability
                         ev = (1.0 - wp.exp(-q * q)) * wp.exp(-qs * qs)
                         if ev < floor:
                             ev = 0.0
@@ -655,9 +650,9 @@ def stable_pairs(log_image, flow, pairs, tau: float, stability: float, floor: fl
     """Weiss's stable-step evidence of each pixel's right and lower pair.
 
     Over the ``T`` frames, the step of the pair's log luminance (the mean
-    over channels) ``s_t = L(t, x + d) - L(t, x)``, its median ``m`` and its
-    median absolute deviation ``MAD`` (the mean of the middle two for even
-    ``T``): ``pairs[y, x, k] = (1 - exp(-(m / tau)^2)) exp(-(MAD / stability)^2)``,
+    over channels) ``s_t = L(t, x + d) - L(t, x)``, its median ``m`` (the mean
+    of the middle two for even ``T``) and its largest deviation from it
+    ``D = max_t |s_t - m|``: ``pairs[y, x, k] = (1 - exp(-(m / tau)^2)) exp(-(D / stability)^2)``,
     0 when ``|m| >= MAX_STABLE_STEP``, when under ``floor``, when the pair
     leaves the image, or when either pixel's flow in any frame pair is
     ``static_flow`` px or longer (:func:`ivkernels.kernels.reference.step_evidence.stable_pairs`).
