@@ -53,9 +53,9 @@ MOVES = {
     "shading_step_stability": (0.0, {"shading_step_stability_changing_light": False}, "truth:static_moving_light"),
     "shading_step_static_flow": (0.01, {"shading_step_stability_changing_light": False}, "truth:objects_camera"),
     # the stable steps' pairs act where the light changes over a still scene
-    "shading_stable_gain": (8.0, {}, "truth:relit"),
-    "shading_stable_spread": (0.5, {"shading_stable_gain": 8.0}, "truth:relit"),
-    "shading_stable_floor": (0.0, {"shading_stable_gain": 8.0}, "truth:relit"),
+    "shading_stable_gain": (0.0, {}, "truth:relit"),
+    "shading_stable_spread": (0.5, {}, "truth:relit"),
+    "shading_stable_floor": (0.0, {}, "truth:relit"),
     "lam_shading_nonlocal": (10.0, {}, "truth"),
     "lam_coupling": (1000.0, {}, "truth"),
     "sigma_s": (1.0, {}, "truth"),
