@@ -179,16 +179,10 @@ def _stable(T_steps, floor):
     def tied(v):
         """Pairs whose evidence, median step or speed lies within a band of a threshold: float32 and
         float64 may decide them differently."""
-        L, _ = ref.luminance_chroma(v["log_image"])
         speed = np.sqrt((np.asarray(v["flow"], np.float64) ** 2).sum(axis=-1))
         near_speed = (np.abs(speed - v["static_flow"]) < TIE).any(axis=0)
-        out = np.zeros((*L.shape[1:], 2), bool)
-        for k, (dy, dx) in enumerate(ref.AXIS_NEIGHBOURS):
-            a, b = ref.pair_slices(L.shape, dy, dx)
-            steps = L[b] - L[a]
-            m = np.median(steps, axis=0)
-            spread = np.abs(steps - m).max(axis=0)
-            ev = (1.0 - np.exp(-(m / v["tau"]) ** 2)) * np.exp(-(spread / v["stability"]) ** 2)
+        out = np.zeros((*near_speed.shape, 2), bool)
+        for k, (a, b), m, ev in ref.stable_step_parts(v["log_image"], v["tau"], v["stability"]):
             out[a[1], a[2], k] = ((np.abs(np.abs(m) - ref.MAX_STABLE_STEP) < 1e-4)
                                   | (np.abs(ev - v["floor"]) < 1e-4) | near_speed[a[1:]] | near_speed[b[1:]])
         return {"pairs": out}

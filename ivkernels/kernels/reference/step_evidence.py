@@ -37,9 +37,10 @@ holds still, its median ``m`` and its largest deviation from it ``D``, and
 the pair's evidence ``(1 - exp(-(m / tau)^2)) exp(-(D / stability)^2)``: a
 step that keeps its contrast under every light of the window is an albedo
 edge (Weiss, ICCV 2001); one that a shadow crosses in some frames is not,
-however many frames it holds in.  Steps of :data:`MAX_STABLE_STEP` log units or more (an
-object's outline against a black background) and evidence under ``floor``
-(the small, stable steps a camera's noise gives every pair) get 0.
+however many frames it holds in.  Steps of :data:`MAX_STABLE_STEP` log
+units or more (an object's outline against a black background) and evidence
+under ``floor`` (the small, stable steps a camera's noise gives every pair)
+get 0.
 """
 from __future__ import annotations
 
@@ -118,7 +119,6 @@ FAMILY.declare("stable_pairs(log_image, flow, pairs, tau, stability, floor, stat
                floor=NonNegative, static_flow=Positive,
                separate=(("pairs", "log_image", "the pairs are written while log_image is read"),
                          ("pairs", "flow", "the pairs are written while flow is read")))
-
 
 
 # ----------------------------------------------------------------------------- the references
@@ -271,19 +271,26 @@ def stable_pairs(log_image, flow, tau: float, stability: float, floor: float, st
     ``(1 - exp(-(m / tau)^2)) exp(-(D / stability)^2)``, 0 when ``|m| >= MAX_STABLE_STEP``
     or when it is under ``floor``.
     """
+    moves = moving(flow, np.shape(log_image)[0], static_flow).any(axis=0)     # (H, W): in any pair
+    out = np.zeros((*moves.shape, 2))
+    for k, (a, b), m, ev in stable_step_parts(log_image, tau, stability):
+        ev[(np.abs(m) >= MAX_STABLE_STEP) | (ev < floor) | moves[a[1:]] | moves[b[1:]]] = 0.0
+        out[a[1], a[2], k] = ev
+    return out
+
+
+def stable_step_parts(log_image, tau: float, stability: float):
+    """Per axis ``k`` of :data:`AXIS_NEIGHBOURS`, ``(k, (a, b), m, ev)``: the index tuples of the
+    pairs' pixels (:func:`pair_slices`), the median step ``m`` over the frames and the evidence
+    ``(1 - exp(-(m / tau)^2)) exp(-(D / stability)^2)`` before the floor, the largest step and
+    the flow rule of :func:`stable_pairs` (float64, (h', w') each)."""
     L, _ = luminance_chroma(log_image)
-    flow = np.asarray(flow, np.float64)
-    moves = (np.sqrt((flow ** 2).sum(axis=-1)) >= static_flow).any(axis=0)       # (H, W)
-    out = np.zeros((*L.shape[1:], 2))
     for k, (dy, dx) in enumerate(AXIS_NEIGHBOURS):
         a, b = pair_slices(L.shape, dy, dx)
         steps = L[b] - L[a]                                                      # (T, h', w')
         m = np.median(steps, axis=0)
         spread = np.abs(steps - m).max(axis=0)
-        ev = (1.0 - np.exp(-(m / tau) ** 2)) * np.exp(-(spread / stability) ** 2)
-        ev[(np.abs(m) >= MAX_STABLE_STEP) | (ev < floor) | moves[a[1:]] | moves[b[1:]]] = 0.0
-        out[a[1], a[2], k] = ev
-    return out
+        yield k, (a, b), m, (1.0 - np.exp(-(m / tau) ** 2)) * np.exp(-(spread / stability) ** 2)
 
 
 def least_stable_step(tau: float, floor: float) -> float:

@@ -1,6 +1,6 @@
 """Taichi mirror of :mod:`ivkernels.kernels.warp.energy_shading` (Eq. 9 local
-smoothness, ungated, gated, and with the weighted axis pairs, Eq. 13 coupling): same host functions and signatures, NumPy arrays
-passed as ``ti.types.ndarray()``.  The outermost loop runs over rows in parallel.
+smoothness, ungated, gated, and with the weighted axis pairs, Eq. 13 coupling): same host
+functions and signatures, NumPy arrays passed as ``ti.types.ndarray()``.  The outermost loop runs over rows in parallel.
 The local term's Charbonnier penalty is the data term's (:mod:`ivkernels.kernels.taichi.energy_data`).
 """
 

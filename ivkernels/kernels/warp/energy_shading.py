@@ -179,13 +179,15 @@ def shading_smoothness_gated(S, gate, gS, energy_rows, lam: float = 2.0, eps: fl
     _local_term(S, gate, gS, energy_rows, lam, eps)
 
 
-def _local_term(S, gate, gS, energy_rows, lam: float, eps: float) -> None:
-    """Launch of Eq. 9's local term (arguments checked), gated unless ``gate`` is None (``S`` stands
-    in for the arrays a variant does not read)."""
+def _local_term(S, gate, gS, energy_rows, lam: float, eps: float, pairs=None, pair_gain: float = 0.0) -> None:
+    """Launch of Eq. 9's local term (arguments checked), gated unless ``gate`` is None, with the
+    axis pairs' weights when ``pairs`` is given (``S`` stands in for the arrays a variant does
+    not read)."""
     t, h, w = S.shape
     tiles = row_tiles(w, S.device)
-    launch_rows(_local_kernel_for(gate is not None), t * h * tiles,
-                [tiles, S, S if gate is None else gate, S, gS, energy_rows, float(lam), 0.0, float(eps)], device=S.device)
+    launch_rows(_local_kernel_for(gate is not None, pairs is not None), t * h * tiles,
+                [tiles, S, S if gate is None else gate, S if pairs is None else pairs, gS, energy_rows,
+                 float(lam), 0.5 * float(pair_gain), float(eps)], device=S.device)
 
 
 @host("shading_smoothness_paired")
@@ -211,11 +213,7 @@ def shading_smoothness_paired(S, gate, pairs, gS, energy_rows, lam: float = 2.0,
     energy_rows : wp.array float64 (T*H,), accumulated.
     lam : lambda_Ss.  pair_gain : the pairs' weight relative to ``lam``.  eps : Charbonnier epsilon.
     """
-    t, h, w = S.shape
-    tiles = row_tiles(w, S.device)
-    launch_rows(_local_kernel_for(True, True), t * h * tiles,
-                [tiles, S, gate, pairs, gS, energy_rows, float(lam), 0.5 * float(pair_gain), float(eps)],
-                device=S.device)
+    _local_term(S, gate, gS, energy_rows, lam, eps, pairs, pair_gain)
 
 
 @host("coupling_term")
