@@ -116,9 +116,11 @@ def test_coarse_basis_transfers_in_tiles_match_the_cpu_layout(be, monkeypatch, s
         out, back = be.zeros((t, h, w)), be.zeros((t, hc, wc))
         be.coarse_basis.prolong_add(be.asarray(z), weights, out, spacing)
         be.coarse_basis.restrict_add(be.asarray(values), weights, back, spacing)
-        return [be.numpy(out).copy(), be.numpy(back).copy()]
+        return [be.numpy(weights).copy(), be.numpy(out).copy(), be.numpy(back).copy()]
 
-    assert_close(*both_layouts(monkeypatch, transfers))
+    cpu, gpu = both_layouts(monkeypatch, transfers)
+    np.testing.assert_array_equal(gpu[0], cpu[0])      # the weights: the same arithmetic per pixel
+    assert_close(cpu[1:], gpu[1:])
 
 
 @pytest.mark.parametrize("shape, radius", [((2, 13, 17), 2), ((1, 1, 5), 2), ((3, 4, 2), 1), ((1, 9, 11), 3)])
@@ -162,8 +164,8 @@ def test_vector_operations_with_the_gpu_chunks(be, gpu_layouts, n):
     assert np.all(be.numpy(out) == np.float32(0.25))
     basis = rng.normal(size=(5, n)).astype(np.float32)
     B = be.asarray(basis.copy())
-    np.testing.assert_allclose(v.dots(B, X, [0, 2, 4]), basis[[0, 2, 4]].astype(np.float64) @ x,
-                               rtol=1e-9, atol=1e-9)
+    for rows in ([0, 2, 4], [4, 1]):
+        np.testing.assert_allclose(v.dots(B, X, rows), basis[rows].astype(np.float64) @ x, rtol=1e-9, atol=1e-9)
     v.combine(out, B, [1, 3], [0.5, -1.0])
     np.testing.assert_allclose(be.numpy(out), 0.5 * basis[1] - basis[3], rtol=1e-5, atol=1e-5)
 
@@ -196,6 +198,38 @@ def test_flow_median_in_tiles_matches_the_reference(be, gpu_layouts, shape, radi
     be.median.weighted_median_flow(*(be.asarray(a) for a in (flow, lab, occ, mask)), out, radius=radius,
                                    workspace=Workspace())
     expected = median_ref.weighted_median_flow(flow, lab, occ, mask, radius=radius)
+    np.testing.assert_allclose(be.numpy(out), expected, rtol=1e-5, atol=1e-5)
+
+
+@pytest.mark.parametrize("shape", [(2, 9, 13, 2), (1, 1, 5, 3), (1, 6, 1, 2)])
+def test_median5x5_in_tiles_is_the_cpu_layout_bitwise(be, monkeypatch, shape):
+    src = np.random.default_rng(shape[2]).normal(0, 2, shape).astype(np.float32)
+
+    def median():
+        out = be.empty(shape)
+        be.median.median5x5(be.asarray(src), out)
+        return [be.numpy(out).copy()]
+
+    cpu, gpu = both_layouts(monkeypatch, median)
+    np.testing.assert_array_equal(gpu[0], cpu[0])
+
+
+@pytest.mark.parametrize("shape, radius", [((3, 11, 14), 2), ((2, 6, 9), 3), ((2, 1, 4), 1)])
+def test_shading_median_in_tiles_matches_the_reference(be, gpu_layouts, shape, radius):
+    from ivkernels.kernels.reference import median as median_ref
+
+    rng = np.random.default_rng(radius)
+    t, h, w = shape
+    S = rng.normal(0, 0.5, (t, h, w)).astype(np.float32)
+    # two motions side by side, so the windows across the seam split in two (Eq. 10's surf)
+    flow = np.zeros((t - 1, h, w, 2), np.float32)
+    flow[:, :, w // 2:, 0] = 3.0
+    flow += rng.normal(0, 0.1, flow.shape).astype(np.float32)
+    w_bnd = (rng.uniform(0, 1, (t - 1, h, w)) > 0.2).astype(np.float32)
+    out = be.empty((t, h, w))
+    be.median.weighted_median_shading(*(be.asarray(a) for a in (S, flow, w_bnd)), out, radius=radius,
+                                      lam=0.01, workspace=Workspace())
+    expected = median_ref.weighted_median_shading(S, flow, w_bnd, radius=radius, lam=0.01)
     np.testing.assert_allclose(be.numpy(out), expected, rtol=1e-5, atol=1e-5)
 
 

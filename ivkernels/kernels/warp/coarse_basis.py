@@ -54,9 +54,9 @@ def tent(f: float, node: int):
 
 
 @wp.kernel
-def coarse_weights_rows(row_begin: int, A: wp.array4d(dtype=float), weights: wp.array4d(dtype=float),
+def coarse_weights_rows(row_begin: int, tiles: int, A: wp.array4d(dtype=float), weights: wp.array4d(dtype=float),
                         spacing: int, inv_sigma2: float, grid_h: int, grid_w: int):
-    r = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, A.shape[2])
     height = A.shape[1]
     width = A.shape[2]
     channels = A.shape[3]
@@ -64,7 +64,7 @@ def coarse_weights_rows(row_begin: int, A: wp.array4d(dtype=float), weights: wp.
     y = r - t * height
     j0 = y // spacing
     fy = float(y) / float(spacing)
-    for x in range(width):
+    for x in range(x_begin, x_end):
         i0 = x // spacing
         fx = float(x) / float(spacing)
         total = float(0.0)
@@ -152,7 +152,8 @@ def restrict_add_rows(row_begin: int, tiles: int, values: wp.array3d(dtype=float
 
 @host("coarse_weights")
 def coarse_weights(A, weights, spacing: int, sigma: float) -> None:
-    """Interpolation weights of the edge-aware coarse basis.
+    """Interpolation weights of the edge-aware coarse basis (on a GPU one pixel per
+    thread: row tiles).
 
     Parameters
     ----------
@@ -167,8 +168,9 @@ def coarse_weights(A, weights, spacing: int, sigma: float) -> None:
     """
     t, h, w, _ = A.shape
     grid_h, grid_w = grid_shape(h, w, spacing)
-    launch_rows(coarse_weights_rows, t * h, [A, weights, spacing, 1.0 / (sigma * sigma), grid_h, grid_w],
-                device=A.device)
+    tiles = row_tiles(w, A.device)
+    launch_rows(coarse_weights_rows, t * h * tiles,
+                [tiles, A, weights, spacing, 1.0 / (sigma * sigma), grid_h, grid_w], device=A.device)
 
 
 @host("prolong_add")

@@ -8,16 +8,18 @@
   ``d`` of the occlusion detector (Eq. 7).
 
 Every neighbour index is clamped to the image (replicate border).  One kernel
-thread per image row.
+thread per tile of an image row: one tile per row on the CPU, one pixel per
+tile on a GPU (:func:`ivkernels.kernels.launch.row_tiles`).
 """
 from __future__ import annotations
 
 import warp as wp
 
 from ivkernels.kernels.contract import implements
-from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.derivatives import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.warp.row_tiles import row_span
 
 host = implements(FAMILY, FRONT)
 
@@ -25,22 +27,22 @@ wp.set_module_options({"enable_backward": False})
 
 
 # ----------------------------------------------------------------------------
-# Kernels (one thread per row = t * H + y)
+# Kernels (one thread per tile of a row = t * H + y)
 # ----------------------------------------------------------------------------
 
 @wp.kernel
-def five_point_gradient_rows(row_begin: int, src: wp.array4d(dtype=float),
+def five_point_gradient_rows(row_begin: int, tiles: int, src: wp.array4d(dtype=float),
                              gx: wp.array4d(dtype=float), gy: wp.array4d(dtype=float)):
-    r = row_begin + wp.tid()
     height = src.shape[1]
     width = src.shape[2]
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
     t = r // height
     y = r - t * height
     ym2 = wp.max(y - 2, 0)
     ym1 = wp.max(y - 1, 0)
     yp1 = wp.min(y + 1, height - 1)
     yp2 = wp.min(y + 2, height - 1)
-    for x in range(width):
+    for x in range(x_begin, x_end):
         xm2 = wp.max(x - 2, 0)
         xm1 = wp.max(x - 1, 0)
         xp1 = wp.min(x + 1, width - 1)
@@ -53,15 +55,16 @@ def five_point_gradient_rows(row_begin: int, src: wp.array4d(dtype=float),
 
 
 @wp.kernel
-def flow_sobel_magnitude_rows(row_begin: int, flow: wp.array4d(dtype=float), out: wp.array3d(dtype=float)):
-    r = row_begin + wp.tid()
+def flow_sobel_magnitude_rows(row_begin: int, tiles: int, flow: wp.array4d(dtype=float),
+                              out: wp.array3d(dtype=float)):
     height = flow.shape[1]
     width = flow.shape[2]
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
     t = r // height
     y = r - t * height
     ym = wp.max(y - 1, 0)
     yp = wp.min(y + 1, height - 1)
-    for x in range(width):
+    for x in range(x_begin, x_end):
         xm = wp.max(x - 1, 0)
         xp = wp.min(x + 1, width - 1)
         total = 0.0
@@ -77,15 +80,16 @@ def flow_sobel_magnitude_rows(row_begin: int, flow: wp.array4d(dtype=float), out
 
 
 @wp.kernel
-def divergence_negative_rows(row_begin: int, flow: wp.array4d(dtype=float), out: wp.array3d(dtype=float)):
-    r = row_begin + wp.tid()
+def divergence_negative_rows(row_begin: int, tiles: int, flow: wp.array4d(dtype=float),
+                             out: wp.array3d(dtype=float)):
     height = flow.shape[1]
     width = flow.shape[2]
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
     t = r // height
     y = r - t * height
     ym = wp.max(y - 1, 0)
     yp = wp.min(y + 1, height - 1)
-    for x in range(width):
+    for x in range(x_begin, x_end):
         xm = wp.max(x - 1, 0)
         xp = wp.min(x + 1, width - 1)
         div = 0.5 * (flow[t, y, xp, 0] - flow[t, y, xm, 0]) + 0.5 * (flow[t, yp, x, 1] - flow[t, ym, x, 1])
@@ -108,8 +112,12 @@ def image_gradient(src, gx, gy) -> None:
     ----------
     src : wp.array float32 (T, H, W, C), any C >= 1.
     gx, gy : wp.array float32 (T, H, W, C), written (must not overlap src).
+
+    On a GPU one pixel per thread (row tiles).
     """
-    launch_rows(five_point_gradient_rows, src.shape[0] * src.shape[1], [src, gx, gy], device=src.device)
+    tiles = row_tiles(src.shape[2], src.device)
+    launch_rows(five_point_gradient_rows, src.shape[0] * src.shape[1] * tiles, [tiles, src, gx, gy],
+                device=src.device)
 
 
 @host("flow_sobel_magnitude")
@@ -124,8 +132,12 @@ def flow_sobel_magnitude(flow, out) -> None:
     ----------
     flow : wp.array float32 (T, H, W, 2), pixels.
     out : wp.array float32 (T, H, W), written, pixels per pixel.
+
+    On a GPU one pixel per thread (row tiles).
     """
-    launch_rows(flow_sobel_magnitude_rows, flow.shape[0] * flow.shape[1], [flow, out], device=flow.device)
+    tiles = row_tiles(flow.shape[2], flow.device)
+    launch_rows(flow_sobel_magnitude_rows, flow.shape[0] * flow.shape[1] * tiles, [tiles, flow, out],
+                device=flow.device)
 
 
 @host("divergence_negative")
@@ -139,5 +151,9 @@ def divergence_negative(flow, out) -> None:
     ----------
     flow : wp.array float32 (T, H, W, 2), pixels.
     out : wp.array float32 (T, H, W), written, <= 0.
+
+    On a GPU one pixel per thread (row tiles).
     """
-    launch_rows(divergence_negative_rows, flow.shape[0] * flow.shape[1], [flow, out], device=flow.device)
+    tiles = row_tiles(flow.shape[2], flow.device)
+    launch_rows(divergence_negative_rows, flow.shape[0] * flow.shape[1] * tiles, [tiles, flow, out],
+                device=flow.device)

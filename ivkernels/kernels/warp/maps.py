@@ -20,9 +20,10 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.contract import implements
-from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.maps import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.warp.row_tiles import row_span
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners, inside_image
 from ivkernels.kernels.workspace import scratch_buffer
 
@@ -61,31 +62,32 @@ def occlusion_likelihood(lab: wp.array4d(dtype=float), flow: wp.array4d(dtype=fl
 
 
 # ----------------------------------------------------------------------------
-# Kernels (one thread per row = t * H + y)
+# Kernels (one thread per tile of a row = t * H + y: one tile per row on the
+# CPU, one pixel per tile on a GPU)
 # ----------------------------------------------------------------------------
 
 @wp.kernel
-def occlusion_soft_rows(row_begin: int, lab: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
+def occlusion_soft_rows(row_begin: int, tiles: int, lab: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
                         div_neg: wp.array3d(dtype=float), out: wp.array3d(dtype=float),
                         sigma_e: float, sigma_d: float):
-    r = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, flow.shape[2])
     height = flow.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(flow.shape[2]):
+    for x in range(x_begin, x_end):
         o, inside = occlusion_likelihood(lab, flow, div_neg, t, y, x, sigma_e, sigma_d)
         out[t, y, x] = o * inside
 
 
 @wp.kernel
-def occlusion_binary_rows(row_begin: int, lab: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
-                          div_neg: wp.array3d(dtype=float), out: wp.array3d(dtype=float),
-                          sigma_e: float, sigma_d: float, threshold: float):
-    r = row_begin + wp.tid()
+def occlusion_binary_rows(row_begin: int, tiles: int, lab: wp.array4d(dtype=float),
+                          flow: wp.array4d(dtype=float), div_neg: wp.array3d(dtype=float),
+                          out: wp.array3d(dtype=float), sigma_e: float, sigma_d: float, threshold: float):
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, flow.shape[2])
     height = flow.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(flow.shape[2]):
+    for x in range(x_begin, x_end):
         o, inside = occlusion_likelihood(lab, flow, div_neg, t, y, x, sigma_e, sigma_d)
         w = 0.0
         if o >= threshold and inside > 0.0:
@@ -109,14 +111,14 @@ def corner_spread(img: wp.array4d(dtype=float), t: int, x0: int, x1: int, fx: fl
 
 
 @wp.kernel
-def warp_reliability_rows(row_begin: int, img: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
-                          occ: wp.array3d(dtype=float), max_spread: float):
-    r = row_begin + wp.tid()
+def warp_reliability_rows(row_begin: int, tiles: int, img: wp.array4d(dtype=float),
+                          flow: wp.array4d(dtype=float), occ: wp.array3d(dtype=float), max_spread: float):
     height = flow.shape[1]
     width = flow.shape[2]
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
     t = r // height
     y = r - t * height
-    for x in range(width):
+    for x in range(x_begin, x_end):
         x0, x1, fx = clamped_corners(float(x) + flow[t, y, x, 0], width)
         y0, y1, fy = clamped_corners(float(y) + flow[t, y, x, 1], height)
         if corner_spread(img, t + 1, x0, x1, fx, y0, y1, fy) >= max_spread:
@@ -137,13 +139,13 @@ def chroma_change_at(img: wp.array4d(dtype=float), flow: wp.array4d(dtype=float)
 
 
 @wp.kernel
-def chroma_consistency_rows(row_begin: int, img: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
-                            occ: wp.array3d(dtype=float), max_change: float):
-    r = row_begin + wp.tid()
+def chroma_consistency_rows(row_begin: int, tiles: int, img: wp.array4d(dtype=float),
+                            flow: wp.array4d(dtype=float), occ: wp.array3d(dtype=float), max_change: float):
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, flow.shape[2])
     height = flow.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(flow.shape[2]):
+    for x in range(x_begin, x_end):
         if chroma_change_at(img, flow, t, y, x) >= max_change:
             occ[t, y, x] = 0.0
 
@@ -164,14 +166,14 @@ def log_change_at(img: wp.array4d(dtype=float), flow: wp.array4d(dtype=float), p
 
 
 @wp.kernel
-def luminance_consistency_rows(row_begin: int, img: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
-                               near: wp.array3d(dtype=float), offsets: wp.array1d(dtype=float),
-                               occ: wp.array3d(dtype=float), max_change: float):
-    r = row_begin + wp.tid()
+def luminance_consistency_rows(row_begin: int, tiles: int, img: wp.array4d(dtype=float),
+                               flow: wp.array4d(dtype=float), near: wp.array3d(dtype=float),
+                               offsets: wp.array1d(dtype=float), occ: wp.array3d(dtype=float), max_change: float):
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, flow.shape[2])
     height = flow.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(flow.shape[2]):
+    for x in range(x_begin, x_end):
         if near[t, y, x] >= 0.5:
             d, inside = log_change_at(img, flow, t, y, x)
             if wp.abs(d - offsets[t]) >= max_change:
@@ -189,15 +191,15 @@ def chroma_distance(img: wp.array4d(dtype=float), t: int, y: int, x: int, yy: in
 
 
 @wp.kernel
-def shading_gate_rows(row_begin: int, img: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
+def shading_gate_rows(row_begin: int, tiles: int, img: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
                       gate: wp.array3d(dtype=float), tau: float, tau_chroma: float):
-    r = row_begin + wp.tid()
     height = img.shape[1]
     width = img.shape[2]
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
     t = r // height
     y = r - t * height
     p = wp.min(t, img.shape[0] - 2)          # the frame's pair with the next frame; the last uses the one before
-    for x in range(width):
+    for x in range(x_begin, x_end):
         d, valid = log_change_at(img, flow, p, y, x)
         e = float(0.0)
         if valid > 0.0:
@@ -235,19 +237,23 @@ def edge_hit(magnitude: wp.array3d(dtype=float), t: int, y: int, x: int, thresho
 
 
 @wp.kernel
-def boundary_dilate_x_rows(row_begin: int, magnitude: wp.array3d(dtype=float), hits: wp.array3d(dtype=float),
-                           threshold: float, radius: int):
+def boundary_dilate_x_rows(row_begin: int, tiles: int, magnitude: wp.array3d(dtype=float),
+                           hits: wp.array3d(dtype=float), threshold: float, radius: int):
     """Row pass: ``hits = 1`` where a pixel within ``radius`` along x exceeds the
-    threshold, from a running count of the edge pixels in the sliding window."""
-    r = row_begin + wp.tid()
+    threshold, from a running count of the edge pixels in the sliding window.
+
+    The count is carried along x, so each tile first counts the whole window of
+    its first pixel (``[x_begin - radius, x_begin + radius]``, clipped); the count
+    is an integer, so every tiling gives the same ``hits``."""
     height = magnitude.shape[1]
     width = magnitude.shape[2]
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
     t = r // height
     y = r - t * height
     count = int(0)
-    for xx in range(wp.min(radius + 1, width)):
+    for xx in range(wp.max(x_begin - radius, 0), wp.min(x_begin + radius + 1, width)):
         count += edge_hit(magnitude, t, y, xx, threshold)
-    for x in range(width):
+    for x in range(x_begin, x_end):
         hit = float(0.0)
         if count > 0:
             hit = 1.0
@@ -259,17 +265,17 @@ def boundary_dilate_x_rows(row_begin: int, magnitude: wp.array3d(dtype=float), h
 
 
 @wp.kernel
-def boundary_dilate_y_rows(row_begin: int, hits: wp.array3d(dtype=float), out: wp.array3d(dtype=float),
-                           radius: int):
+def boundary_dilate_y_rows(row_begin: int, tiles: int, hits: wp.array3d(dtype=float),
+                           out: wp.array3d(dtype=float), radius: int):
     """Column pass: ``out`` = max of ``hits`` over the rows within ``radius``."""
-    r = row_begin + wp.tid()
     height = hits.shape[1]
     width = hits.shape[2]
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
     t = r // height
     y = r - t * height
     y_lo = wp.max(y - radius, 0)
     y_hi = wp.min(y + radius, height - 1)
-    for x in range(width):
+    for x in range(x_begin, x_end):
         m = hits[t, y_lo, x]
         for yy in range(y_lo + 1, y_hi + 1):
             m = wp.max(m, hits[t, yy, x])
@@ -297,9 +303,12 @@ def occlusion_soft(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: floa
     out : wp.array float32 (T, H, W), written, in [0, 1].
     sigma_e : Lab distance scale (paper: 20).
     sigma_d : divergence scale, pixels per pixel (paper: 0.3).
+
+    On a GPU one pixel per thread (row tiles).
     """
-    launch_rows(occlusion_soft_rows, flow.shape[0] * flow.shape[1],
-                [lab, flow, div_neg, out, sigma_e, sigma_d], device=lab.device)
+    tiles = row_tiles(flow.shape[2], lab.device)
+    launch_rows(occlusion_soft_rows, flow.shape[0] * flow.shape[1] * tiles,
+                [tiles, lab, flow, div_neg, out, sigma_e, sigma_d], device=lab.device)
 
 
 @host("occlusion_binary")
@@ -310,19 +319,22 @@ def occlusion_binary(lab, flow, div_neg, out, sigma_e: float = 20.0, sigma_d: fl
     ``out = 1`` where ``o(x) >= threshold`` (``o`` of Eq. 7, as in
     :func:`occlusion_soft`) and ``x + u`` lies inside ``[0, W-1] x [0, H-1]``;
     0 otherwise.  Same arguments as :func:`occlusion_soft`; ``threshold``: the
-    paper's 0.5.
+    paper's 0.5.  On a GPU one pixel per thread (row tiles).
     """
-    launch_rows(occlusion_binary_rows, flow.shape[0] * flow.shape[1],
-                [lab, flow, div_neg, out, sigma_e, sigma_d, float(threshold)], device=lab.device)
+    tiles = row_tiles(flow.shape[2], lab.device)
+    launch_rows(occlusion_binary_rows, flow.shape[0] * flow.shape[1] * tiles,
+                [tiles, lab, flow, div_neg, out, sigma_e, sigma_d, float(threshold)], device=lab.device)
 
 
 def _clear_occlusion_where(kernel, log_image, flow, occ, threshold: float, inputs=()) -> None:
     """Launch ``kernel``, a test that clears ``occ`` (T-1, H, W) from ``log_image``
     (T, H, W, 3) sampled along ``flow`` (T-1, H, W, 2), with the positive ``threshold``;
-    the kernel's further ``inputs`` come between ``flow`` and ``occ``."""
+    the kernel's further ``inputs`` come between ``flow`` and ``occ``.  On a GPU one
+    pixel per thread (row tiles)."""
     t, h, w, _ = log_image.shape
     dev = log_image.device
-    launch_rows(kernel, (t - 1) * h, [log_image, flow, *inputs, occ, float(threshold)], device=dev)
+    tiles = row_tiles(w, dev)
+    launch_rows(kernel, (t - 1) * h * tiles, [tiles, log_image, flow, *inputs, occ, float(threshold)], device=dev)
 
 
 @host("warp_reliability")
@@ -346,6 +358,8 @@ def warp_reliability(log_image, flow, occ, max_spread: float) -> None:
     flow : wp.array float32 (T-1, H, W, 2), forward flow in pixels.
     occ : wp.array float32 (T-1, H, W), ``w_occ``, updated in place.
     max_spread : spread (log units) from which the warp is not trusted, > 0.
+
+    On a GPU one pixel per thread (row tiles).
     """
     _clear_occlusion_where(warp_reliability_rows, log_image, flow, occ, max_spread)
 
@@ -370,6 +384,8 @@ def chroma_consistency(log_image, flow, occ, max_change: float) -> None:
     flow : wp.array float32 (T-1, H, W, 2), forward flow in pixels.
     occ : wp.array float32 (T-1, H, W), ``w_occ``, updated in place.
     max_change : change of log chromaticity from which the pixels differ, > 0.
+
+    On a GPU one pixel per thread (row tiles).
     """
     _clear_occlusion_where(chroma_consistency_rows, log_image, flow, occ, max_change)
 
@@ -395,6 +411,8 @@ def luminance_consistency(log_image, flow, near, offsets, occ, max_change: float
     offsets : wp.array float32 (T-1,), each pair's global change of the mean log.
     occ : wp.array float32 (T-1, H, W), ``w_occ``, updated in place.
     max_change : change of log brightness from which the pixels differ, > 0.
+
+    On a GPU one pixel per thread (row tiles).
     """
     _clear_occlusion_where(luminance_consistency_rows, log_image, flow, occ, max_change, (near, offsets))
 
@@ -428,13 +446,16 @@ def shading_gate(log_image, flow, gate, tau: float, tau_chroma: float = 0.0) -> 
     gate : wp.array float32 (T, H, W), written; dimensionless, in (0, 1].
     tau : log-contrast change (log units) at which the gate falls to 1/e, > 0.
     tau_chroma : log-chromaticity change (log units) that divides the evidence by e; 0: not used.
+
+    On a GPU one pixel per thread (row tiles).
     """
     t, h, w, _ = log_image.shape
     dev = log_image.device
     if t == 1:
         gate.fill_(1.0)
         return
-    launch_rows(shading_gate_rows, t * h, [log_image, flow, gate, tau, tau_chroma], device=dev)
+    tiles = row_tiles(w, dev)
+    launch_rows(shading_gate_rows, t * h * tiles, [tiles, log_image, flow, gate, tau, tau_chroma], device=dev)
 
 
 @host("motion_boundary")
@@ -457,12 +478,15 @@ def motion_boundary(sobel_mag, out, threshold: float, radius: int, *, workspace=
     workspace : optional :class:`ivkernels.kernels.workspace.Workspace` that
         keeps the scratch buffer between calls; without one it is allocated
         for this call.
+
+    On a GPU one pixel per thread (row tiles; each tile of the row pass starts
+    its running count afresh, an exact integer count).
     """
-    rows = sobel_mag.shape[0] * sobel_mag.shape[1]
     shape, dev = tuple(sobel_mag.shape), sobel_mag.device
+    tiles = row_tiles(shape[2], dev)
+    rows = shape[0] * shape[1] * tiles
     hits = scratch_buffer(workspace, f"{__name__}.boundary_hits", shape, wp.float32,
                           lambda: wp.empty(shape, dtype=wp.float32, device=dev), dev)
-    launch_rows(boundary_dilate_x_rows, rows, [sobel_mag, hits, float(threshold), int(radius)],
-                device=sobel_mag.device)
-    launch_rows(boundary_dilate_y_rows, rows, [hits, out, int(radius)], device=sobel_mag.device)
+    launch_rows(boundary_dilate_x_rows, rows, [tiles, sobel_mag, hits, float(threshold), int(radius)], device=dev)
+    launch_rows(boundary_dilate_y_rows, rows, [tiles, hits, out, int(radius)], device=dev)
 

@@ -296,12 +296,13 @@ def nearer_second(fx: float, fy: float, c0x: float, c0y: float, c1x: float, c1y:
 
 
 # ----------------------------------------------------------------------------
-# Kernels: one thread per image row (row = t * H + y), looping over x
+# Kernels: one thread per image row (row = t * H + y), looping over x, or per
+# tile of a row on a GPU (:func:`row_span`)
 # ----------------------------------------------------------------------------
 
 @wp.kernel
-def median5x5_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array4d(dtype=float)):
-    r = row_begin + wp.tid()
+def median5x5_rows(row_begin: int, tiles: int, src: wp.array4d(dtype=float), out: wp.array4d(dtype=float)):
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, src.shape[2])
     height = src.shape[1]
     width = src.shape[2]
     t = r // height
@@ -310,7 +311,7 @@ def median5x5_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array4d
     y1 = wp.max(y - 1, 0)
     y3 = wp.min(y + 1, height - 1)
     y4 = wp.min(y + 2, height - 1)
-    for x in range(width):
+    for x in range(x_begin, x_end):
         x0 = wp.max(x - 2, 0)
         x1 = wp.max(x - 1, 0)
         x3 = wp.min(x + 1, width - 1)
@@ -325,11 +326,14 @@ def median5x5_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array4d
 
 
 @wp.kernel
-def weighted_median_shading_rows(row_begin: int, S: wp.array3d(dtype=float), flow: wp.array4d(dtype=float),
-                                 w_bnd: wp.array3d(dtype=float), out: wp.array3d(dtype=float),
-                                 scratch: wp.array2d(dtype=wp.vec2), spatial: wp.array(dtype=float), radius: int,
-                                 lam: float, iterations: int, min_separation: float):
-    r = row_begin + wp.tid()
+def weighted_median_shading_rows(row_begin: int, tiles: int, S: wp.array3d(dtype=float),
+                                 flow: wp.array4d(dtype=float), w_bnd: wp.array3d(dtype=float),
+                                 out: wp.array3d(dtype=float), scratch: wp.array2d(dtype=wp.vec2),
+                                 spatial: wp.array(dtype=float), radius: int, lam: float, iterations: int,
+                                 min_separation: float):
+    # thread ``slot`` covers one tile of row ``r`` (the whole row on the CPU), with scratch row ``slot``
+    slot = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(slot, tiles, S.shape[2])
     height = S.shape[1]
     width = S.shape[2]
     t = r // height
@@ -337,7 +341,7 @@ def weighted_median_shading_rows(row_begin: int, S: wp.array3d(dtype=float), flo
     side = 2 * radius + 1
     last = float(0.0)   # the answer at the previous pixel when it had one (has_last = 1):
     has_last = int(0)   # the first pivot tried, as neighbouring windows share most pixels
-    for x in range(width):
+    for x in range(x_begin, x_end):
         s = S[t, y, x]
         out[t, y, x] = s
         if t >= flow.shape[0]:
@@ -350,7 +354,7 @@ def weighted_median_shading_rows(row_begin: int, S: wp.array3d(dtype=float), flo
         x_lo = wp.max(x - radius, 0)
         x_hi = wp.min(x + radius + 1, width)
         # surf (Eq. 10): 2-means of the window's flow vectors, copied (row-major)
-        # into scratch[r, :m]; centre 1 starts at the vector farthest from flow(x)
+        # into scratch[slot, :m]; centre 1 starts at the vector farthest from flow(x)
         c0 = wp.vec2(flow[t, y, x, 0], flow[t, y, x, 1])
         c1 = c0
         far = float(-1.0)
@@ -360,7 +364,7 @@ def weighted_median_shading_rows(row_begin: int, S: wp.array3d(dtype=float), flo
         for yy in range(y_lo, y_hi):
             for xx in range(x_lo, x_hi):
                 f = wp.vec2(flow[t, yy, xx, 0], flow[t, yy, xx, 1])
-                scratch[r, m] = f
+                scratch[slot, m] = f
                 m += 1
                 dx = f[0] - c0[0]
                 dy = f[1] - c0[1]
@@ -382,7 +386,7 @@ def weighted_median_shading_rows(row_begin: int, S: wp.array3d(dtype=float), flo
                 s1 = wp.vec2(0.0, 0.0)
                 n1 = int(0)
                 for i in range(m):
-                    f = scratch[r, i]
+                    f = scratch[slot, i]
                     near = nearer_second(f[0], f[1], c0[0], c0[1], c1[0], c1[1])
                     s1 += wp.where(near, f, wp.vec2(0.0, 0.0))
                     s0 += wp.where(near, wp.vec2(0.0, 0.0), f)
@@ -409,13 +413,13 @@ def weighted_median_shading_rows(row_begin: int, S: wp.array3d(dtype=float), flo
             for xx in range(x_lo, x_hi):
                 keep = True
                 if split:
-                    f = scratch[r, i]
+                    f = scratch[slot, i]
                     keep = nearer_second(f[0], f[1], c0[0], c0[1], c1[0], c1[1]) == own
-                scratch[r, n] = wp.vec2(S[t, yy, xx], spatial[k])
+                scratch[slot, n] = wp.vec2(S[t, yy, xx], spatial[k])
                 n += wp.where(keep, 1, 0)
                 i += 1
                 k += 1
-        last = l1_quadratic_select(scratch, r, n, 0, 1, 0, s, lam, last, has_last)
+        last = l1_quadratic_select(scratch, slot, n, 0, 1, 0, s, lam, last, has_last)
         has_last = 1
         out[t, y, x] = last
 
@@ -477,10 +481,11 @@ def weighted_median_flow_rows(row_begin: int, tiles: int, flow: wp.array4d(dtype
 # Host functions
 # ----------------------------------------------------------------------------
 
-#: Pixels per thread of the flow's weighted median on a GPU: each thread keeps its
-#: own window of (u, v, weight) triples, 12 (2 radius + 1)^2 bytes, so one thread
-#: per pixel would hold a frame stack's windows at once (6.6 GB at 640x480x8).
-FLOW_MEDIAN_PIXELS_PER_TILE = 32
+#: Pixels per thread of the weighted medians on a GPU: each thread keeps its own
+#: window of (value, weight) pairs or (u, v, weight) triples, 8 or 12 (2 radius + 1)^2
+#: bytes, so one thread per pixel would hold a frame stack's windows at once (6.6 GB
+#: for the flow's at 640x480x8; at 16 pixels a thread, 415 MB).
+MEDIAN_PIXELS_PER_TILE = 16
 
 
 def _cached_table(key: tuple, make, dtype, device):
@@ -516,7 +521,8 @@ def _scratch(workspace, name: str, shape: tuple, device):
 
 @host("median5x5")
 def median5x5(src, out) -> None:
-    """5x5 median of every channel, replicate border (Classic+NL's median filter of the flow).
+    """5x5 median of every channel, replicate border (Classic+NL's median filter of the flow);
+    on a GPU one pixel per thread (row tiles).
 
     Parameters
     ----------
@@ -524,7 +530,8 @@ def median5x5(src, out) -> None:
     out : wp.array float32 (T, H, W, C), written.  Must not overlap ``src``.
     """
     t, h, w, c = src.shape
-    launch_rows(median5x5_rows, t * h, [src, out], device=src.device)
+    tiles = row_tiles(w, src.device)
+    launch_rows(median5x5_rows, t * h * tiles, [tiles, src, out], device=src.device)
 
 
 @host("weighted_median_shading")
@@ -566,16 +573,19 @@ def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float
     sigma_s : spatial scale of w_nl in pixels.
     lam : weight of the quadratic pull towards S(x), >= 0.
     workspace : optional :class:`ivkernels.kernels.workspace.Workspace` that
-        keeps the float32 scratch of shape :func:`shading_scratch_shape`
-        between calls; without one it is allocated for this call.
+        keeps the float32 scratch of shape :func:`shading_scratch_shape` (its
+        rows times :func:`row_tiles` on a GPU, one window per thread) between
+        calls; without one it is allocated for this call.
     """
     t, h, w = S.shape
-    buf = _scratch(workspace, "shading_window", shading_scratch_shape(S.shape, radius), S.device)
+    tiles = row_tiles(w, S.device, MEDIAN_PIXELS_PER_TILE)
+    rows, width = shading_scratch_shape(S.shape, radius)
+    buf = _scratch(workspace, "shading_window", (rows * tiles, width), S.device)
     pairs = _as_vectors(buf, wp.vec2)
     spatial = _cached_table(("spatial", radius, sigma_s), lambda: spatial_weights(radius, sigma_s),
                             wp.float32, S.device)
-    launch_rows(weighted_median_shading_rows, t * h,
-                [S, flow, w_bnd, out, pairs, spatial, radius, lam, KMEANS_ITERATIONS, MIN_SEPARATION],
+    launch_rows(weighted_median_shading_rows, t * h * tiles,
+                [tiles, S, flow, w_bnd, out, pairs, spatial, radius, lam, KMEANS_ITERATIONS, MIN_SEPARATION],
                 device=S.device, balance=True)
 
 
@@ -603,7 +613,7 @@ def weighted_median_flow(flow, lab, occ, mask, out, radius: int = 7, sigma_x: fl
         thread); without one it is allocated for this call.
     """
     t, h, w, _ = flow.shape
-    tiles = row_tiles(w, flow.device, FLOW_MEDIAN_PIXELS_PER_TILE)
+    tiles = row_tiles(w, flow.device, MEDIAN_PIXELS_PER_TILE)
     rows, width = flow_scratch_shape(flow.shape, radius)
     buf = _scratch(workspace, "flow_window", (rows * tiles, width), flow.device)
     triples = _as_vectors(buf, wp.vec3)

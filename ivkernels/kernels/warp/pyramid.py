@@ -17,9 +17,10 @@ import warp as wp
 
 from ivkernels.kernels.contract import implements
 from ivkernels.kernels.host import gaussian_kernel
-from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.pyramid import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.warp.row_tiles import row_span
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners
 
 host = implements(FAMILY, FRONT)
@@ -28,18 +29,19 @@ wp.set_module_options({"enable_backward": False})
 
 
 # ----------------------------------------------------------------------------
-# Kernels (one thread per output row = t * H + y)
+# Kernels (one thread per tile of an output row = t * H + y: one tile per row
+# on the CPU, one pixel per tile on a GPU)
 # ----------------------------------------------------------------------------
 
 @wp.kernel
-def blur_x_rows(row_begin: int, src: wp.array4d(dtype=float), dst: wp.array4d(dtype=float),
+def blur_x_rows(row_begin: int, tiles: int, src: wp.array4d(dtype=float), dst: wp.array4d(dtype=float),
                 weights: wp.array(dtype=float), radius: int):
-    r = row_begin + wp.tid()
     height = src.shape[1]
     width = src.shape[2]
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
     t = r // height
     y = r - t * height
-    for x in range(width):
+    for x in range(x_begin, x_end):
         for c in range(src.shape[3]):
             acc = float(0.0)
             for k in range(-radius, radius + 1):
@@ -48,13 +50,13 @@ def blur_x_rows(row_begin: int, src: wp.array4d(dtype=float), dst: wp.array4d(dt
 
 
 @wp.kernel
-def blur_y_rows(row_begin: int, src: wp.array4d(dtype=float), dst: wp.array4d(dtype=float),
+def blur_y_rows(row_begin: int, tiles: int, src: wp.array4d(dtype=float), dst: wp.array4d(dtype=float),
                 weights: wp.array(dtype=float), radius: int):
-    r = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, src.shape[2])
     height = src.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(src.shape[2]):
+    for x in range(x_begin, x_end):
         for c in range(src.shape[3]):
             acc = float(0.0)
             for k in range(-radius, radius + 1):
@@ -63,39 +65,39 @@ def blur_y_rows(row_begin: int, src: wp.array4d(dtype=float), dst: wp.array4d(dt
 
 
 @wp.kernel
-def copy_rows(row_begin: int, src: wp.array4d(dtype=float), dst: wp.array4d(dtype=float)):
-    r = row_begin + wp.tid()
+def copy_rows(row_begin: int, tiles: int, src: wp.array4d(dtype=float), dst: wp.array4d(dtype=float)):
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, src.shape[2])
     height = src.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(src.shape[2]):
+    for x in range(x_begin, x_end):
         for c in range(src.shape[3]):
             dst[t, y, x, c] = src[t, y, x, c]
 
 
 @wp.kernel
-def resize_bilinear_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array4d(dtype=float),
+def resize_bilinear_rows(row_begin: int, tiles: int, src: wp.array4d(dtype=float), out: wp.array4d(dtype=float),
                          scale_x: float, scale_y: float):
-    r = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, out.shape[2])
     height = out.shape[1]
     t = r // height
     y = r - t * height
     y0, y1, fy = clamped_corners((float(y) + 0.5) * scale_y - 0.5, src.shape[1])
-    for x in range(out.shape[2]):
+    for x in range(x_begin, x_end):
         x0, x1, fx = clamped_corners((float(x) + 0.5) * scale_x - 0.5, src.shape[2])
         for c in range(out.shape[3]):
             out[t, y, x, c] = bilinear_at(src, t, c, x0, x1, fx, y0, y1, fy)
 
 
 @wp.kernel
-def resize_flow_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array4d(dtype=float),
+def resize_flow_rows(row_begin: int, tiles: int, src: wp.array4d(dtype=float), out: wp.array4d(dtype=float),
                      scale_x: float, scale_y: float, gain_x: float, gain_y: float):
-    r = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, out.shape[2])
     height = out.shape[1]
     t = r // height
     y = r - t * height
     y0, y1, fy = clamped_corners((float(y) + 0.5) * scale_y - 0.5, src.shape[1])
-    for x in range(out.shape[2]):
+    for x in range(x_begin, x_end):
         x0, x1, fx = clamped_corners((float(x) + 0.5) * scale_x - 0.5, src.shape[2])
         out[t, y, x, 0] = bilinear_at(src, t, 0, x0, x1, fx, y0, y1, fy) * gain_x
         out[t, y, x, 1] = bilinear_at(src, t, 1, x0, x1, fx, y0, y1, fy) * gain_y
@@ -121,17 +123,21 @@ def gaussian_blur(src, out, scratch, sigma: float) -> None:
     scratch : wp.array float32 (T, H, W, C), overwritten (the x-blurred
         image); must overlap neither ``src`` nor ``out``.
     sigma : standard deviation in pixels; ``sigma <= 0`` copies ``src``.
+
+    On a GPU one pixel per thread (row tiles): each pass reads only its input
+    (``src``, then ``scratch``), which it does not write.
     """
-    rows = src.shape[0] * src.shape[1]
+    tiles = row_tiles(src.shape[2], src.device)
+    rows = src.shape[0] * src.shape[1] * tiles
     if sigma <= 0.0:
         if out.ptr != src.ptr:
-            launch_rows(copy_rows, rows, [src, out], device=src.device)
+            launch_rows(copy_rows, rows, [tiles, src, out], device=src.device)
         return
     taps = gaussian_kernel(sigma)
     weights = wp.array(taps, dtype=wp.float32, device=src.device)
     radius = (len(taps) - 1) // 2
-    launch_rows(blur_x_rows, rows, [src, scratch, weights, radius], device=src.device)
-    launch_rows(blur_y_rows, rows, [scratch, out, weights, radius], device=src.device)
+    launch_rows(blur_x_rows, rows, [tiles, src, scratch, weights, radius], device=src.device)
+    launch_rows(blur_y_rows, rows, [tiles, scratch, out, weights, radius], device=src.device)
 
 
 def _scales(src, out):
@@ -150,9 +156,13 @@ def resize_bilinear(src, out) -> None:
     ----------
     src : wp.array float32 (T, h, w, C).
     out : wp.array float32 (T, H, W, C), written (must not overlap src).
+
+    On a GPU one pixel per thread (row tiles).
     """
     scale_x, scale_y = _scales(src, out)
-    launch_rows(resize_bilinear_rows, out.shape[0] * out.shape[1], [src, out, scale_x, scale_y], device=src.device)
+    tiles = row_tiles(out.shape[2], src.device)
+    launch_rows(resize_bilinear_rows, out.shape[0] * out.shape[1] * tiles, [tiles, src, out, scale_x, scale_y],
+                device=src.device)
 
 
 @host("resize_flow")
@@ -167,8 +177,11 @@ def resize_flow(src, out) -> None:
     ----------
     src : wp.array float32 (T, h, w, 2), pixels of the source size.
     out : wp.array float32 (T, H, W, 2), written, pixels of the target size.
+
+    On a GPU one pixel per thread (row tiles).
     """
     scale_x, scale_y = _scales(src, out)
     gain_x, gain_y = out.shape[2] / src.shape[2], out.shape[1] / src.shape[1]
-    launch_rows(resize_flow_rows, out.shape[0] * out.shape[1], [src, out, scale_x, scale_y, gain_x, gain_y],
-                device=src.device)
+    tiles = row_tiles(out.shape[2], src.device)
+    launch_rows(resize_flow_rows, out.shape[0] * out.shape[1] * tiles,
+                [tiles, src, out, scale_x, scale_y, gain_x, gain_y], device=src.device)

@@ -21,9 +21,10 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.contract import implements
-from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.sampling import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.warp.row_tiles import row_span
 
 host = implements(FAMILY, FRONT)
 
@@ -108,18 +109,19 @@ def bicubic_at(src: wp.array4d(dtype=float), t: int, c: int, px: float, py: floa
 
 
 # ----------------------------------------------------------------------------
-# Kernels: one thread per image row (row = t * H + y), looping over x
+# Kernels: one thread per tile of an image row (row = t * H + y; one tile per
+# row on the CPU, one pixel per tile on a GPU), looping over x
 # ----------------------------------------------------------------------------
 
 @wp.kernel
-def bilinear_warp_rows(row_begin: int, src: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
+def bilinear_warp_rows(row_begin: int, tiles: int, src: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
                        out: wp.array4d(dtype=float), inside: wp.array3d(dtype=float)):
-    r = row_begin + wp.tid()
     height = flow.shape[1]
     width = flow.shape[2]
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
     t = r // height
     y = r - t * height
-    for x in range(width):
+    for x in range(x_begin, x_end):
         px = float(x) + flow[t, y, x, 0]
         py = float(y) + flow[t, y, x, 1]
         x0, x1, fx = clamped_corners(px, width)
@@ -130,14 +132,14 @@ def bilinear_warp_rows(row_begin: int, src: wp.array4d(dtype=float), flow: wp.ar
 
 
 @wp.kernel
-def bilinear_splat_rows(row_begin: int, values: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
-                        out: wp.array4d(dtype=float)):
-    r = row_begin + wp.tid()
+def bilinear_splat_rows(row_begin: int, tiles: int, values: wp.array4d(dtype=float),
+                        flow: wp.array4d(dtype=float), out: wp.array4d(dtype=float)):
     height = flow.shape[1]
     width = flow.shape[2]
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
     t = r // height
     y = r - t * height
-    for x in range(width):
+    for x in range(x_begin, x_end):
         px = float(x) + flow[t, y, x, 0]
         py = float(y) + flow[t, y, x, 1]
         x0, x1, fx = clamped_corners(px, width)
@@ -155,14 +157,14 @@ def bilinear_splat_rows(row_begin: int, values: wp.array4d(dtype=float), flow: w
 
 
 @wp.kernel
-def bicubic_warp_rows(row_begin: int, src: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
+def bicubic_warp_rows(row_begin: int, tiles: int, src: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
                       out: wp.array4d(dtype=float), inside: wp.array3d(dtype=float)):
-    r = row_begin + wp.tid()
     height = flow.shape[1]
     width = flow.shape[2]
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
     t = r // height
     y = r - t * height
-    for x in range(width):
+    for x in range(x_begin, x_end):
         px = float(x) + flow[t, y, x, 0]
         py = float(y) + flow[t, y, x, 1]
         for c in range(src.shape[3]):
@@ -191,9 +193,12 @@ def warp_bilinear(src, flow, out, inside) -> None:
         indices clamped to the image (replicate border).  Must not overlap src.
     inside : wp.array float32 (T, H, W), written: 1.0 where the sample point
         lies within ``[0, W-1] x [0, H-1]``, else 0.0.
+
+    On a GPU one pixel per thread (row tiles).
     """
-    t, h = src.shape[0], src.shape[1]
-    launch_rows(bilinear_warp_rows, t * h, [src, flow, out, inside], device=src.device)
+    t, h, w = src.shape[0], src.shape[1], src.shape[2]
+    tiles = row_tiles(w, src.device)
+    launch_rows(bilinear_warp_rows, t * h * tiles, [tiles, src, flow, out, inside], device=src.device)
 
 
 @host("splat_bilinear")
@@ -214,9 +219,13 @@ def splat_bilinear(values, flow, out) -> None:
 
     Atomic adds; the rows are split between CPU threads only at frame
     boundaries (``align=H``) so the two halves never write the same frame.
+
+    On a GPU one pixel per thread (row tiles).
     """
     t, h, w, c = values.shape
-    launch_rows(bilinear_splat_rows, t * h, [values, flow, out], device=values.device, align=h)
+    tiles = row_tiles(w, values.device)
+    launch_rows(bilinear_splat_rows, t * h * tiles, [tiles, values, flow, out], device=values.device,
+                align=h * tiles)
 
 
 @host("warp_bicubic")
@@ -226,6 +235,9 @@ def warp_bicubic(src, flow, out, inside) -> None:
     Same contract as :func:`warp_bilinear` (shapes, clamped tap indices,
     ``inside`` map); the 4 x 4 taps around ``floor(p)`` are each clamped to the
     image.  Used by the optical flow's warping step (Classic+NL warps bicubically).
+
+    On a GPU one pixel per thread (row tiles).
     """
-    t, h = src.shape[0], src.shape[1]
-    launch_rows(bicubic_warp_rows, t * h, [src, flow, out, inside], device=src.device)
+    t, h, w = src.shape[0], src.shape[1], src.shape[2]
+    tiles = row_tiles(w, src.device)
+    launch_rows(bicubic_warp_rows, t * h * tiles, [tiles, src, flow, out, inside], device=src.device)

@@ -176,30 +176,47 @@ def fill_chunks(row_begin: int, x: wp.array(dtype=float), x4: wp.array(dtype=wp.
         x[i] = value
 
 
+@wp.func
+def basis_chunk_dot(basis: wp.array2d(dtype=float), x: wp.array(dtype=float),
+                    basis4: wp.array2d(dtype=wp.vec4), x4: wp.array(dtype=wp.vec4), j: int, k: int, chunk: int):
+    """Sum over chunk ``k`` of ``basis[j] * x``: float64 products, four accumulators."""
+    n4 = x4.shape[0]
+    acc0 = wp.float64(0.0)
+    acc1 = wp.float64(0.0)
+    acc2 = wp.float64(0.0)
+    acc3 = wp.float64(0.0)
+    for i in range(chunk_begin(k, chunk) // 4, vec_range_end(k, chunk, n4)):
+        u = basis4[j, i]
+        v = x4[i]
+        acc0 += wp.float64(u[0]) * wp.float64(v[0])
+        acc1 += wp.float64(u[1]) * wp.float64(v[1])
+        acc2 += wp.float64(u[2]) * wp.float64(v[2])
+        acc3 += wp.float64(u[3]) * wp.float64(v[3])
+    for i in range(tail_begin(k, chunk, n4), chunk_end(k, chunk, x.shape[0])):
+        acc0 += wp.float64(basis[j, i]) * wp.float64(x[i])
+    return (acc0 + acc1) + (acc2 + acc3)
+
+
 @wp.kernel
 def basis_dots_chunks(row_begin: int, basis: wp.array2d(dtype=float), x: wp.array(dtype=float),
                       basis4: wp.array2d(dtype=wp.vec4), x4: wp.array(dtype=wp.vec4),
                       rows: wp.array(dtype=int), partial: wp.array2d(dtype=wp.float64), chunk: int):
-    """``partial[r, k] = sum over chunk k of basis[rows[r]] * x`` (the chunk of ``x``
-    stays in cache while the rows stream past it)."""
+    """``partial[r, k] = sum over chunk k of basis[rows[r]] * x`` (the CPU's layout: one
+    thread per chunk, so the chunk of ``x`` stays in cache while the rows stream past it)."""
     k = row_begin + wp.tid()
-    n4 = x4.shape[0]
     for r in range(rows.shape[0]):
-        j = rows[r]
-        acc0 = wp.float64(0.0)
-        acc1 = wp.float64(0.0)
-        acc2 = wp.float64(0.0)
-        acc3 = wp.float64(0.0)
-        for i in range(chunk_begin(k, chunk) // 4, vec_range_end(k, chunk, n4)):
-            u = basis4[j, i]
-            v = x4[i]
-            acc0 += wp.float64(u[0]) * wp.float64(v[0])
-            acc1 += wp.float64(u[1]) * wp.float64(v[1])
-            acc2 += wp.float64(u[2]) * wp.float64(v[2])
-            acc3 += wp.float64(u[3]) * wp.float64(v[3])
-        for i in range(tail_begin(k, chunk, n4), chunk_end(k, chunk, x.shape[0])):
-            acc0 += wp.float64(basis[j, i]) * wp.float64(x[i])
-        partial[r, k] = (acc0 + acc1) + (acc2 + acc3)
+        partial[r, k] = basis_chunk_dot(basis, x, basis4, x4, rows[r], k, chunk)
+
+
+@wp.kernel
+def basis_dots_cells(row_begin: int, basis: wp.array2d(dtype=float), x: wp.array(dtype=float),
+                     basis4: wp.array2d(dtype=wp.vec4), x4: wp.array(dtype=wp.vec4),
+                     rows: wp.array(dtype=int), partial: wp.array2d(dtype=wp.float64), chunk: int):
+    """The same partial sums in a GPU's layout: one thread per (row, chunk) cell."""
+    cell = row_begin + wp.tid()
+    r = cell // partial.shape[1]
+    k = cell - r * partial.shape[1]
+    partial[r, k] = basis_chunk_dot(basis, x, basis4, x4, rows[r], k, chunk)
 
 
 @wp.kernel
@@ -370,14 +387,19 @@ def dots(basis, x, rows=None) -> np.ndarray:
     x : 1-D float32 wp.array of length n (may be a row of ``basis``).
     rows : row indices to use (default all k).
     Returns (len(rows),) float64 NumPy array, ``basis[rows] @ x``, each with
-    float64 products and sums per chunk (as :func:`dot`).
+    float64 products and sums per chunk (as :func:`dot`).  On a GPU one thread
+    per (row, chunk), on the CPU one per chunk over all rows: the same sums.
     """
     n, chunk = x.shape[0], _chunk(x.device, reduction=True)
     basis, rows_wp = _basis_rows(basis, rows)
-    partial = wp.empty((rows_wp.shape[0], _chunks(n, chunk)), dtype=wp.float64, device=x.device)
+    n_rows, n_chunks = rows_wp.shape[0], _chunks(n, chunk)
+    partial = wp.empty((n_rows, n_chunks), dtype=wp.float64, device=x.device)
     x4, = _vec4(x)
-    launch_rows(basis_dots_chunks, _chunks(n, chunk), [basis, x, _basis_vec4(basis, x4.shape[0]), x4, rows_wp,
-                                                       partial, chunk], device=x.device)
+    args = [basis, x, _basis_vec4(basis, x4.shape[0]), x4, rows_wp, partial, chunk]
+    if gpu_layout(x.device):
+        launch_rows(basis_dots_cells, n_rows * n_chunks, args, device=x.device)
+    else:
+        launch_rows(basis_dots_chunks, n_chunks, args, device=x.device)
     return partial.numpy().sum(axis=1)
 
 

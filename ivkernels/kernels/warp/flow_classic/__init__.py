@@ -41,7 +41,9 @@ host function added to one of them needs no line here.
 
 Array layout: see :mod:`ivkernels.kernels`.  Every kernel runs one thread per
 image row (``row = t * H + y``) and loops over ``x``; all are gathers except
-:func:`sor_sweep`, which updates ``du`` in place one colour at a time.
+:func:`sor_sweep`, which updates ``du`` in place one colour at a time.  On a
+GPU all but :func:`row_min_max` (a reduction per row) cut the rows into
+tiles of one pixel (:func:`ivkernels.kernels.launch.row_tiles`).
 
 The sweep reads only ``du``: :func:`assemble_system` first folds the data
 coefficients, the smoothness weights and the current flow into each pixel's

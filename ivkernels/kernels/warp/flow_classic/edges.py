@@ -11,9 +11,10 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.contract import implements
-from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.flow_classic import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.warp.row_tiles import row_span
 
 host = implements(FAMILY, FRONT)
 
@@ -39,21 +40,45 @@ def sobel_at(flow: wp.array4d(dtype=float), t: int, y: int, x: int, c: int):
 
 
 @wp.kernel
-def flow_sobel_components_rows(row_begin: int, flow: wp.array4d(dtype=float), out: wp.array4d(dtype=float),
-                               row_energy: wp.array2d(dtype=float)):
-    r = row_begin + wp.tid()
+def flow_sobel_components_rows(row_begin: int, tiles: int, flow: wp.array4d(dtype=float),
+                               out: wp.array4d(dtype=float), row_energy: wp.array2d(dtype=float)):
+    """The Sobel derivatives of one tile of a row; with one tile per row also the
+    row's energy (else :func:`sobel_row_energy_rows` sums it afterwards)."""
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, flow.shape[2])
     height = flow.shape[1]
     t = r // height
     y = r - t * height
     sum_u = float(0.0)
     sum_v = float(0.0)
-    for x in range(flow.shape[2]):
+    for x in range(x_begin, x_end):
         gxu, gyu = sobel_at(flow, t, y, x, 0)
         gxv, gyv = sobel_at(flow, t, y, x, 1)
         out[t, y, x, 0] = gxu
         out[t, y, x, 1] = gyu
         out[t, y, x, 2] = gxv
         out[t, y, x, 3] = gyv
+        sum_u += gxu * gxu + gyu * gyu
+        sum_v += gxv * gxv + gyv * gyv
+    if tiles == 1:
+        row_energy[r, 0] = sum_u
+        row_energy[r, 1] = sum_v
+
+
+@wp.kernel
+def sobel_row_energy_rows(row_begin: int, sobel: wp.array4d(dtype=float), row_energy: wp.array2d(dtype=float)):
+    """``sum_x |grad u|^2`` and ``sum_x |grad v|^2`` of a row of :func:`flow_sobel_components_rows`'
+    output, added in the order and with the operations of its one-tile loop (the same bits)."""
+    r = row_begin + wp.tid()
+    height = sobel.shape[1]
+    t = r // height
+    y = r - t * height
+    sum_u = float(0.0)
+    sum_v = float(0.0)
+    for x in range(sobel.shape[2]):
+        gxu = sobel[t, y, x, 0]
+        gyu = sobel[t, y, x, 1]
+        gxv = sobel[t, y, x, 2]
+        gyv = sobel[t, y, x, 3]
         sum_u += gxu * gxu + gyu * gyu
         sum_v += gxv * gxv + gyv * gyv
     row_energy[r, 0] = sum_u
@@ -68,16 +93,16 @@ def sobel_energy(sobel: wp.array4d(dtype=float), t: int, y: int, x: int, c: int)
 
 
 @wp.kernel
-def thin_edges_rows(row_begin: int, sobel: wp.array4d(dtype=float), cutoff: wp.array2d(dtype=float),
+def thin_edges_rows(row_begin: int, tiles: int, sobel: wp.array4d(dtype=float), cutoff: wp.array2d(dtype=float),
                     out: wp.array3d(dtype=float)):
-    r = row_begin + wp.tid()
     height = sobel.shape[1]
     width = sobel.shape[2]
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
     t = r // height
     y = r - t * height
     ym = wp.max(y - 1, 0)
     yp = wp.min(y + 1, height - 1)
-    for x in range(width):
+    for x in range(x_begin, x_end):
         xm = wp.max(x - 1, 0)
         xp = wp.min(x + 1, width - 1)
         edge = float(0.0)
@@ -104,9 +129,16 @@ def flow_sobel_components(flow, out, row_energy) -> None:
     out : (T, H, W, 4) float32 ``(du/dx, du/dy, dv/dx, dv/dy)``.
     row_energy : (T*H, 2) float32, ``sum_x |grad u|^2`` and ``sum_x |grad v|^2``
         of each row (the host averages them into the edge thresholds).
+
+    On a GPU one pixel per thread (row tiles), then one thread per row sums the
+    row energies from ``out`` in the CPU's order (no atomics: the same bits).
     """
     t, h, w, _ = flow.shape
-    launch_rows(flow_sobel_components_rows, t * h, [flow, out, row_energy], flow.device)
+    dev = flow.device
+    tiles = row_tiles(w, dev)
+    launch_rows(flow_sobel_components_rows, t * h * tiles, [tiles, flow, out, row_energy], dev)
+    if tiles > 1:
+        launch_rows(sobel_row_energy_rows, t * h, [out, row_energy], dev)
 
 
 @host("thin_edges")
@@ -122,6 +154,9 @@ def thin_edges(sobel, cutoff, out) -> None:
     sobel : (T, H, W, 4) float32 from :func:`flow_sobel_components`.
     cutoff : (T, 2) float32 squared-magnitude thresholds (pixels^2 / pixel^2).
     out : (T, H, W) float32, 1 on an edge of u or v, else 0.
+
+    On a GPU one pixel per thread (row tiles).
     """
     t, h, w, _ = sobel.shape
-    launch_rows(thin_edges_rows, t * h, [sobel, cutoff, out], sobel.device)
+    tiles = row_tiles(w, sobel.device)
+    launch_rows(thin_edges_rows, t * h * tiles, [tiles, sobel, cutoff, out], sobel.device)

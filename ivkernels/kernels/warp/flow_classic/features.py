@@ -12,9 +12,10 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.contract import implements
-from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.flow_classic import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.warp.row_tiles import row_span
 
 host = implements(FAMILY, FRONT)
 
@@ -24,39 +25,40 @@ wp.set_module_options({"enable_backward": False})
 
 
 @wp.kernel
-def pack_image_gradient_rows(row_begin: int, img: wp.array3d(dtype=float), gx: wp.array3d(dtype=float),
-                             gy: wp.array3d(dtype=float), out: wp.array4d(dtype=float)):
-    r = row_begin + wp.tid()
+def pack_image_gradient_rows(row_begin: int, tiles: int, img: wp.array3d(dtype=float),
+                             gx: wp.array3d(dtype=float), gy: wp.array3d(dtype=float),
+                             out: wp.array4d(dtype=float)):
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, img.shape[2])
     height = img.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(img.shape[2]):
+    for x in range(x_begin, x_end):
         out[t, y, x, 0] = img[t, y, x]
         out[t, y, x, 1] = gx[t, y, x]
         out[t, y, x, 2] = gy[t, y, x]
 
 
 @wp.kernel
-def pack_gradient_rows(row_begin: int, gx: wp.array3d(dtype=float), gy: wp.array3d(dtype=float),
+def pack_gradient_rows(row_begin: int, tiles: int, gx: wp.array3d(dtype=float), gy: wp.array3d(dtype=float),
                        out: wp.array4d(dtype=float)):
-    r = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, gx.shape[2])
     height = gx.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(gx.shape[2]):
+    for x in range(x_begin, x_end):
         out[t, y, x, 0] = gx[t, y, x]
         out[t, y, x, 1] = gy[t, y, x]
 
 
 @wp.kernel
-def soft_census_rows(row_begin: int, img: wp.array3d(dtype=float), out: wp.array4d(dtype=float),
+def soft_census_rows(row_begin: int, tiles: int, img: wp.array3d(dtype=float), out: wp.array4d(dtype=float),
                      radius: int, eps: float, scale: float):
-    r = row_begin + wp.tid()
     height = img.shape[1]
     width = img.shape[2]
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
     t = r // height
     y = r - t * height
-    for x in range(width):
+    for x in range(x_begin, x_end):
         centre = img[t, y, x]
         k = int(0)
         for dy in range(-radius, radius + 1):
@@ -69,13 +71,14 @@ def soft_census_rows(row_begin: int, img: wp.array3d(dtype=float), out: wp.array
 
 
 @wp.kernel
-def pack_channels_gradient_rows(row_begin: int, feat: wp.array4d(dtype=float), gx: wp.array4d(dtype=float),
-                                gy: wp.array4d(dtype=float), out: wp.array4d(dtype=float)):
-    r = row_begin + wp.tid()
+def pack_channels_gradient_rows(row_begin: int, tiles: int, feat: wp.array4d(dtype=float),
+                                gx: wp.array4d(dtype=float), gy: wp.array4d(dtype=float),
+                                out: wp.array4d(dtype=float)):
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, feat.shape[2])
     height = feat.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(feat.shape[2]):
+    for x in range(x_begin, x_end):
         for c in range(feat.shape[3]):
             out[t, y, x, 3 * c] = feat[t, y, x, c]
             out[t, y, x, 3 * c + 1] = gx[t, y, x, c]
@@ -87,9 +90,12 @@ def pack_image_gradient(img, gx, gy, out) -> None:
     """Stack an image and its two derivatives as channels: ``out = (img, gx, gy)``.
 
     img, gx, gy : (T, H, W) float32; out : (T, H, W, 3) float32.
+
+    On a GPU one pixel per thread (row tiles).
     """
     t, h, w = img.shape
-    launch_rows(pack_image_gradient_rows, t * h, [img, gx, gy, out], img.device)
+    tiles = row_tiles(w, img.device)
+    launch_rows(pack_image_gradient_rows, t * h * tiles, [tiles, img, gx, gy, out], img.device)
 
 
 @host("pack_gradient")
@@ -98,9 +104,12 @@ def pack_gradient(gx, gy, out) -> None:
 
     gx, gy : (T, H, W) float32 (e.g. from
     :func:`ivkernels.kernels.warp.derivatives.image_gradient`); out : (T, H, W, 2) float32.
+
+    On a GPU one pixel per thread (row tiles).
     """
     t, h, w = gx.shape
-    launch_rows(pack_gradient_rows, t * h, [gx, gy, out], gx.device)
+    tiles = row_tiles(w, gx.device)
+    launch_rows(pack_gradient_rows, t * h * tiles, [tiles, gx, gy, out], gx.device)
 
 
 @host("soft_census")
@@ -117,9 +126,12 @@ def soft_census(img, out, radius: int = 1, eps: float = 4.0, scale: float = 1.0)
 
     img : (T, H, W) float32.
     out : (T, H, W, C) float32, ``C = (2 radius + 1)^2 - 1``.
+
+    On a GPU one pixel per thread (row tiles).
     """
     t, h, w = img.shape
-    launch_rows(soft_census_rows, t * h, [img, out, radius, float(eps), float(scale)], img.device)
+    tiles = row_tiles(w, img.device)
+    launch_rows(soft_census_rows, t * h * tiles, [tiles, img, out, radius, float(eps), float(scale)], img.device)
 
 
 @host("pack_channels_gradient")
@@ -127,6 +139,9 @@ def pack_channels_gradient(feat, gx, gy, out) -> None:
     """Interleave C channels with their derivatives: ``out[..., 3c : 3c + 3] = (feat_c, gx_c, gy_c)``.
 
     feat, gx, gy : (T, H, W, C) float32; out : (T, H, W, 3C) float32.
+
+    On a GPU one pixel per thread (row tiles).
     """
     t, h, w, c = feat.shape
-    launch_rows(pack_channels_gradient_rows, t * h, [feat, gx, gy, out], feat.device)
+    tiles = row_tiles(w, feat.device)
+    launch_rows(pack_channels_gradient_rows, t * h * tiles, [tiles, feat, gx, gy, out], feat.device)

@@ -12,9 +12,10 @@ import warp as wp
 
 from ivkernels.kernels.contract import implements
 from ivkernels.kernels.host import GREY_WEIGHTS
-from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.flow_classic import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.warp.row_tiles import row_span
 
 host = implements(FAMILY, FRONT)
 
@@ -34,26 +35,26 @@ def srgb_encode(c: float):
 
 
 @wp.kernel
-def srgb_grey_rows(row_begin: int, rgb: wp.array4d(dtype=float), out: wp.array3d(dtype=float),
+def srgb_grey_rows(row_begin: int, tiles: int, rgb: wp.array4d(dtype=float), out: wp.array3d(dtype=float),
                    wr: float, wg: float, wb: float):
-    r = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, out.shape[2])
     height = out.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(out.shape[2]):
+    for x in range(x_begin, x_end):
         g = wr * srgb_encode(rgb[t, y, x, 0]) + wg * srgb_encode(rgb[t, y, x, 1]) \
             + wb * srgb_encode(rgb[t, y, x, 2])
         out[t, y, x] = 255.0 * g
 
 
 @wp.kernel
-def log_grey_rows(row_begin: int, rgb: wp.array4d(dtype=float), out: wp.array3d(dtype=float),
+def log_grey_rows(row_begin: int, tiles: int, rgb: wp.array4d(dtype=float), out: wp.array3d(dtype=float),
                   wr: float, wg: float, wb: float, floor: float):
-    r = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, out.shape[2])
     height = out.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(out.shape[2]):
+    for x in range(x_begin, x_end):
         g = wr * rgb[t, y, x, 0] + wg * rgb[t, y, x, 1] + wb * rgb[t, y, x, 2]
         out[t, y, x] = wp.log(wp.max(g, floor))
 
@@ -76,13 +77,13 @@ def min_max_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array3d(d
 
 
 @wp.kernel
-def scale_shift_rows(row_begin: int, src: wp.array4d(dtype=float), out: wp.array4d(dtype=float),
+def scale_shift_rows(row_begin: int, tiles: int, src: wp.array4d(dtype=float), out: wp.array4d(dtype=float),
                      scale: wp.array(dtype=float), shift: wp.array(dtype=float)):
-    r = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, src.shape[2])
     height = src.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(src.shape[2]):
+    for x in range(x_begin, x_end):
         for c in range(src.shape[3]):
             out[t, y, x, c] = src[t, y, x, c] * scale[c] + shift[c]
 
@@ -97,9 +98,12 @@ def srgb_grey(rgb, out) -> None:
 
     rgb : (T, H, W, 3) float32, linear RGB in [0, 1].
     out : (T, H, W) float32, grey in [0, 255] (gamma-encoded, not linear).
+
+    On a GPU one pixel per thread (row tiles).
     """
     t, h, w, _ = rgb.shape
-    launch_rows(srgb_grey_rows, t * h, [rgb, out, *GREY_WEIGHTS], rgb.device)
+    tiles = row_tiles(w, rgb.device)
+    launch_rows(srgb_grey_rows, t * h * tiles, [tiles, rgb, out, *GREY_WEIGHTS], rgb.device)
 
 
 @host("log_grey")
@@ -111,9 +115,12 @@ def log_grey(rgb, out, floor: float = 1e-3) -> None:
 
     rgb : (T, H, W, 3) float32, linear RGB.
     out : (T, H, W) float32, log grey (<= 0 for input in [0, 1]).
+
+    On a GPU one pixel per thread (row tiles).
     """
     t, h, w, _ = rgb.shape
-    launch_rows(log_grey_rows, t * h, [rgb, out, *GREY_WEIGHTS, float(floor)], rgb.device)
+    tiles = row_tiles(w, rgb.device)
+    launch_rows(log_grey_rows, t * h * tiles, [tiles, rgb, out, *GREY_WEIGHTS, float(floor)], rgb.device)
 
 
 @host("row_min_max")
@@ -134,6 +141,9 @@ def scale_shift(src, out, scale, shift) -> None:
 
     src, out : (T, H, W, C) float32 (may be the same array).
     scale, shift : (C,) float32 arrays on the same device.
+
+    On a GPU one pixel per thread (row tiles).
     """
     t, h, w, c = src.shape
-    launch_rows(scale_shift_rows, t * h, [src, out, scale, shift], src.device)
+    tiles = row_tiles(w, src.device)
+    launch_rows(scale_shift_rows, t * h * tiles, [tiles, src, out, scale, shift], src.device)

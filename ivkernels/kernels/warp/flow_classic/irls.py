@@ -13,9 +13,10 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.contract import implements
-from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.flow_classic import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.warp.row_tiles import row_span
 
 host = implements(FAMILY, FRONT)
 
@@ -40,16 +41,16 @@ def robust_weight(z: float, a: float, eps: float, quad_frac: float, quad_weight:
 
 
 @wp.kernel
-def data_coefficients_rows(row_begin: int, i1: wp.array3d(dtype=float), i1x: wp.array3d(dtype=float),
-                           i1y: wp.array3d(dtype=float), warped: wp.array4d(dtype=float),
-                           inside: wp.array3d(dtype=float), du: wp.array4d(dtype=float),
-                           out: wp.array4d(dtype=float), blend: float, a: float, eps: float,
-                           quad_frac: float, quad_weight: float):
-    r = row_begin + wp.tid()
+def data_coefficients_rows(row_begin: int, tiles: int, i1: wp.array3d(dtype=float),
+                           i1x: wp.array3d(dtype=float), i1y: wp.array3d(dtype=float),
+                           warped: wp.array4d(dtype=float), inside: wp.array3d(dtype=float),
+                           du: wp.array4d(dtype=float), out: wp.array4d(dtype=float), blend: float, a: float,
+                           eps: float, quad_frac: float, quad_weight: float):
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, i1.shape[2])
     height = i1.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(i1.shape[2]):
+    for x in range(x_begin, x_end):
         ix = 0.0
         iy = 0.0
         it = 0.0
@@ -67,16 +68,16 @@ def data_coefficients_rows(row_begin: int, i1: wp.array3d(dtype=float), i1x: wp.
 
 
 @wp.kernel
-def data_coefficients_channels_rows(row_begin: int, first: wp.array4d(dtype=float),
+def data_coefficients_channels_rows(row_begin: int, tiles: int, first: wp.array4d(dtype=float),
                                     warped: wp.array4d(dtype=float), inside: wp.array3d(dtype=float),
                                     du: wp.array4d(dtype=float), weights: wp.array(dtype=float),
                                     out: wp.array4d(dtype=float), blend: float, a: float, eps: float,
                                     quad_frac: float, quad_weight: float):
-    r = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, first.shape[2])
     height = first.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(first.shape[2]):
+    for x in range(x_begin, x_end):
         sxx = float(0.0)
         sxy = float(0.0)
         syy = float(0.0)
@@ -103,15 +104,15 @@ def data_coefficients_channels_rows(row_begin: int, first: wp.array4d(dtype=floa
 
 
 @wp.kernel
-def smoothness_weights_rows(row_begin: int, flow: wp.array4d(dtype=float), du: wp.array4d(dtype=float),
-                            out: wp.array4d(dtype=float), a: float, eps: float,
+def smoothness_weights_rows(row_begin: int, tiles: int, flow: wp.array4d(dtype=float),
+                            du: wp.array4d(dtype=float), out: wp.array4d(dtype=float), a: float, eps: float,
                             quad_frac: float, quad_weight: float):
-    r = row_begin + wp.tid()
     height = flow.shape[1]
     width = flow.shape[2]
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
     t = r // height
     y = r - t * height
-    for x in range(width):
+    for x in range(x_begin, x_end):
         for c in range(2):
             here = flow[t, y, x, c] + du[t, y, x, c]
             w_right = 0.0
@@ -142,11 +143,14 @@ def data_coefficients(i1, i1x, i1y, warped, inside, du, out, blend: float = 0.5,
     inside : (T, H, W) float32, 1 where ``x + u`` lies in the image.
     du : (T, H, W, 2) float32, current flow increment.
     out : (T, H, W, 5) float32 ``psi * (Ix Ix, Ix Iy, Iy Iy, Ix It, Iy It)``.
+
+    On a GPU one pixel per thread (row tiles).
     """
     t, h, w = i1.shape
     dev = i1.device
-    launch_rows(data_coefficients_rows, t * h,
-                [i1, i1x, i1y, warped, inside, du, out, float(blend), float(a), float(eps),
+    tiles = row_tiles(w, dev)
+    launch_rows(data_coefficients_rows, t * h * tiles,
+                [tiles, i1, i1x, i1y, warped, inside, du, out, float(blend), float(a), float(eps),
                  float(quad_frac), float(quad_weight)], dev)
 
 
@@ -169,11 +173,14 @@ def data_coefficients_channels(first, warped, inside, du, weights, out, blend: f
     du : (T, H, W, 2) float32, current increment.
     weights : (C,) float32 channel weights ``w_c``.
     out : (T, H, W, 5) float32 ``sum_c psi_c (Ix Ix, Ix Iy, Iy Iy, Ix It, Iy It)_c``.
+
+    On a GPU one pixel per thread (row tiles).
     """
     t, h, w, _ = first.shape
     dev = first.device
-    launch_rows(data_coefficients_channels_rows, t * h,
-                [first, warped, inside, du, weights, out, float(blend), float(a), float(eps),
+    tiles = row_tiles(w, dev)
+    launch_rows(data_coefficients_channels_rows, t * h * tiles,
+                [tiles, first, warped, inside, du, weights, out, float(blend), float(a), float(eps),
                  float(quad_frac), float(quad_weight)], dev)
 
 
@@ -186,7 +193,9 @@ def smoothness_weights(flow, du, out, a: float = 0.45, eps: float = 1e-3, quad_f
     out : (T, H, W, 4) float32: ``psi`` of the difference to the right
         neighbour and to the neighbour below, for u (channels 0, 1) and
         v (channels 2, 3); 0 where that neighbour does not exist.
+    On a GPU one pixel per thread (row tiles).
     """
     t, h, w, _ = flow.shape
-    launch_rows(smoothness_weights_rows, t * h,
-                [flow, du, out, float(a), float(eps), float(quad_frac), float(quad_weight)], flow.device)
+    tiles = row_tiles(w, flow.device)
+    launch_rows(smoothness_weights_rows, t * h * tiles,
+                [tiles, flow, du, out, float(a), float(eps), float(quad_frac), float(quad_weight)], flow.device)

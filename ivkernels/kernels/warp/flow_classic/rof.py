@@ -10,9 +10,10 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.contract import implements
-from ivkernels.kernels.launch import launch_rows
+from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.flow_classic import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.warp.row_tiles import row_span
 
 host = implements(FAMILY, FRONT)
 
@@ -34,18 +35,20 @@ def rof_divergence(p: wp.array4d(dtype=float), t: int, y: int, x: int):
 
 
 @wp.kernel
-def rof_dual_step_rows(row_begin: int, img: wp.array3d(dtype=float), p_in: wp.array4d(dtype=float),
+def rof_dual_step_rows(row_begin: int, tiles: int, img: wp.array3d(dtype=float), p_in: wp.array4d(dtype=float),
                        p_out: wp.array4d(dtype=float), theta: float, delta: float):
-    r = row_begin + wp.tid()
-    height = img.shape[1]
     width = img.shape[2]
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
+    height = img.shape[1]
     t = r // height
     y = r - t * height
-    # v = img + theta div(p) at (y, x); its value at x + 1 is carried to the next x
+    # v = img + theta div(p) at (y, x); its value at x + 1 is carried to the next x.  Only a
+    # cache of the same expression, so a tile starts it afresh at its first column: the
+    # pixels stay independent and every tiling gives the same bits.
     v = float(0.0)
-    if width > 0:
-        v = img[t, y, 0] + theta * rof_divergence(p_in, t, y, 0)
-    for x in range(width):
+    if x_begin < x_end:
+        v = img[t, y, x_begin] + theta * rof_divergence(p_in, t, y, x_begin)
+    for x in range(x_begin, x_end):
         gx = 0.0
         gy = 0.0
         v_right = float(0.0)
@@ -63,13 +66,13 @@ def rof_dual_step_rows(row_begin: int, img: wp.array3d(dtype=float), p_in: wp.ar
 
 
 @wp.kernel
-def rof_texture_rows(row_begin: int, img: wp.array3d(dtype=float), p: wp.array4d(dtype=float),
+def rof_texture_rows(row_begin: int, tiles: int, img: wp.array3d(dtype=float), p: wp.array4d(dtype=float),
                      out: wp.array3d(dtype=float), theta: float, alpha: float):
-    r = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, img.shape[2])
     height = img.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(img.shape[2]):
+    for x in range(x_begin, x_end):
         structure = img[t, y, x] + theta * rof_divergence(p, t, y, x)
         out[t, y, x] = img[t, y, x] - alpha * structure
 
@@ -86,9 +89,13 @@ def rof_dual_step(img, p_in, p_out, theta: float, delta: float) -> None:
 
     img : (T, H, W) float32 (the public code scales it to [-1, 1]).
     p_in, p_out : (T, H, W, 2) float32 dual field; must be different arrays.
+
+    On a GPU one pixel per thread (row tiles).
     """
     t, h, w = img.shape
-    launch_rows(rof_dual_step_rows, t * h, [img, p_in, p_out, float(theta), float(delta)], img.device)
+    tiles = row_tiles(w, img.device)
+    launch_rows(rof_dual_step_rows, t * h * tiles, [tiles, img, p_in, p_out, float(theta), float(delta)],
+                img.device)
 
 
 @host("rof_texture")
@@ -100,6 +107,9 @@ def rof_texture(img, p, out, theta: float, alpha: float) -> None:
 
     img : (T, H, W) float32; p : (T, H, W, 2) float32 from :func:`rof_dual_step`;
     out : (T, H, W) float32 (may be ``img``).
+
+    On a GPU one pixel per thread (row tiles).
     """
     t, h, w = img.shape
-    launch_rows(rof_texture_rows, t * h, [img, p, out, float(theta), float(alpha)], img.device)
+    tiles = row_tiles(w, img.device)
+    launch_rows(rof_texture_rows, t * h * tiles, [tiles, img, p, out, float(theta), float(alpha)], img.device)

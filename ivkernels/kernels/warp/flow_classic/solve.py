@@ -31,14 +31,15 @@ wp.set_module_options({"enable_backward": False})
 
 
 @wp.kernel
-def assemble_system_rows(row_begin: int, flow: wp.array4d(dtype=float), data: wp.array4d(dtype=float),
-                         smooth: wp.array4d(dtype=float), out: wp.array4d(dtype=float), lam: float):
-    r = row_begin + wp.tid()
+def assemble_system_rows(row_begin: int, tiles: int, flow: wp.array4d(dtype=float),
+                         data: wp.array4d(dtype=float), smooth: wp.array4d(dtype=float),
+                         out: wp.array4d(dtype=float), lam: float):
     height = flow.shape[1]
     width = flow.shape[2]
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
     t = r // height
     y = r - t * height
-    for x in range(width):
+    for x in range(x_begin, x_end):
         u = flow[t, y, x, 0]
         v = flow[t, y, x, 1]
         diag_u = float(0.0)
@@ -172,13 +173,13 @@ def sor_edge_rows(row_begin: int, bounds: wp.array(dtype=int), du: wp.array4d(dt
 
 
 @wp.kernel
-def apply_update_rows(row_begin: int, flow: wp.array4d(dtype=float), du: wp.array4d(dtype=float),
+def apply_update_rows(row_begin: int, tiles: int, flow: wp.array4d(dtype=float), du: wp.array4d(dtype=float),
                       out: wp.array4d(dtype=float), limit: float):
-    r = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, flow.shape[2])
     height = flow.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(flow.shape[2]):
+    for x in range(x_begin, x_end):
         for c in range(2):
             d = du[t, y, x, c]
             if limit > 0.0:
@@ -187,13 +188,14 @@ def apply_update_rows(row_begin: int, flow: wp.array4d(dtype=float), du: wp.arra
 
 
 @wp.kernel
-def select_masked_rows(row_begin: int, mask: wp.array3d(dtype=float), inside_mask: wp.array4d(dtype=float),
-                       outside_mask: wp.array4d(dtype=float), out: wp.array4d(dtype=float)):
-    r = row_begin + wp.tid()
+def select_masked_rows(row_begin: int, tiles: int, mask: wp.array3d(dtype=float),
+                       inside_mask: wp.array4d(dtype=float), outside_mask: wp.array4d(dtype=float),
+                       out: wp.array4d(dtype=float)):
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, mask.shape[2])
     height = mask.shape[1]
     t = r // height
     y = r - t * height
-    for x in range(mask.shape[2]):
+    for x in range(x_begin, x_end):
         for c in range(out.shape[3]):
             if mask[t, y, x] >= 0.5:
                 out[t, y, x, c] = inside_mask[t, y, x, c]
@@ -214,10 +216,13 @@ def assemble_system(flow, data, smooth, lam: float, out) -> None:
     data : (T, H, W, 5) float32 from :func:`data_coefficients`.
     smooth : (T, H, W, 4) float32 from :func:`smoothness_weights`.
     out : (T, H, W, 5) float32.
+
+    On a GPU one pixel per thread (row tiles).
     """
     t, h, w, _ = flow.shape
     dev = flow.device
-    launch_rows(assemble_system_rows, t * h, [flow, data, smooth, out, float(lam)], dev)
+    tiles = row_tiles(w, dev)
+    launch_rows(assemble_system_rows, t * h * tiles, [tiles, flow, data, smooth, out, float(lam)], dev)
 
 
 @host("sor_sweep")
@@ -287,9 +292,12 @@ def apply_update(flow, du, out, limit: float = 1.0) -> None:
     """``out = flow + clip(du, -limit, limit)`` (no clipping when ``limit <= 0``).
 
     flow, du, out : (T, H, W, 2) float32; ``out`` may be ``flow``.
+
+    On a GPU one pixel per thread (row tiles).
     """
     t, h, w, _ = flow.shape
-    launch_rows(apply_update_rows, t * h, [flow, du, out, float(limit)], flow.device)
+    tiles = row_tiles(w, flow.device)
+    launch_rows(apply_update_rows, t * h * tiles, [tiles, flow, du, out, float(limit)], flow.device)
 
 
 @host("select_masked")
@@ -297,7 +305,8 @@ def select_masked(mask, inside_mask, outside_mask, out) -> None:
     """``out = inside_mask`` where ``mask >= 0.5``, else ``outside_mask``.
 
     mask : (T, H, W) float32; inside_mask, outside_mask, out : (T, H, W, C) float32
-    (``out`` may alias either input).
+    (``out`` may alias either input).  On a GPU one pixel per thread (row tiles).
     """
     t, h, w = mask.shape
-    launch_rows(select_masked_rows, t * h, [mask, inside_mask, outside_mask, out], mask.device)
+    tiles = row_tiles(w, mask.device)
+    launch_rows(select_masked_rows, t * h * tiles, [tiles, mask, inside_mask, outside_mask, out], mask.device)
