@@ -48,6 +48,7 @@ only (seed 0 is refused).
     python perf/scale.py --parts phases --repeats 2
     python perf/scale.py --parts chunks --kinds objects_camera --overlaps 2 4
     python perf/scale.py --parts chunks --shares task_cpus --chunk-windows params chunk
+    python perf/scale.py --parts chunks --shares task_cpus --set lbfgs_iterations=160   # a Params field
 """
 from __future__ import annotations
 
@@ -60,6 +61,7 @@ import time
 import numpy as np
 
 import ivkernels as iv
+from common import parse_grid
 from ivkernels.evaluation import metrics, synthetic
 from ivkernels.parallel import engines, many
 from ivkernels.parallel.engines import LOCAL_CLUSTER, RayEngine
@@ -213,12 +215,13 @@ def measure_chunks(args) -> None:
     # chunks in windows of Params.window (as before chunks.chunk_params), or in the chunks' own
     windows = {"params": lambda params, n_frames: params, "chunk": many.chunk_params}
     runs = [(share, win) for share in shares for win in args.chunk_windows]
+    params = iv.Params(**parse_grid(args.set)[0])
     for kind in args.kinds:
         seq = synthetic.render_sequence(kind, args.long_frames, size=tuple(args.size), seed=args.seed)
         frames = seq.frames
         for repeat in range(args.repeats):
             t0, c0 = time.perf_counter(), time.process_time()
-            ref = iv.decompose(frames)
+            ref = iv.decompose(frames, params=params)
             t_seq, c_seq = time.perf_counter() - t0, time.process_time() - c0
             ray.init(**LOCAL_CLUSTER)
             iv.decompose_many([frames[:3]], engine="ray")        # cluster up and workers warm, not timed
@@ -229,7 +232,7 @@ def measure_chunks(args) -> None:
                     try:
                         t0 = time.perf_counter()
                         out = iv.decompose_many([frames], engine="ray", chunk_frames=args.chunk_frames,
-                                                chunk_overlap=overlap)[0]
+                                                chunk_overlap=overlap, params=params)[0]
                         t_ch = time.perf_counter() - t0
                     finally:
                         engines.task_cpus, many.chunk_params = saved
@@ -401,6 +404,8 @@ def main(argv=None) -> None:
     p.add_argument("--chunk-windows", nargs="+", default=["chunk"], choices=["params", "chunk"],
                    help="'chunks': windows of Params.window inside a chunk (as before chunk_params), "
                         "the chunks' own (chunk_params)")
+    p.add_argument("--set", nargs="*", default=[], metavar="NAME=VALUE",
+                   help="'chunks': Params fields of both the sequential and the chunked solve")
     args = p.parse_args(argv)
     if args.seed == 0:
         p.error("seed 0 is the evaluation seed; measure on training seeds (1 and up)")

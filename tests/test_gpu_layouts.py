@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import ivkernels as iv
+from gpu_layout_harness import TILES, both_layouts
 from ivkernels.backends import get_backend
 from ivkernels.evaluation import metrics, synthetic
 from ivkernels.kernels import launch
@@ -20,8 +21,6 @@ from ivkernels.kernels.reference import energy_albedo_gsm as gsm_ref
 from ivkernels.kernels.warp import vecops as warp_vecops
 from ivkernels.kernels.workspace import Workspace
 from ivkernels.priors import load_albedo_prior
-
-TILES = 3
 
 
 @pytest.fixture
@@ -34,16 +33,6 @@ def gpu_layouts(monkeypatch):
     monkeypatch.setattr(launch, "FORCE_GPU_LAYOUT_TILES", TILES)
     with launch.threads(1):
         yield
-
-
-def both_layouts(monkeypatch, call):
-    """``call()`` (NumPy arrays out) with the CPU layout, then with the GPU's."""
-    with launch.threads(1):
-        cpu = call()
-        monkeypatch.setattr(launch, "FORCE_GPU_LAYOUT_TILES", TILES)
-        gpu = call()
-        monkeypatch.setattr(launch, "FORCE_GPU_LAYOUT_TILES", None)
-    return cpu, gpu
 
 
 def assert_close(cpu, gpu, rtol=1e-5):

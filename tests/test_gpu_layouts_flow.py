@@ -15,11 +15,10 @@ import numpy as np
 import pytest
 import warp as wp
 
+from gpu_layout_harness import both_layouts
 from ivkernels.backends import get_backend
-from ivkernels.kernels import launch
 from ivkernels.kernels.workspace import Workspace
 
-TILES = 3
 
 #: (frames, height, width): widths 1, 7, 13 (1, 3, 3 tiles of 1..5 pixels), heights 1, 5, 9
 SHAPES = [(2, 5, 7), (3, 1, 13), (1, 9, 1), (2, 9, 13)]
@@ -28,16 +27,6 @@ SHAPES = [(2, 5, 7), (3, 1, 13), (1, 9, 1), (2, 9, 13)]
 @pytest.fixture
 def be():
     return get_backend("warp", "cpu")
-
-
-def both_layouts(monkeypatch, call):
-    """``call()`` (NumPy arrays out) with the CPU layout, then with the GPU's."""
-    with launch.threads(1):
-        cpu = call()
-        monkeypatch.setattr(launch, "FORCE_GPU_LAYOUT_TILES", TILES)
-        gpu = call()
-        monkeypatch.setattr(launch, "FORCE_GPU_LAYOUT_TILES", None)
-    return cpu, gpu
 
 
 def assert_same_bits(monkeypatch, call):
