@@ -194,6 +194,15 @@ class Params:
         slow hard-shadow lamp 0.536 -> 0.541.  With the median absolute
         deviation in place of the largest (a step holding in most frames)
         it lost on the hard-shadow kinds and on a cup's creases.
+    shading_light_edge_tau
+        Weiss's cue for the light's own edges
+        (:func:`~ivkernels.solver.step_evidence.light_edge_factor`): in a
+        window of three frames or more whose light changes (``n > 1``), a
+        horizontal or vertical pair that holds still and whose log-luminance
+        step in frame ``t`` departs from its median over the frames by ``d``
+        multiplies Eq. 9's local weight of both its pixels in that frame by
+        ``exp(-(d / tau)^2)``: a shadow's outline crossing the pair is the
+        light's edge, and the shading may step there.  0: off.
     shading_gate_chroma
         With the gate on and this > 0, a contrast change where the input's
         log chromaticity changes by about this much is not taken for a
@@ -314,6 +323,7 @@ class Params:
     shading_stable_gain: float = 8.0
     shading_stable_spread: float = 0.1
     shading_stable_floor: float = 0.3
+    shading_light_edge_tau: float = 0.0
     shading_gate_chroma: float = 0.0
     lam_shading_nonlocal: float = 10000.0
     lam_coupling: float = 10.0
@@ -423,4 +433,6 @@ _RULES = {
                                                  "stable-step pairs off"),
     "shading_stable_spread": Range(float, 0.0, low_open=True, why="a deviation of a log step from its median"),
     "shading_stable_floor": Range(float, 0.0, 1.0, why="an evidence in [0, 1)"),
+    "shading_light_edge_tau": Range(float, 0.0, why="a deviation of a log step from its median; 0 switches "
+                                                    "the light-edge factor off"),
 }

@@ -190,6 +190,22 @@ def test_flow_median_in_tiles_matches_the_reference(be, gpu_layouts, shape, radi
     np.testing.assert_allclose(be.numpy(out), expected, rtol=1e-5, atol=1e-5)
 
 
+@pytest.mark.parametrize("shape", [(4, 9, 13), (3, 1, 5), (5, 6, 1)])
+def test_light_edge_factor_in_tiles_is_the_cpu_layout_bitwise(be, monkeypatch, shape):
+    rng = np.random.default_rng(sum(shape))
+    t, h, w = shape
+    img = (rng.normal(-1, 0.5, (1, h, w, 3)) + rng.normal(0, 0.3, (t, h, w, 3))).astype(np.float32)
+    flow = rng.normal(0, 0.8, (t - 1, h, w, 2)).astype(np.float32)
+
+    def factor():
+        out = be.empty((t, h, w))
+        be.step_evidence.moving_steps(be.asarray(img), be.asarray(flow), out, 0.25, 1.0)
+        return [be.numpy(out).copy()]
+
+    cpu, gpu = both_layouts(monkeypatch, factor)
+    np.testing.assert_array_equal(gpu[0], cpu[0])
+
+
 @pytest.mark.parametrize("shape", [(2, 9, 13, 2), (1, 1, 5, 3), (1, 6, 1, 2)])
 def test_median5x5_in_tiles_is_the_cpu_layout_bitwise(be, monkeypatch, shape):
     src = np.random.default_rng(shape[2]).normal(0, 2, shape).astype(np.float32)

@@ -43,7 +43,7 @@ from ivkernels.kernels.workspace import Workspace
 from ivkernels.params import Params
 from ivkernels.priors import entropy_blur_weights
 from ivkernels.solver.motion_maps import shading_cut_gate
-from ivkernels.solver.step_evidence import multiply_step_gate, stable_pair_weights
+from ivkernels.solver.step_evidence import light_edge_factor, multiply_step_gate, stable_pair_weights
 
 
 class WindowEnergy:
@@ -118,10 +118,12 @@ class WindowEnergy:
         (``Params.shading_cut_threshold``, :func:`ivkernels.solver.motion_maps.
         shading_cut_gate`) and the input's temporal gate
         (``Params.shading_gate_tau``, ``maps.shading_gate``), both needing the
-        flow, and of the step evidence (``Params.shading_step_gain``,
+        flow, of the step evidence (``Params.shading_step_gain``,
         :func:`ivkernels.solver.step_evidence.multiply_step_gate`: kernels of the
         ``step_evidence`` family multiply it into the gate on the backend's
-        arrays), each where it is on.
+        arrays), and of the light's edges (``Params.shading_light_edge_tau``,
+        :func:`ivkernels.solver.step_evidence.light_edge_factor`, over at least
+        three frames), each where it is on.
         """
         be, params, flow = self.be, self.params, self.flow
         T, h, w = self.shape
@@ -142,6 +144,10 @@ class WindowEnergy:
                                stability=params.shading_step_stability,
                                static_flow=params.shading_step_static_flow,
                                share_radius=params.shading_step_share_radius)
+        if self.temporal and params.shading_light_edge_tau > 0 and T >= 3:
+            factor = be.numpy(light_edge_factor(be, self.I, flow, params.shading_light_edge_tau,
+                                                params.shading_step_static_flow))
+            gate = be.asarray(factor if gate is None else be.numpy(gate) * factor)
         return gate
 
     def _stable_pairs(self):

@@ -159,8 +159,9 @@ def window_params(params, n: float):
     0): with no light change to read, the cue would take a step whose
     contrast the flow's errors or a moving shadow change for light.  For the
     same reason such a window has no stable-step pairs
-    (``shading_stable_gain`` 0).  Unchanged at ``n = 1`` with the switch off
-    and no stable-step pairs.
+    (``shading_stable_gain`` 0) and no light-edge factor
+    (``shading_light_edge_tau`` 0).  Unchanged at ``n = 1`` with the switch off
+    and neither on.
     """
     changes = {}
     if n != 1.0:
@@ -170,4 +171,6 @@ def window_params(params, n: float):
         changes.update(shading_step_stability=0.0)
     if n <= 1.0 and params.shading_stable_gain > 0:
         changes.update(shading_stable_gain=0.0)
+    if n <= 1.0 and params.shading_light_edge_tau > 0:
+        changes.update(shading_light_edge_tau=0.0)
     return params.replace(**changes) if changes else params

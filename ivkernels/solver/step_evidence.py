@@ -55,8 +55,8 @@ from ivkernels.kernels.reference import step_evidence as ref
 from ivkernels.kernels.reference.step_evidence import AXIS_NEIGHBOURS, DARK_OFFSET, HALF_NEIGHBOURS  # noqa: F401
 from ivkernels.params import Params
 
-__all__ = ["chromatic_share", "local_chromatic_share", "grey_step_gate", "multiply_step_gate", "share_radius_pixels",
-           "stable_pair_weights", "step_evidence", "step_gate", "DARK_OFFSET", "SHARE_PRIOR_STEPS", "STATIC_FLOW"]
+__all__ = ["chromatic_share", "local_chromatic_share", "grey_step_gate", "light_edge_factor", "multiply_step_gate",
+           "share_radius_pixels", "stable_pair_weights", "step_evidence", "step_gate", "DARK_OFFSET", "SHARE_PRIOR_STEPS", "STATIC_FLOW"]
 
 #: Flow (pixels) below which a pixel counts as holding still for Weiss's cue:
 #: the default of ``Params.shading_step_static_flow``, read from there.
@@ -226,3 +226,29 @@ def stable_pair_weights(be, log_image, flow, tau: float, stability: float, floor
     pairs = be.empty((h, w, 2))
     be.step_evidence.stable_pairs(offset, flow, pairs, tau, stability, floor, static_flow)
     return pairs
+
+
+def light_edge_factor(be, log_image, flow, tau: float, static_flow: float = STATIC_FLOW):
+    """Weiss's cue for the light's own edges, per pixel and frame, on the backend's arrays.
+
+    The other side of :func:`stable_pair_weights`: where the scene holds
+    still, the log-luminance step of a horizontal or vertical pair that
+    departs from its median over the window's frames by ``d`` in frame ``t``
+    is the light's (a shadow's outline crossing the pair), so Eq. 9 should
+    not smooth the shading across it there: ``exp(-(d / tau)^2)``, the
+    smallest over a pixel's still pairs, 1 without one (kernel
+    ``step_evidence.moving_steps``, read on ``log(i + DARK_OFFSET)``).
+
+    be : backend.
+    log_image : (T, h, w, 3) backend array, ``I = log i``.
+    flow : (T-1, h, w, 2) backend array.
+    tau : log units, > 0; static_flow : pixels, > 0.
+
+    Returns the (T, h, w) backend array of factors in (0, 1].
+    """
+    T, h, w, _ = log_image.shape
+    offset = be.empty((T, h, w, 3))
+    be.step_evidence.offset_log(log_image, offset, DARK_OFFSET)
+    factor = be.empty((T, h, w))
+    be.step_evidence.moving_steps(offset, flow, factor, tau, static_flow)
+    return factor

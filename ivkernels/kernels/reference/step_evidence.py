@@ -109,6 +109,14 @@ FAMILY.declare("still_stability(log_image, flow, weight, tau, static_flow)",
                tau=Positive, static_flow=Positive,
                separate=(("weight", "log_image", "the weight is written while log_image is read"),
                          ("weight", "flow", "the weight is written while flow is read")))
+FAMILY.declare("moving_steps(log_image, flow, factor, tau, static_flow)",
+               "Weiss's cue for the light's own edges: per pixel and frame, the smallest over its still "
+               "horizontal and vertical pairs of ``exp(-((s_t - m) / tau)^2)``, ``s_t`` the pair's "
+               "log-luminance step in frame ``t`` and ``m`` its median over the frames; 1 without a still pair.",
+               log_image="T H W 3", flow=Array("T-1 H W 2", layout="(T-1, H, W, 2)"), factor=Out("T H W"),
+               tau=FinitePositive, static_flow=Positive,
+               separate=(("factor", "log_image", "the factor is written while log_image is read"),
+                         ("factor", "flow", "the factor is written while flow is read")))
 FAMILY.declare("stable_pairs(log_image, flow, pairs, tau, stability, floor, static_flow)",
                "Weiss's stable-step evidence of each pixel's right and lower pair over the frames: "
                "``(1 - exp(-(m / tau)^2)) exp(-(D / stability)^2)`` of the median ``m`` and the largest deviation "
@@ -276,6 +284,32 @@ def stable_pairs(log_image, flow, tau: float, stability: float, floor: float, st
     for k, (a, b), m, ev in stable_step_parts(log_image, tau, stability):
         ev[(np.abs(m) >= MAX_STABLE_STEP) | (ev < floor) | moves[a[1:]] | moves[b[1:]]] = 0.0
         out[a[1], a[2], k] = ev
+    return out
+
+
+def moving_steps(log_image, flow, tau: float, static_flow: float) -> np.ndarray:
+    """(T, H, W) float64: Weiss's cue for the light's own edges, a factor on Eq. 9's local weight.
+
+    For each horizontal or vertical pair that holds still (neither pixel's flow in any frame pair
+    is ``static_flow`` px or longer), the step of the log luminance ``s_t = L(t, x + d) - L(t, x)``
+    against its median ``m`` over the ``T`` frames (the mean of the middle two for even ``T``):
+    ``exp(-((s_t - m) / tau)^2)``, small in the frames where an edge of the light (a shadow's
+    outline) crosses the pair.  A pixel's factor in frame ``t`` is the smallest over its (up to
+    four) still pairs, 1 where it has none.
+
+    log_image : (T, H, W, 3), ``I'`` (:func:`offset_log`); ``L = mean_c I'``.
+    flow : (T-1, H, W, 2).
+    """
+    L, _ = luminance_chroma(log_image)
+    moves = moving(flow, L.shape[0], static_flow).any(axis=0)                    # (H, W): in any pair
+    out = np.ones(L.shape)
+    for dy, dx in AXIS_NEIGHBOURS:
+        a, b = pair_slices(L.shape, dy, dx)
+        steps = L[b] - L[a]                                                      # (T, h', w')
+        factor = np.exp(-((steps - np.median(steps, axis=0)) / tau) ** 2)
+        factor[:, moves[a[1:]] | moves[b[1:]]] = 1.0
+        out[a] = np.minimum(out[a], factor)
+        out[b] = np.minimum(out[b], factor)
     return out
 
 

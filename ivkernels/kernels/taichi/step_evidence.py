@@ -393,6 +393,31 @@ def stable_pairs_rows(steps: nd4, flow: nd4, pairs: nd3, tau: ti.f32, stability:
                 pairs[y, x, k] = ev
 
 
+@ti.func
+def light_edge_factor(steps: nd4, flow: nd4, factor: nd3, y, x, py, px, k, ny, nx, tau, static_flow):
+    """Lower ``factor[:, y, x]`` by the pair of ``steps[:, py, px, k]`` (see the Warp module)."""
+    if ny >= 0 and nx >= 0 and ny < factor.shape[1] and nx < factor.shape[2]:
+        if moves(flow, ny, nx, static_flow) == 0:
+            m = median_of(steps, py, px, k)
+            for t in range(factor.shape[0]):
+                q = (steps[t, py, px, k] - m) / tau
+                factor[t, y, x] = ti.min(factor[t, y, x], ti.exp(-q * q))
+
+
+@ti.kernel
+def moving_steps_rows(steps: nd4, flow: nd4, factor: nd3, tau: ti.f32, static_flow: ti.f32):
+    """The light-edge factor of each pixel over its still axis pairs (see the Warp module)."""
+    for y in range(factor.shape[1]):
+        for x in range(factor.shape[2]):
+            for t in range(factor.shape[0]):
+                factor[t, y, x] = 1.0
+            if moves(flow, y, x, static_flow) == 0:
+                light_edge_factor(steps, flow, factor, y, x, y, x, 0, y, x + 1, tau, static_flow)
+                light_edge_factor(steps, flow, factor, y, x, y, x, 1, y + 1, x, tau, static_flow)
+                light_edge_factor(steps, flow, factor, y, x, y, x - 1, 0, y, x - 1, tau, static_flow)
+                light_edge_factor(steps, flow, factor, y, x, y - 1, x, 1, y - 1, x, tau, static_flow)
+
+
 @host("offset_log")
 def offset_log(log_image, out, offset: float) -> None:
     """``out = log(exp(log_image) + offset)``; see :func:`ivkernels.kernels.warp.step_evidence.offset_log`."""
@@ -466,3 +491,15 @@ def stable_pairs(log_image, flow, pairs, tau: float, stability: float, floor: fl
     steps = np.empty((t, h, w, 2), np.float32)
     luminance_steps_rows(log_image, steps)
     stable_pairs_rows(steps, flow, pairs, tau, stability, floor, static_flow, least_stable_step(tau, floor))
+
+
+@host("moving_steps")
+def moving_steps(log_image, flow, factor, tau: float, static_flow: float) -> None:
+    """Weiss's cue for the light's own edges; see
+    :func:`ivkernels.kernels.warp.step_evidence.moving_steps`."""
+    t, h, w, _ = log_image.shape
+    if factor.size == 0:
+        return
+    steps = np.empty((t, h, w, 2), np.float32)
+    luminance_steps_rows(log_image, steps)
+    moving_steps_rows(steps, flow, factor, tau, static_flow)

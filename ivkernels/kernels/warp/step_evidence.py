@@ -496,6 +496,37 @@ def stable_pairs_pixels(row_begin: int, tiles: int, steps: wp.array4d(dtype=floa
             pairs[y, x, k] = ev
 
 
+@wp.func
+def light_edge_factor(steps: wp.array4d(dtype=float), flow: wp.array4d(dtype=float), factor: wp.array3d(dtype=float),
+                      y: int, x: int, py: int, px: int, k: int, ny: int, nx: int, tau: float, static_flow: float):
+    """Lower ``factor[:, y, x]`` to ``exp(-((s_t - m) / tau)^2)`` of the pair whose steps are
+    ``steps[:, py, px, k]`` and whose other pixel is ``(ny, nx)``, when that pixel lies in the
+    image and holds still (the caller checks ``(y, x)``)."""
+    if ny >= 0 and nx >= 0 and ny < factor.shape[1] and nx < factor.shape[2]:
+        if moves(flow, ny, nx, static_flow) == 0:
+            m = median_of(steps, py, px, k)
+            for t in range(factor.shape[0]):
+                q = (steps[t, py, px, k] - m) / tau
+                factor[t, y, x] = wp.min(factor[t, y, x], wp.exp(-q * q))
+
+
+@wp.kernel
+def moving_steps_pixels(row_begin: int, tiles: int, steps: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
+                        factor: wp.array3d(dtype=float), tau: float, static_flow: float):
+    """``factor[:, y, x]``: the smallest over the pixel's still right, lower, left and upper pairs
+    of ``exp(-((s_t - m) / tau)^2)`` (:func:`luminance_steps_rows` gives ``s``); one row ``y``
+    per thread (``tiles`` per row on a GPU).  Each pair's median is found by both its pixels."""
+    y, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, factor.shape[2])
+    for x in range(x_begin, x_end):
+        for t in range(factor.shape[0]):
+            factor[t, y, x] = 1.0
+        if moves(flow, y, x, static_flow) == 0:
+            light_edge_factor(steps, flow, factor, y, x, y, x, 0, y, x + 1, tau, static_flow)
+            light_edge_factor(steps, flow, factor, y, x, y, x, 1, y + 1, x, tau, static_flow)
+            light_edge_factor(steps, flow, factor, y, x, y, x - 1, 0, y, x - 1, tau, static_flow)
+            light_edge_factor(steps, flow, factor, y, x, y - 1, x, 1, y - 1, x, tau, static_flow)
+
+
 # ----------------------------------------------------------------------------
 # Host functions
 # ----------------------------------------------------------------------------
@@ -676,3 +707,32 @@ def stable_pairs(log_image, flow, pairs, tau: float, stability: float, floor: fl
     launch_rows(stable_pairs_pixels, h * tiles,
                 [tiles, steps, flow, pairs, tau, stability, floor, static_flow, least_stable_step(tau, floor)], device=dev)
 
+
+@host("moving_steps")
+def moving_steps(log_image, flow, factor, tau: float, static_flow: float) -> None:
+    """Weiss's cue for the light's own edges, a factor on Eq. 9's local weight.
+
+    For each horizontal or vertical pair that holds still (neither pixel's
+    flow in any frame pair is ``static_flow`` px or longer), the step of the
+    log luminance (the mean over channels) ``s_t = L(t, x + d) - L(t, x)``
+    against its median ``m`` over the ``T`` frames (the mean of the middle two
+    for even ``T``): ``exp(-((s_t - m) / tau)^2)``, small in the frames where
+    an edge of the light crosses the pair.  ``factor[t, y, x]`` is the smallest
+    over the pixel's still pairs, 1 where it has none
+    (:func:`ivkernels.kernels.reference.step_evidence.moving_steps`).  The
+    steps go into a (T, H, W, 2) buffer of this call; each median is found by
+    ranks, ``O(T^2)`` per pair.
+
+    log_image : wp.array float32 (T, H, W, 3), the offset log image (:func:`offset_log`).
+    flow : wp.array float32 (T-1, H, W, 2), forward flow in pixels.
+    factor : wp.array float32 (T, H, W), written; in (0, 1].
+    tau : log units, > 0; static_flow : pixels, > 0.
+    """
+    t, h, w, _ = log_image.shape
+    dev = log_image.device
+    if factor.size == 0:
+        return
+    steps = wp.empty((t, h, w, 2), dtype=float, device=dev)
+    tiles = row_tiles(w, dev)
+    launch_rows(luminance_steps_rows, t * h * tiles, [tiles, log_image, steps], device=dev)
+    launch_rows(moving_steps_pixels, h * tiles, [tiles, steps, flow, factor, tau, static_flow], device=dev)

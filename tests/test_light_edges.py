@@ -1,0 +1,72 @@
+"""Weiss's cue for the light's own edges (``Params.shading_light_edge_tau``).
+
+The factor comes from the ``step_evidence.moving_steps`` kernel (checked
+against its NumPy reference in the kernel battery); here: what it says on a
+scene built so the answer is known (a shadow whose outline sweeps a grey
+checkerboard under a changing light), that it stays out of the way where the
+scene moves or the light holds still, and what it does to a solve.
+"""
+import numpy as np
+import pytest
+
+import ivkernels as iv
+from ivkernels.evaluation import metrics
+from ivkernels.solver.independent_shadings import window_params
+from ivkernels.solver.step_evidence import light_edge_factor
+from test_stable_pairs import FAST, checkerboard_scene
+
+TAU = 0.25
+
+
+def factor_of(be, frames, flow, tau=TAU):
+    return be.numpy(light_edge_factor(be, be.asarray(np.log(np.maximum(frames, 1e-4))), be.asarray(flow), tau))
+
+
+def test_the_factor_marks_the_shadow_outline_in_its_frame_only(any_backend):
+    frames, flow, albedo, shadows = checkerboard_scene()
+    factor = factor_of(any_backend, frames, flow)
+    T, H, W = factor.shape
+    assert (T, H, W) == frames.shape[:3]
+    for t, c in enumerate(shadows):
+        # both pixels of the pair the outline crosses in frame t, in that frame only
+        assert factor[t, :, c - 1].max() < 0.05 and factor[t, :, c].max() < 0.05
+        # in the other frames only a little lower (the dark offset of the steps' log, DARK_OFFSET,
+        # shrinks a square's edge in the frames the shadow covers it)
+        others = [u for u in range(T) if abs(shadows[u] - c) > 1]
+        assert factor[others][:, :, c].min() > 0.75
+    # away from every outline (the left half: the checkerboard's steps hold in every frame) the
+    # shading keeps Eq. 9's full weight
+    assert factor[:, :, : min(shadows) - 2].min() > 0.9
+
+
+def test_moving_pixels_and_short_windows_keep_the_full_weight(any_backend):
+    frames, flow, _, _ = checkerboard_scene()
+    moving = np.full_like(flow, 0.0)
+    moving[..., 0] = 2.0                                 # every pixel moves 2 px: nothing is still
+    assert (factor_of(any_backend, frames, moving) == 1.0).all()
+    # a still pixel beside a moving one: its pair with it is left out, its other pairs are read
+    one = flow.copy()
+    one[:, :, : 10, 0] = 2.0
+    factor = factor_of(any_backend, frames, one)
+    assert (factor[:, :, :10] == 1.0).all() and factor[:, :, 11:].min() < 0.05
+
+
+def test_the_factor_is_off_where_the_window_counts_one_shading():
+    assert window_params(iv.Params(shading_light_edge_tau=TAU), 1.0).shading_light_edge_tau == 0.0
+    assert window_params(iv.Params(shading_light_edge_tau=TAU), 1.5).shading_light_edge_tau == TAU
+    assert window_params(iv.Params(), 2.0).shading_light_edge_tau == iv.Params().shading_light_edge_tau
+
+
+@pytest.mark.slow
+def test_the_solve_keeps_the_moving_outline_out_of_the_albedo():
+    # a light that swings by 1.2 log units across the frame: the outline's first frame is where
+    # the solve without the factor leaves part of the shadow's step in the albedo
+    frames, flow, albedo, shadows = checkerboard_scene(light_change=1.2)
+    truth = np.repeat(albedo[None, ..., None], len(frames), axis=0).repeat(3, axis=-1)
+    err, leak = {}, {}
+    for name, tau in (("off", 0.0), ("on", TAU)):
+        out = iv.decompose(frames, flow=flow, params=iv.Params(**FAST, shading_light_edge_tau=tau))
+        err[name] = metrics.lmse(out.albedo, truth)
+        A = np.log(out.albedo.mean(axis=-1))
+        leak[name] = max(abs(float(np.median(A[t, :, c - 1] - A[t, :, c]))) for t, c in enumerate(shadows))
+    assert err["on"] < 0.8 * err["off"] and leak["on"] < 0.5 * leak["off"], (err, leak)
