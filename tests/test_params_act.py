@@ -56,7 +56,7 @@ MOVES = {
     "shading_stable_gain": (0.0, {}, "truth:relit"),
     "shading_stable_spread": (0.5, {}, "truth:relit"),
     "shading_stable_floor": (0.0, {}, "truth:relit"),
-    "shading_light_edge_tau": (0.25, {}, "truth:relit"),
+    "shading_light_edge_tau": (0.0, {}, "truth:relit"),
     "lam_shading_nonlocal": (10.0, {}, "truth"),
     "lam_coupling": (1000.0, {}, "truth"),
     "sigma_s": (1.0, {}, "truth"),
