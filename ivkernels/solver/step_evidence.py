@@ -37,6 +37,10 @@ the pair's evidence (:func:`ivkernels.kernels.reference.step_evidence.stable_pai
 On the pair, not on its pixels: a per-pixel weight also stiffens the pairs
 along the edge, and the shading's smooth variation along a printed edge then
 goes into the albedo (perf/RESULTS.md, "What teabag2 loses to Weiss").
+The other half of the cue, :func:`light_edge_factor`
+(``Params.shading_light_edge_tau``): what a still pair's step does beyond its
+median in one frame is the light's, and Eq. 9's weight of its pixels in that
+frame falls by ``exp(-((s_t - m) / tau)^2)``.
 
 The formula is computed by the kernels of the ``step_evidence`` family on
 the backend's arrays (:mod:`ivkernels.kernels.warp.step_evidence`, the

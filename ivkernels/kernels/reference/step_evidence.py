@@ -40,7 +40,10 @@ edge (Weiss, ICCV 2001); one that a shadow crosses in some frames is not,
 however many frames it holds in.  Steps of :data:`MAX_STABLE_STEP` log
 units or more (an object's outline against a black background) and evidence
 under ``floor`` (the small, stable steps a camera's noise gives every pair)
-get 0.
+get 0.  The other half of the cue (:func:`moving_steps`): what a still
+pair's step does beyond its median in frame ``t`` is the light's, so Eq. 9's
+weight of its pixels in that frame is multiplied by
+``exp(-((s_t - m) / tau)^2)`` (a shadow's outline crossing the pair).
 """
 from __future__ import annotations
 

@@ -14,6 +14,8 @@
 * :func:`stable_pairs`: Weiss's stable-step evidence of each pixel's right and
   lower pair over the window's frames (the median of the pair's step and its
   largest deviation from it), where the pair holds still.
+* :func:`moving_steps`: the light's own edges, per pixel and frame: the
+  smallest over its still pairs of ``exp(-((s_t - m) / tau)^2)``.
 
 The formula, its constants and the NumPy reference:
 :mod:`ivkernels.kernels.reference.step_evidence`; its use in the energy:
