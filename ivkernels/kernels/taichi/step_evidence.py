@@ -481,15 +481,21 @@ def still_stability(log_image, flow, weight, tau: float, static_flow: float) -> 
         still_stability_rows(flow, change, weight, tau, static_flow)
 
 
+def _luminance_steps(log_image) -> np.ndarray:
+    """The (T, H, W, 2) float32 steps of the log luminance to the right and lower neighbour."""
+    t, h, w, _ = log_image.shape
+    steps = np.empty((t, h, w, 2), np.float32)
+    luminance_steps_rows(log_image, steps)
+    return steps
+
+
 @host("stable_pairs")
 def stable_pairs(log_image, flow, pairs, tau: float, stability: float, floor: float, static_flow: float) -> None:
     """Weiss's stable-step evidence of each pixel's right and lower pair; see
     :func:`ivkernels.kernels.warp.step_evidence.stable_pairs`."""
-    t, h, w, _ = log_image.shape
     if pairs.size == 0:
         return
-    steps = np.empty((t, h, w, 2), np.float32)
-    luminance_steps_rows(log_image, steps)
+    steps = _luminance_steps(log_image)
     stable_pairs_rows(steps, flow, pairs, tau, stability, floor, static_flow, least_stable_step(tau, floor))
 
 
@@ -497,9 +503,6 @@ def stable_pairs(log_image, flow, pairs, tau: float, stability: float, floor: fl
 def moving_steps(log_image, flow, factor, tau: float, static_flow: float) -> None:
     """Weiss's cue for the light's own edges; see
     :func:`ivkernels.kernels.warp.step_evidence.moving_steps`."""
-    t, h, w, _ = log_image.shape
     if factor.size == 0:
         return
-    steps = np.empty((t, h, w, 2), np.float32)
-    luminance_steps_rows(log_image, steps)
-    moving_steps_rows(steps, flow, factor, tau, static_flow)
+    moving_steps_rows(_luminance_steps(log_image), flow, factor, tau, static_flow)

@@ -678,6 +678,17 @@ def still_stability(log_image, flow, weight, tau: float, static_flow: float) -> 
     launch_rows(still_stability_rows, t * h, [flow, change, weight, tau, static_flow], device=dev)
 
 
+def _luminance_steps(log_image):
+    """The (T, H, W, 2) steps of the log luminance to the right and lower neighbour
+    (:func:`luminance_steps_rows`) in a buffer of this call, and the row tiles of the device."""
+    t, h, w, _ = log_image.shape
+    dev = log_image.device
+    steps = wp.empty((t, h, w, 2), dtype=float, device=dev)
+    tiles = row_tiles(w, dev)
+    launch_rows(luminance_steps_rows, t * h * tiles, [tiles, log_image, steps], device=dev)
+    return steps, tiles
+
+
 @host("stable_pairs")
 def stable_pairs(log_image, flow, pairs, tau: float, stability: float, floor: float, static_flow: float) -> None:
     """Weiss's stable-step evidence of each pixel's right and lower pair.
@@ -699,13 +710,10 @@ def stable_pairs(log_image, flow, pairs, tau: float, stability: float, floor: fl
     pairs : wp.array float32 (H, W, 2), written; in [0, 1).
     tau, stability : log units, > 0; floor : >= 0; static_flow : pixels, > 0.
     """
-    t, h, w, _ = log_image.shape
-    dev = log_image.device
     if pairs.size == 0:
         return
-    steps = wp.empty((t, h, w, 2), dtype=float, device=dev)
-    tiles = row_tiles(w, dev)
-    launch_rows(luminance_steps_rows, t * h * tiles, [tiles, log_image, steps], device=dev)
+    steps, tiles = _luminance_steps(log_image)
+    h, dev = log_image.shape[1], log_image.device
     launch_rows(stable_pairs_pixels, h * tiles,
                 [tiles, steps, flow, pairs, tau, stability, floor, static_flow, least_stable_step(tau, floor)], device=dev)
 
@@ -730,11 +738,8 @@ def moving_steps(log_image, flow, factor, tau: float, static_flow: float) -> Non
     factor : wp.array float32 (T, H, W), written; in (0, 1].
     tau : log units, > 0; static_flow : pixels, > 0.
     """
-    t, h, w, _ = log_image.shape
-    dev = log_image.device
     if factor.size == 0:
         return
-    steps = wp.empty((t, h, w, 2), dtype=float, device=dev)
-    tiles = row_tiles(w, dev)
-    launch_rows(luminance_steps_rows, t * h * tiles, [tiles, log_image, steps], device=dev)
-    launch_rows(moving_steps_pixels, h * tiles, [tiles, steps, flow, factor, tau, static_flow], device=dev)
+    steps, tiles = _luminance_steps(log_image)
+    launch_rows(moving_steps_pixels, log_image.shape[1] * tiles, [tiles, steps, flow, factor, tau, static_flow],
+                device=log_image.device)
