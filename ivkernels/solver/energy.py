@@ -15,8 +15,10 @@ temporal shading           Eq. 8        once (``temporal_term`` on A or S alone)
 local shading smoothness   Eq. 9        ``energy_shading.shading_smoothness`` (``_gated``
                                         with the cut at flow jumps, ``motion_maps.
                                         shading_cut_gate``, ``maps.shading_gate`` and
-                                        the step evidence, ``step_evidence.step_gate``;
-                                        ``_paired`` with the stable steps' pairs too,
+                                        the step evidence, ``step_evidence.step_gate``,
+                                        and the light's edges, ``step_evidence.
+                                        moving_steps``; ``_paired`` with the stable
+                                        steps' pairs too,
                                         ``step_evidence.stable_pairs``)
 coupling to S~             Eq. 13       ``energy_shading.coupling_term``
 albedo GSM smoothness      Eq. 11       ``energy_albedo_gsm.gsm_smoothness``
