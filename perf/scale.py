@@ -18,8 +18,11 @@ Four parts, each printing its table (``--parts``):
     sequential solve: time ratio, albedo LMSE, albedo drift first to last
     (``|exp(g_T - g_1) - 1|``, ``g_t`` the median over pixels and channels of
     ``log(estimate / truth)`` of frame t: how far the global albedo scale
-    wanders), and albedo flicker (:func:`ivkernels.metrics.albedo_flicker`
-    along the true flow) on the frame pairs at the seams and elsewhere;
+    wanders), the change of the same surface points' albedo first to last
+    (:func:`ivkernels.evaluation.metrics.tracked_albedo_change`: the median
+    and the mean absolute change of the points followed along the true flow,
+    and the fraction of the first frame followed to the last), and albedo
+    flicker (:func:`ivkernels.metrics.albedo_flicker` along the true flow) on the frame pairs at the seams and elsewhere;
     each chunked call twice, its tasks sharing the CPUs
     (:func:`ivkernels.parallel.engines.task_cpus`) and on one CPU each (as
     before it), side by side, ``--repeats`` times (``--shares`` picks
@@ -207,8 +210,10 @@ def measure_chunks(args) -> None:
 
     print("\n| kind | seed | overlap | repeat | tasks hold | chunk windows | chunks | windows | sequential s | "
           "chunked s | ratio | CPU-s seq / chunks | LMSE seq | LMSE chunked | LMSE ratio | drift seq | drift chunked | "
+          "tracked change seq / chunked (median, mean abs) | tracked | "
           "flicker at seams seq / chunked | flicker elsewhere seq / chunked |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- "
+          "| --- | --- |")
     # each task on one CPU (as before engines.task_cpus), against the CPUs shared by the call's tasks
     shares = {"1 CPU (before)": lambda n_tasks, cpus, node_cpus: 1, "task_cpus": engines.task_cpus}
     shares = {name: fn for name, fn in shares.items() if name.split()[0] in args.shares}
@@ -247,10 +252,15 @@ def measure_chunks(args) -> None:
                                                         min(prev_stop, args.long_frames - 1))})
                     other = [t for t in range(args.long_frames - 1) if t not in seam_pairs]
                     l_seq, l_ch = metrics.lmse(ref.albedo, seq.albedo), metrics.lmse(out.albedo, seq.albedo)
+                    # the same surface points first to last, along the true flow (metrics.tracked_albedo_change)
+                    k_seq = metrics.tracked_albedo_change(ref.albedo, seq.flow, seq.visibility)
+                    k_ch = metrics.tracked_albedo_change(out.albedo, seq.flow, seq.visibility)
                     print(f"| {kind} | {args.seed} | {overlap} | {repeat + 1} | {name} | {win} | "
                           f"{' '.join(f'{a}-{b}' for a, b in ranges)} | {solved} | {t_seq:.1f} | {t_ch:.1f} | "
                           f"{t_ch / t_seq:.2f} | {c_seq:.1f} / {c_ch:.1f} | {l_seq:.4f} | {l_ch:.4f} | {l_ch / l_seq:.3f} | "
                           f"{_drift(ref.albedo, seq.albedo):.4f} | {_drift(out.albedo, seq.albedo):.4f} | "
+                          f"{k_seq['median']:+.4f}, {k_seq['mean_abs']:.4f} / {k_ch['median']:+.4f}, "
+                          f"{k_ch['mean_abs']:.4f} | {k_ch['tracked']:.2f} | "
                           f"{_pair_flicker(ref.albedo, seq, seam_pairs):.4f} / "
                           f"{_pair_flicker(out.albedo, seq, seam_pairs):.4f} | "
                           f"{_pair_flicker(ref.albedo, seq, other):.4f} / "

@@ -4,7 +4,7 @@ import pytest
 
 from ivkernels.evaluation.metrics import (_dis_flow, albedo_consistency, albedo_drift, albedo_flicker, angular_error,
                                           dark_ratio, endpoint_error, flow_errors, intrinsic_lmse, lmse, luminance,
-                                          temporal_incoherence)
+                                          temporal_incoherence, tracked_albedo_change)
 
 
 def _lmse_loops(est, truth, mask, window, step):
@@ -414,3 +414,64 @@ def test_albedo_drift_against_a_reference_ignores_content_that_enters_the_view()
     assert albedo_drift(drifting[:, :, :, 0], reference=truth[:, :, :, 0]) == pytest.approx(-2.0, rel=1e-6)
     with pytest.raises(ValueError, match="positive"):
         albedo_drift(truth, reference=truth * 0)
+
+
+# ----------------------------------------------------------------------------
+# tracked_albedo_change (points followed along the ground-truth flow)
+# ----------------------------------------------------------------------------
+
+def _panning(t=5, h=19, w=27, shift=(2, 1), seed=4):
+    """A textured albedo seen through a window that moves ``shift`` (x, y) pixels a frame,
+    its true flow (every pixel moves by ``-shift``) and visibility (what stays in view)."""
+    rng = np.random.default_rng(seed)
+    sx, sy = shift
+    world = rng.uniform(0.1, 0.9, (h + sy * t, w + sx * t, 3))
+    albedo = np.stack([world[k * sy:k * sy + h, k * sx:k * sx + w] for k in range(t)])
+    flow = np.zeros((t - 1, h, w, 2))
+    flow[..., 0], flow[..., 1] = -sx, -sy
+    yy, xx = np.mgrid[:h, :w]
+    vis = np.broadcast_to((xx >= sx) & (yy >= sy), (t - 1, h, w)).astype(float)
+    return albedo, flow, vis
+
+
+def test_tracked_change_is_zero_for_an_albedo_that_holds_along_the_flow():
+    albedo, flow, vis = _panning()
+    out = tracked_albedo_change(albedo, flow, vis)
+    assert out["median"] == pytest.approx(0.0, abs=1e-6)
+    assert out["mean_abs"] == pytest.approx(0.0, abs=1e-6)
+    # what survives 4 frames of a (2, 1) pan in 19x27: columns >= 8, rows >= 4
+    assert out["tracked"] == pytest.approx((27 - 8) * (19 - 4) / (27 * 19))
+
+
+def test_tracked_change_follows_the_points_not_the_pixels():
+    albedo, flow, vis = _panning()
+    brighter = albedo.copy()
+    brighter[-1] *= 1.03                          # the last frame's albedo 3% brighter everywhere
+    out = tracked_albedo_change(brighter, flow, vis)
+    assert out["median"] == pytest.approx(0.03, rel=1e-5)
+    assert out["mean_abs"] == pytest.approx(0.03, rel=1e-5)
+    # compared in place (flow=None) the pan reads as a large change, which is not the albedo's
+    assert tracked_albedo_change(albedo)["mean_abs"] > 0.2
+
+
+def test_tracked_change_of_one_region_shows_in_the_mean_not_the_median():
+    a = np.full((3, 10, 12), 0.5)
+    a[-1, :, :4] *= 0.9                            # a third of the scene 10% darker at the end
+    out = tracked_albedo_change(a)
+    assert out["median"] == pytest.approx(0.0, abs=1e-12)
+    assert out["mean_abs"] == pytest.approx(np.exp(-np.log(0.9) / 3) - 1, rel=1e-6)   # logs in float32
+    assert out["tracked"] == 1.0
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda a, f, v: tracked_albedo_change(a[:1]), "at least 2"),
+    (lambda a, f, v: tracked_albedo_change(-a), "positive"),
+    (lambda a, f, v: tracked_albedo_change(a, f[:, :-1], v), "expected shape"),
+    (lambda a, f, v: tracked_albedo_change(a, None, v), "visibility needs a flow"),
+    (lambda a, f, v: tracked_albedo_change(a, f, np.zeros_like(v)), "no point"),
+    (lambda a, f, v: tracked_albedo_change(a, f * 100, v), "no point"),     # everything leaves the view
+])
+def test_tracked_change_refuses_bad_input(call, match):
+    albedo, flow, vis = _panning()
+    with pytest.raises(ValueError, match=match):
+        call(albedo, flow, vis)

@@ -17,6 +17,9 @@
   ground truth: whether the darkest input pixels keep a dark albedo (a
   split that puts dark materials in the shading gives a ratio near 1), and
   how fast the albedo's level creeps over the frames.
+* :func:`tracked_albedo_change` — with ground-truth flow: how much the
+  albedo of the same surface points changed from the first frame to the
+  last, the points followed along the chained flow.
 
 All inputs are NumPy arrays; computations run in float64.
 """
@@ -41,6 +44,7 @@ __all__ = [
     "luminance",
     "dark_ratio",
     "albedo_drift",
+    "tracked_albedo_change",
 ]
 
 _REC709 = np.array([0.2126, 0.7152, 0.0722])
@@ -573,3 +577,92 @@ def albedo_drift(albedo, mask=None, reference=None) -> float:
     ok = np.isfinite(levels)
     slope = np.polyfit(np.arange(t)[ok], np.log(levels[ok]), 1)[0]
     return float(slope * 100.0 * 100.0)
+
+
+def _track_points(flow: np.ndarray, vis) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Follow every pixel of frame 0 along the chained forward flow.
+
+    Returns ``(x, y, alive)``, each ``(H, W)``: where pixel ``(row, col)``
+    of frame 0 lies in the last frame, and whether it stayed visible, with
+    known flow and inside the frame, over every pair.  The flow and the
+    visibility of pair ``k`` are read at the point's position in frame ``k``
+    (bilinear for the flow, nearest for the visibility).
+    """
+    _, h, w, _ = flow.shape
+    known = valid_flow_mask(flow)
+    fl = np.where(known[..., None], flow, 0.0).astype(np.float32)
+    x, y = np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32))
+    alive = np.ones((h, w), bool)
+    for k in range(flow.shape[0]):
+        ok = known[k] if vis is None else known[k] & vis[k]
+        alive &= cv2.remap(ok.astype(np.uint8), x, y, cv2.INTER_NEAREST,
+                           borderMode=cv2.BORDER_CONSTANT, borderValue=0).astype(bool)
+        dx = cv2.remap(fl[k, ..., 0], x, y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        dy = cv2.remap(fl[k, ..., 1], x, y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        x, y = x + dx, y + dy
+        alive &= (x >= 0) & (x <= w - 1) & (y >= 0) & (y <= h - 1)
+    return x, y, alive
+
+
+def tracked_albedo_change(albedo, flow=None, visibility=None) -> dict:
+    """Change of the albedo of the same surface points from the first frame to the last.
+
+    Every pixel ``x`` of frame 0 is followed along the chained ground-truth
+    flow to its position ``p(x)`` in the last frame ``T-1`` (kept only if it
+    stays visible, with known flow and inside the frame, in every pair); its
+    change is ``d(x) = log Y_{T-1}(p(x)) - log Y_0(x)``, ``Y`` the albedo's
+    luminance (bilinear at ``p(x)``).  A split whose albedo holds along the
+    flow gives ``d = 0`` everywhere, whatever its error against the truth.
+
+    Unlike :func:`albedo_drift` with a ``reference``, which compares the
+    median error of the first and the last frame, this follows points: the
+    median error can sit on the edge between two regions of different
+    error (say a wall too dark and a floor about right) and move with the
+    small changes of the darker region alone, and on a moving camera it
+    moves with what enters and leaves the view.
+
+    Parameters
+    ----------
+    albedo : ``(T, H, W, 3)`` linear RGB or ``(T, H, W)`` grey, ``T >= 2``, positive.
+    flow : ``(T-1, H, W, 2)`` forward ground-truth flow (unknown values
+        > 1e9 are ignored), or ``None`` for a static scene (every pixel
+        followed in place).
+    visibility : ``(T-1, H, W)`` (``>= 0.5``: pixel ``x`` of frame ``t`` is
+        visible in frame ``t+1``), or ``None`` (all visible).
+
+    Returns
+    -------
+    ``{"median": exp(median d) - 1, "mean_abs": exp(mean |d|) - 1,
+    "tracked": fraction of frame 0's pixels followed to the last frame}``;
+    the first two are relative changes (0.01 = 1%).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> a = np.full((3, 4, 6), 0.5); a[-1] *= 1.02                  # the last frame 2% brighter
+    >>> round(tracked_albedo_change(a)["median"], 6)
+    0.02
+    """
+    y = _luminance_stack(albedo, "tracked_albedo_change: albedo")
+    t, h, w = y.shape
+    if t < 2:
+        raise ValueError(f"tracked_albedo_change: needs at least 2 frames, got {t}")
+    if np.any(~(y > 0)):
+        raise ValueError("tracked_albedo_change: the albedo must be positive everywhere")
+    log_y = np.log(y).astype(np.float32)
+    if flow is None:
+        if visibility is not None:
+            raise ValueError("tracked_albedo_change: visibility needs a flow (flow=None means a static scene)")
+        d = (log_y[-1] - log_y[0]).astype(np.float64).ravel()
+        alive_fraction = 1.0
+    else:
+        flow, vis = _check_flow_visibility(flow, visibility, t, h, w)
+        x, yy, alive = _track_points(np.asarray(flow, np.float64), vis)
+        if not alive.any():
+            raise ValueError("tracked_albedo_change: no point of the first frame is visible in the last "
+                             "along the flow")
+        last = cv2.remap(log_y[-1], x, yy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        d = (last[alive].astype(np.float64) - log_y[0][alive].astype(np.float64))
+        alive_fraction = float(alive.mean())
+    return {"median": float(np.expm1(np.median(d))), "mean_abs": float(np.expm1(np.mean(np.abs(d)))),
+            "tracked": alive_fraction}
