@@ -15,7 +15,8 @@ is an :class:`ivkernels.IntrinsicVideo` or the exception the task raised.
   lost) is run again, up to ``max_retries`` times; an exception raised by
   the task itself is not retried (it would fail again).  Before the first
   task, each node runs :func:`ivkernels.parallel.tasks.warm_up` once (once
-  per process and cluster).
+  per process and cluster); on a local cluster the call starts, this
+  process warms the machine's kernel cache while the cluster starts.
 
 Ray is an optional dependency (``pip install ivkernels[ray]``), imported
 only here and only when a :class:`RayEngine` is made.
@@ -25,6 +26,7 @@ from __future__ import annotations
 import logging
 import os
 from collections import deque
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -162,7 +164,7 @@ class RayEngine:
         self._started = False
         if not ray.is_initialized():
             if address is None and not os.environ.get("RAY_ADDRESS"):
-                ray.init(**LOCAL_CLUSTER)
+                self._start_local_cluster(warm_up_flow)
             else:
                 ray.init(address=address, logging_level=logging.WARNING)
             self._started = True
@@ -177,15 +179,44 @@ class RayEngine:
             self.close()
             raise
 
+    def _kernels(self, flow) -> tuple:
+        """What decides the kernels a call compiles: backend, device, temporal terms, flow."""
+        o = self.options
+        return (o.get("backend", "warp"), o.get("device", "cpu"), o.get("temporal", True),
+                flow if isinstance(flow, str) or flow is None else "given")
+
+    def _start_local_cluster(self, flow) -> None:
+        """``ray.init`` a local cluster, warming this machine's kernel cache meanwhile.
+
+        Starting the cluster takes about 2 s, most of it waiting for the raylet to
+        register; the warm-up's tiny decomposition (:func:`tasks.warm_up_here`) runs in
+        a thread of this process during that wait, so the node needs no warm-up task
+        (perf/RESULTS.md, "Ray's fixed cost per call").  Warp on the CPU only: the
+        Taichi runtime and a CUDA context are process-wide, and are not this
+        process's to start.
+        """
+        ray = self.ray
+        kernels = self._kernels(flow)
+        if kernels[:2] != ("warp", "cpu"):
+            ray.init(**LOCAL_CLUSTER)
+            return
+        with ThreadPoolExecutor(1, thread_name_prefix="ivkernels-warm-up") as pool:
+            warming = pool.submit(tasks.warm_up_here, self.options, flow)
+            ray.init(**LOCAL_CLUSTER)       # should it raise, leaving the pool waits for the warm-up
+            try:
+                warming.result()            # a failed warm-up raises here, as a failed task would
+            except BaseException:
+                ray.shutdown()
+                raise
+        _warmed.add((ray.get_runtime_context().get_node_id(), kernels))
+
     def _warm_up(self, flow) -> list[str]:
         """Run :func:`tasks.warm_up` once on each alive node with a CPU that this process has
         not warmed for these kernels yet (:data:`_warmed`); returns the node ids warmed now."""
         ray = self.ray
         from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
 
-        o = self.options
-        kernels = (o.get("backend", "warp"), o.get("device", "cpu"), o.get("temporal", True),
-                   flow if isinstance(flow, str) or flow is None else "given")
+        kernels = self._kernels(flow)
         nodes = [node["NodeID"] for node in ray.nodes()
                  if node.get("Alive") and node.get("Resources", {}).get("CPU", 0) >= 1
                  and (node["NodeID"], kernels) not in _warmed]

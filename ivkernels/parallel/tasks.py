@@ -14,7 +14,9 @@ starts its workers as fresh processes, so each initialises its own).
 Per node, once (:func:`warm_up`): a tiny decomposition with the same
 options compiles every kernel the call will use into Warp's (and Taichi's)
 on-disk kernel cache, so the node's workers load kernels instead of each
-compiling them at the same time.
+compiling them at the same time.  On a local cluster that the call starts,
+the same decomposition runs in the calling process instead
+(:func:`warm_up_here`), while the cluster starts.
 """
 from __future__ import annotations
 
@@ -87,17 +89,30 @@ def solve_in_worker(frames: np.ndarray, flow, options: dict) -> IntrinsicVideo:
     return video
 
 
-def warm_up(options: dict, flow) -> str:
-    """Decompose a tiny clip with ``options`` (and the flow method, or a zero
-    flow when arrays are given), so every kernel is compiled on this node;
-    returns the Ray node id."""
-    import ray
-
+def _warm_up_clip(flow) -> tuple[np.ndarray, object]:
+    """The tiny clip :func:`warm_up` decomposes, and its flow argument: the flow method
+    named by ``flow``, or a zero flow when arrays are given."""
     T, H, W = WARM_UP_SHAPE
     y, x = np.mgrid[0:H, 0:W] / max(H, W)
     frame = np.stack([0.2 + 0.6 * x, 0.3 + 0.4 * y, 0.5 + 0.3 * x * y], axis=-1)
     frames = np.stack([np.roll(frame, t, axis=1) for t in range(T)]).astype(np.float32)
     if flow is not None and not isinstance(flow, str):
         flow = np.zeros((T - 1, H, W, 2), np.float32)
-    solve_in_worker(frames, flow, options)
+    return frames, flow
+
+
+def warm_up(options: dict, flow) -> str:
+    """Decompose a tiny clip with ``options`` (and the flow method, or a zero
+    flow when arrays are given), so every kernel is compiled on this node;
+    returns the Ray node id."""
+    import ray
+
+    solve_in_worker(*_warm_up_clip(flow), options)
     return ray.get_runtime_context().get_node_id()
+
+
+def warm_up_here(options: dict, flow) -> None:
+    """:func:`warm_up`'s decomposition in the calling process, on one thread for this
+    call only (nothing process-wide is set): compiles the kernels into this machine's
+    on-disk caches, which a local cluster's workers then load."""
+    solve(*_warm_up_clip(flow), dict(options, threads=1))
