@@ -113,6 +113,6 @@ def warm_up(options: dict, flow) -> str:
 
 def warm_up_here(options: dict, flow) -> None:
     """:func:`warm_up`'s decomposition in the calling process, on one thread for this
-    call only (nothing process-wide is set): compiles the kernels into this machine's
-    on-disk caches, which a local cluster's workers then load."""
-    solve(*_warm_up_clip(flow), dict(options, threads=1))
+    call only (nothing process-wide is set) and without a progress bar: compiles the
+    kernels into this machine's on-disk caches, which a local cluster's workers then load."""
+    solve(*_warm_up_clip(flow), dict(options, threads=1, progress=False))
