@@ -298,3 +298,58 @@ def test_the_ray_engine_without_ray_says_how_to_install_it(monkeypatch):
     monkeypatch.setitem(__import__("sys").modules, "ray", None)      # import ray fails
     with pytest.raises(ImportError, match=r"ivkernels\[ray\]"):
         iv.decompose_many([np.zeros((2, 24, 32, 3), np.uint8)], engine="ray")
+
+
+def _panned(T, H, W, shift, seed=8):
+    """A textured albedo panning ``shift`` px a frame to the left (its true flow ``(-shift, 0)``)
+    under a grey shading, and the flow."""
+    rng = np.random.default_rng(seed)
+    world = rng.uniform(0.2, 0.9, (H, W + shift * T, 3)).astype(np.float32)
+    albedo = np.stack([world[:, k * shift:k * shift + W] for k in range(T)])
+    shading = np.full((T, H, W), 0.7, np.float32)
+    flow = np.zeros((T - 1, H, W, 2), np.float32)
+    flow[..., 0] = -shift
+    return albedo, shading, flow
+
+
+@pytest.mark.parametrize("shift", [0, 1])
+def test_stitch_carries_what_one_gain_leaves_along_the_flow(shift):
+    # the second chunk splits the scene differently region by region: a smooth ramp of log
+    # gain across the view (attached to the surfaces, so it moves with the pan) on top of one gain
+    T, H, W = 10, 60, 64
+    albedo, shading, flow = _panned(T, H, W, shift)
+    ranges = [(0, 5), (3, T)]
+    x = np.arange(W, dtype=np.float32)
+    ramps = np.stack([0.2 * (x + shift * k) / W for k in range(T)])[:, None, :]  # surface-attached
+    first = iv.IntrinsicVideo(albedo[:5], shading[:5], flow[:4], np.ones((4, H, W), np.float32),
+                              np.zeros((4, H, W), np.float32), {})
+    bent = albedo[3:] * 1.3 * np.exp(ramps[3:])[..., None]
+    second = iv.IntrinsicVideo(bent.astype(np.float32), (shading[3:] / 1.3 / np.exp(ramps[3:])).astype(np.float32),
+                               flow[3:], np.ones((T - 4, H, W), np.float32), np.zeros((T - 4, H, W), np.float32), {})
+    out = stitch([first, second], ranges)
+    seam = out.diagnostics["seams"][0]
+    assert seam["field_rms"] > 0.02                        # the ramp's spread is what the gain left
+    inner = (slice(None), slice(20, 40), slice(20, 44))    # away from the blur's borders
+    err = np.abs(np.log(out.albedo[5:]) - np.log(albedo[5:]))[inner]
+    assert err.max() < 0.01, err.max()                     # the ramp is taken out along the pan
+    # without the field, one gain leaves up to half the ramp's 0.2 in place
+    no_field = stitch([first, iv.IntrinsicVideo(second.albedo, second.shading, None, None, None, {})], ranges)
+    assert np.abs(np.log(no_field.albedo[5:]) - np.log(albedo[5:]))[inner].max() > 0.03
+    # the field moves between albedo and shading only: every frame still reconstructs its input
+    np.testing.assert_allclose(out.albedo * out.shading[..., None], albedo * shading[..., None], rtol=1e-4)
+
+
+def test_residual_field_is_the_blurred_luminance_difference_and_carry_follows_the_flow():
+    from ivkernels.parallel.chunks import FIELD_SIGMA, carry_field, residual_field
+    rng = np.random.default_rng(2)
+    prev, here = rng.normal(0, 0.1, (2, 30, 40, 3)).astype(np.float32)
+    field = residual_field(prev, here)
+    lum = ((prev - here) @ np.array([0.2126, 0.7152, 0.0722], np.float32)).astype(np.float32)
+    import cv2
+    np.testing.assert_allclose(field, cv2.GaussianBlur(lum, (0, 0), FIELD_SIGMA * 30), atol=1e-6)
+    # carried by a flow of (+3, -2) px: what was at (y, x) is at (y - 2, x + 3), the edge held
+    flow = np.zeros((30, 40, 2), np.float32)
+    flow[..., 0], flow[..., 1] = 3, -2
+    moved = carry_field(field, flow)
+    np.testing.assert_allclose(moved[:28, 3:], field[2:, :37], atol=1e-6)
+    np.testing.assert_allclose(moved[:28, 0], field[2:, 0], atol=1e-6)      # entering at the left edge
