@@ -12,7 +12,9 @@ Four parts, each printing its table (``--parts``):
     The done criterion of the Ray issue: ``--videos`` clips of ``--frames``
     frames through ``decompose_many(engine="ray")`` (a local cluster started
     by the call, all cores) against ``decompose()`` one by one (all cores):
-    time ratio and the largest albedo difference.
+    time ratio and the largest albedo difference; then the same call on a
+    local cluster that is already up and warm (no start, warm-up or
+    shutdown in the call).
 ``chunks``
     A ``--long-frames`` video in ``--chunk-frames`` chunks on Ray against the
     sequential solve: time ratio, albedo LMSE, albedo drift first to last
