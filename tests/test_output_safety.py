@@ -188,8 +188,21 @@ def test_sigterm_inside_an_output_folder_removes_it(tmp_path):
     assert signal.getsignal(signal.SIGTERM) == before
 
 
+@pytest.fixture
+def python_signal_handlers():
+    """Python's own SIGINT and SIGTERM handlers for the test, whatever earlier tests in this
+    process left (an in-process Ray driver, say, keeps a SIGTERM handler after shutdown);
+    ``signal.signal`` also puts Python's C-level handler back in place."""
+    saved = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    yield
+    for signum, handler in saved.items():
+        signal.signal(signum, handler if handler is not None else signal.SIG_DFL)
+
+
 @pytest.mark.parametrize("signum, expected", [(signal.SIGTERM, Interrupted), (signal.SIGINT, KeyboardInterrupt)])
-def test_a_swallowed_signal_still_stops_the_commit(tmp_path, signum, expected):
+def test_a_swallowed_signal_still_stops_the_commit(tmp_path, signum, expected, python_signal_handlers):
     """Python drops an exception raised inside some hooks (an at-fork handler, a
     finaliser); the signal must still keep the output from being published."""
     out = tmp_path / "out"
