@@ -32,28 +32,28 @@ every chunk on the first chunk's scale:
    colour balance), and its log shading with one offset: each offset is the
    median over the shared pixels of the log ratio, robust to the pixels
    where the two solves differ;
-2. chain: chunk ``c`` is corrected after chunk ``c-1``, so every chunk ends
-   on chunk 0's scale;
-3. blend the shared frames linearly in time, in log (a geometric blend, so
-   the blended albedo times the blended shading still reconstructs the
-   input as well as either chunk does): weight ``j / (overlap + 1)`` for
-   chunk ``c`` on its ``j``-th shared frame (``j = 1 .. overlap``).
-
-4. carry what one gain leaves (:func:`residual_field`): where the two
+2. carry what one gain leaves (:func:`residual_field`): where the two
    solves split the shared frames differently region by region (a wall too
    dark in one, the floor in the other), the rest of the log-albedo
    difference on the last shared frame, blurred to its large scale
    (Gaussian, :data:`FIELD_SIGMA` of the frame's shorter side), is added to
    chunk ``c``'s log albedo and taken from its log shading (the product is
    unchanged), on its shared frames and, carried along the chunk's own flow
-   frame by frame, on the frames after them.  So a surface the previous
-   chunk saw keeps its albedo while the camera moves on; what enters the
-   view takes the correction of the view's edge.  On 36-frame training
-   videos in 12-frame chunks this brought the change of the tracked surface
-   points' albedo first to last from 0.02-2.6% to 0.04-0.49% (seven videos,
-   lamp and moving camera) at the same LMSE (perf/RESULTS.md, "The chunks'
+   frame by frame (:func:`carry_field`), on the frames after them.  So a
+   surface the previous chunk saw keeps its albedo while the camera moves
+   on; what enters the view takes the correction of the view's edge.  On
+   36-frame training videos in 12-frame chunks this brought the change of
+   the tracked surface points' albedo first to last from 0.02-2.6% to
+   0.04-0.49% (seven videos, lamp and moving camera) at the same LMSE, and
+   the flicker at the seams down by 7-36% (perf/RESULTS.md, "The chunks'
    residual field").  Chunks without a flow (``temporal=False``) get no
-   field.
+   field;
+3. chain: chunk ``c`` is corrected after chunk ``c-1``, so every chunk ends
+   on chunk 0's scale;
+4. blend the shared frames linearly in time, in log (a geometric blend, so
+   the blended albedo times the blended shading still reconstructs the
+   input as well as either chunk does): weight ``j / (overlap + 1)`` for
+   chunk ``c`` on its ``j``-th shared frame (``j = 1 .. overlap``).
 
 The albedo and shading offsets are fitted separately; both chunks
 reconstruct the same frames, so their sum is close to zero, and its size
@@ -196,7 +196,8 @@ def stitch(chunks: list[IntrinsicVideo], ranges: list[tuple[int, int]]) -> Intri
     -------
     IntrinsicVideo of all frames; ``diagnostics`` holds ``chunks`` (the
     ranges), ``seams`` (per seam: the shared frames, the fitted log albedo
-    offset per channel and log shading offset), and ``chunk_diagnostics``
+    offset per channel and log shading offset, and, with a flow, the
+    residual field's root mean square ``field_rms``), and ``chunk_diagnostics``
     (each chunk's own diagnostics).  A single chunk is returned unchanged.
     """
     if len(chunks) != len(ranges) or not chunks:
