@@ -179,7 +179,12 @@ def fill_chunks(row_begin: int, x: wp.array(dtype=float), x4: wp.array(dtype=wp.
 @wp.func
 def basis_chunk_dot(basis: wp.array2d(dtype=float), x: wp.array(dtype=float),
                     basis4: wp.array2d(dtype=wp.vec4), x4: wp.array(dtype=wp.vec4), j: int, k: int, chunk: int):
-    """Sum over chunk ``k`` of ``basis[j] * x``: float64 products, four accumulators."""
+    """Sum over chunk ``k`` of ``basis[j] * x``: float64 products, four accumulators.
+
+    The loop of :func:`dot_chunks` on a row.  It is written out in both on purpose: a
+    shared ``wp.func`` taking 1-D arrays (``basis[j]`` a row view) gives the same bits but
+    made ``vecops.dot`` 15-20% slower on the CPU (``perf/bench_kernels.py --only
+    vecops.dot``, 12.8-13.1 against 15.0-15.2 ms on one thread)."""
     n4 = x4.shape[0]
     acc0 = wp.float64(0.0)
     acc1 = wp.float64(0.0)
