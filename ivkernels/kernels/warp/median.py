@@ -15,7 +15,9 @@ as if computed per pixel).  The shading median's 2-means runs on a copy of
 the window's flow vectors and is skipped where their bounding box is too small
 to split.  The 5x5 median runs a branch-free compare-exchange network
 (:func:`median_network`) written out as straight-line code on 25 scalars
-(:func:`median25`).
+(:func:`median25`); on the CPU the same network runs as a native loop over
+a row's pixels, which the compiler vectorises (:func:`median5x5_row`: 8 frames
+at 640x480, two channels, 2 threads: 204 -> 29 ms, bit for bit the same).
 
 Scratch convention: the weighted medians take ``workspace=None``, a
 :class:`ivkernels.kernels.workspace.Workspace` that keeps their float32
@@ -325,6 +327,100 @@ def median5x5_rows(row_begin: int, tiles: int, src: wp.array4d(dtype=float), out
                 src[t, y4, x0, c], src[t, y4, x1, c], src[t, y4, x, c], src[t, y4, x3, c], src[t, y4, x4, c])
 
 
+# The CPU's 5x5 median: one row per kernel thread, written as a native loop over the
+# row's pixels that the CPU compiler vectorises (eight medians at a time with AVX2:
+# the network's compare-exchanges are a min and a max, branch-free), the same
+# network and the same ``wp::min`` / ``wp::max`` as :func:`median25`, so the
+# result is bit for bit the same.
+_CE = "".join(f"IVK_CE(v{i}, v{j}) " for i, j in median_network(25))
+
+_MEDIAN5X5_ROW = r"""
+#if defined(__CUDA_ARCH__)
+#define IVK_MEDIAN_SIMD
+#else
+#define IVK_MEDIAN_SIMD _Pragma("clang loop vectorize(assume_safety)")
+#endif
+#define IVK_CE(a, b) { const float lo_ = wp::min(a, b); const float hi_ = wp::max(a, b); a = lo_; b = hi_; }
+#define IVK_ROW_LOADS(R, C0, C1, C2, C3, C4, K0, K1, K2, K3, K4) \
+    float v##K0 = *(const float*)(R + (C0)); float v##K1 = *(const float*)(R + (C1)); \
+    float v##K2 = *(const float*)(R + (C2)); float v##K3 = *(const float*)(R + (C3)); \
+    float v##K4 = *(const float*)(R + (C4));
+#define IVK_MEDIAN_AT(OUT, C0, C1, C2, C3, C4) { \
+    IVK_ROW_LOADS(r0, C0, C1, C2, C3, C4, 0, 1, 2, 3, 4) \
+    IVK_ROW_LOADS(r1, C0, C1, C2, C3, C4, 5, 6, 7, 8, 9) \
+    IVK_ROW_LOADS(r2, C0, C1, C2, C3, C4, 10, 11, 12, 13, 14) \
+    IVK_ROW_LOADS(r3, C0, C1, C2, C3, C4, 15, 16, 17, 18, 19) \
+    IVK_ROW_LOADS(r4, C0, C1, C2, C3, C4, 20, 21, 22, 23, 24) \
+    """ + _CE + r""" \
+    OUT = v12; }
+const int height = src.shape[1];
+const int width = src.shape[2];
+const int channels = src.shape[3];
+const size_t sx = src.strides[2];
+const size_t ox = out.strides[2];
+const int y0 = y - 2 > 0 ? y - 2 : 0;
+const int y1 = y - 1 > 0 ? y - 1 : 0;
+const int y3 = y + 1 < height - 1 ? y + 1 : height - 1;
+const int y4 = y + 2 < height - 1 ? y + 2 : height - 1;
+for (int c = 0; c < channels; ++c) {
+    const char* base = (const char*)src.data + (size_t)t * src.strides[0] + (size_t)c * src.strides[3];
+    const char* r0 = base + (size_t)y0 * src.strides[1];
+    const char* r1 = base + (size_t)y1 * src.strides[1];
+    const char* r2 = base + (size_t)y * src.strides[1];
+    const char* r3 = base + (size_t)y3 * src.strides[1];
+    const char* r4 = base + (size_t)y4 * src.strides[1];
+    char* o = (char*)out.data + (size_t)t * out.strides[0] + (size_t)y * out.strides[1] + (size_t)c * out.strides[3];
+    const int inner_begin = width < 2 ? width : 2;
+    const int inner_end = width - 2 > inner_begin ? width - 2 : inner_begin;
+    // the border columns, with the indices clamped as the kernel clamps them
+    for (int x = 0; x < width; ++x) {
+        if (x == inner_begin && inner_end > inner_begin) x = inner_end;
+        if (x >= width) break;
+        const size_t c0 = (size_t)(x - 2 > 0 ? x - 2 : 0) * sx;
+        const size_t c1 = (size_t)(x - 1 > 0 ? x - 1 : 0) * sx;
+        const size_t c2 = (size_t)x * sx;
+        const size_t c3 = (size_t)(x + 1 < width - 1 ? x + 1 : width - 1) * sx;
+        const size_t c4 = (size_t)(x + 2 < width - 1 ? x + 2 : width - 1) * sx;
+        IVK_MEDIAN_AT(*(float*)(o + (size_t)x * ox), c0, c1, c2, c3, c4)
+    }
+    // the inside, where no index needs a clamp: a vectorised loop, with a fixed
+    // stride for the contiguous one- and two-channel layouts
+    float* of = (float*)o;
+    if (sx == sizeof(float) && ox == sizeof(float)) {
+        IVK_MEDIAN_SIMD
+        for (int x = inner_begin; x < inner_end; ++x)
+            IVK_MEDIAN_AT(of[x], 4 * (x - 2), 4 * (x - 1), 4 * x, 4 * (x + 1), 4 * (x + 2))
+    } else if (sx == 2 * sizeof(float) && ox == 2 * sizeof(float)) {
+        IVK_MEDIAN_SIMD
+        for (int x = inner_begin; x < inner_end; ++x)
+            IVK_MEDIAN_AT(of[2 * x], 8 * (x - 2), 8 * (x - 1), 8 * x, 8 * (x + 1), 8 * (x + 2))
+    } else {
+        IVK_MEDIAN_SIMD
+        for (int x = inner_begin; x < inner_end; ++x)
+            IVK_MEDIAN_AT(*(float*)(o + (size_t)x * ox), (size_t)(x - 2) * sx, (size_t)(x - 1) * sx,
+                          (size_t)x * sx, (size_t)(x + 1) * sx, (size_t)(x + 2) * sx)
+    }
+}
+#undef IVK_MEDIAN_AT
+#undef IVK_ROW_LOADS
+#undef IVK_CE
+#undef IVK_MEDIAN_SIMD
+"""
+
+
+@wp.func_native(_MEDIAN5X5_ROW)
+def median5x5_row(src: wp.array4d(dtype=float), out: wp.array4d(dtype=float), t: int, y: int):
+    """Row ``y`` of frame ``t`` of :func:`median5x5_rows`, every channel (CPU)."""
+    ...
+
+
+@wp.kernel
+def median5x5_rows_cpu(row_begin: int, src: wp.array4d(dtype=float), out: wp.array4d(dtype=float)):
+    r = row_begin + wp.tid()
+    t = r // src.shape[1]
+    median5x5_row(src, out, t, r - t * src.shape[1])
+
+
 @wp.kernel
 def weighted_median_shading_rows(row_begin: int, tiles: int, S: wp.array3d(dtype=float),
                                  flow: wp.array4d(dtype=float), w_bnd: wp.array3d(dtype=float),
@@ -530,6 +626,9 @@ def median5x5(src, out) -> None:
     out : wp.array float32 (T, H, W, C), written.  Must not overlap ``src``.
     """
     t, h, w, c = src.shape
+    if src.device.is_cpu:
+        launch_rows(median5x5_rows_cpu, t * h, [src, out], device=src.device)
+        return
     tiles = row_tiles(w, src.device)
     launch_rows(median5x5_rows, t * h * tiles, [tiles, src, out], device=src.device)
 

@@ -1,0 +1,92 @@
+"""The CPU's native row loops against the per-pixel Warp kernels they stand in for.
+
+On the CPU some Warp host functions run a row per kernel thread as a native
+loop that the compiler vectorises (``wp.func_native``); on a GPU the same host
+functions launch the per-pixel kernels.  Both must give the same bits, so the
+CPU loops are checked here against the per-pixel kernels launched on the CPU,
+on odd sizes, rows narrower than the stencil, ties and signed zeros, and the
+layouts that fall back (strided views).  The reference tests of each family
+(``test_kernels_*``) check both against NumPy.
+"""
+import numpy as np
+import pytest
+
+wp = pytest.importorskip("warp")
+
+from ivkernels.kernels.host import gaussian_kernel  # noqa: E402
+from ivkernels.kernels.launch import launch_rows  # noqa: E402
+from ivkernels.kernels.warp import median, pyramid  # noqa: E402
+
+SHAPES = [(1, 1, 1, 1), (1, 2, 3, 1), (2, 5, 5, 2), (2, 7, 9, 2), (3, 13, 17, 3), (2, 31, 40, 1), (1, 4, 100, 2)]
+
+
+def same_bits(a: np.ndarray, b: np.ndarray) -> bool:
+    return a.shape == b.shape and np.array_equal(a.view(np.uint32), b.view(np.uint32))
+
+
+def values(rng, shape, kind):
+    """Normal values, or small integers (ties) with signed zeros."""
+    if kind == "normal":
+        return rng.normal(size=shape).astype(np.float32)
+    a = rng.integers(-2, 3, shape).astype(np.float32)
+    a[rng.random(shape) < 0.2] = -0.0
+    return a
+
+
+def per_pixel_median(src):
+    out = wp.empty(src.shape, dtype=float)
+    launch_rows(median.median5x5_rows, src.shape[0] * src.shape[1], [1, src, out])
+    return out.numpy()
+
+
+def per_pixel_blur(src, sigma):
+    taps = gaussian_kernel(sigma)
+    weights = wp.array(taps, dtype=float)
+    radius = (len(taps) - 1) // 2
+    scratch, out = wp.empty(src.shape, dtype=float), wp.empty(src.shape, dtype=float)
+    rows = src.shape[0] * src.shape[1]
+    launch_rows(pyramid.blur_x_rows, rows, [1, src, scratch, weights, radius])
+    launch_rows(pyramid.blur_y_rows, rows, [1, scratch, out, weights, radius])
+    return out.numpy()
+
+
+@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("kind", ["normal", "ties"])
+def test_median5x5_row_loop_matches_the_per_pixel_kernel(rng, shape, kind):
+    src = wp.array(values(rng, shape, kind))
+    out = wp.empty(shape, dtype=float)
+    median.median5x5(src, out)
+    assert same_bits(out.numpy(), per_pixel_median(src))
+
+
+def test_median5x5_on_a_channel_view_and_a_wide_layout(rng):
+    # a view whose pixels are 3 floats apart (the generic stride) and 3 channels
+    full = wp.array(values(rng, (2, 9, 23, 3), "normal"))
+    view = full[:, :, :, 1:2]
+    out = wp.empty(view.shape, dtype=float)
+    median.median5x5(view, out)
+    assert same_bits(out.numpy(), per_pixel_median(wp.array(view.numpy())))
+    out3 = wp.empty(full.shape, dtype=float)
+    median.median5x5(full, out3)
+    assert same_bits(out3.numpy(), per_pixel_median(full))
+
+
+@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("sigma", [0.3, 1.0, 2.5, 7.0])
+def test_blur_row_loops_match_the_per_pixel_kernels(rng, shape, sigma):
+    src = wp.array(values(rng, shape, "normal"))
+    out, scratch = wp.empty(shape, dtype=float), wp.empty(shape, dtype=float)
+    pyramid.gaussian_blur(src, out, scratch, sigma)
+    assert same_bits(out.numpy(), per_pixel_blur(src, sigma))
+
+
+def test_blur_in_place_and_on_a_strided_view(rng):
+    a = values(rng, (2, 11, 19, 3), "normal")
+    want = per_pixel_blur(wp.array(a), 1.3)
+    src = wp.array(a)
+    pyramid.gaussian_blur(src, src, wp.empty(src.shape, dtype=float), 1.3)      # out is src
+    assert same_bits(src.numpy(), want)
+    view = wp.array(np.concatenate([a, a], axis=2))[:, :, ::2, :]                 # pixels 2 apart: fallback
+    out = wp.empty(view.shape, dtype=float)
+    pyramid.gaussian_blur(view, out, wp.empty(view.shape, dtype=float), 1.3)
+    assert same_bits(out.numpy(), per_pixel_blur(wp.array(view.numpy()), 1.3))
