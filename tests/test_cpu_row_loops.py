@@ -86,7 +86,71 @@ def test_blur_in_place_and_on_a_strided_view(rng):
     src = wp.array(a)
     pyramid.gaussian_blur(src, src, wp.empty(src.shape, dtype=float), 1.3)      # out is src
     assert same_bits(src.numpy(), want)
-    view = wp.array(np.concatenate([a, a], axis=2))[:, :, ::2, :]                 # pixels 2 apart: fallback
+    view = wp.array(np.concatenate([a, a], axis=2))[:, :, ::2, :]                 # pixels 6 floats apart: fallback
     out = wp.empty(view.shape, dtype=float)
     pyramid.gaussian_blur(view, out, wp.empty(view.shape, dtype=float), 1.3)
     assert same_bits(out.numpy(), per_pixel_blur(wp.array(view.numpy()), 1.3))
+
+
+def temporal_inputs(rng, T, H, W, large_flow):
+    yy, xx = np.mgrid[0:H, 0:W]
+    flow = np.zeros((T - 1, H, W, 2), np.float32)
+    flow[..., 0] = 3 * np.sin(xx / 7.0) + 1.3
+    flow[..., 1] = 2 * np.cos(yy / 4.0) - 0.4
+    if large_flow:                       # samples far outside the image: clamped corners
+        flow += rng.normal(0, 20, flow.shape).astype(np.float32)
+    occ = np.where(rng.random((T - 1, H, W)) < 0.8, 1.0, rng.random((T - 1, H, W)) * (rng.random((T - 1, H, W)) < 0.5))
+    A = rng.normal(size=(T, H, W, 3)).astype(np.float32) * 3          # many differences beyond Tukey's alpha
+    S = rng.normal(size=(T, H, W)).astype(np.float32) * 3
+    return A, S, flow, occ.astype(np.float32)
+
+
+def temporal_terms(rng, A, S, flow, occ, per_pixel, alpha):
+    from ivkernels.kernels.warp import energy_temporal as et
+
+    T, H, W, _ = A.shape
+    arrays = [wp.array(a) for a in (A, S, flow, occ)]
+    gA = wp.array(rng.normal(size=A.shape).astype(np.float32))
+    gS = wp.array(rng.normal(size=S.shape).astype(np.float32))
+    rows = wp.array(np.linspace(0.0, 1.0, T * H))
+    if per_pixel:
+        weight = wp.empty((T - 1, H, W, 4), dtype=float)
+        S4, gS4 = et.with_channel_axis(arrays[1]), et.with_channel_axis(gS)
+        launch_rows(et.temporal_pair_gather_rows, (T - 1) * H,
+                    [1, arrays[0], S4, arrays[2], arrays[3], gA, gS4, weight, rows, 10.0, 1.0, alpha])
+        launch_rows(et.temporal_pair_splat_rows, (T - 1) * H, [1, arrays[2], arrays[3], weight, gA, gS4], align=H)
+    else:
+        et.temporal_terms(*arrays, gA, gS, rows, 10.0, 1.0, alpha)
+    return gA.numpy(), gS.numpy(), rows.numpy()
+
+
+@pytest.mark.parametrize("size", [(2, 1, 1), (3, 7, 9), (4, 13, 300), (2, 40, 517)])
+@pytest.mark.parametrize("large_flow", [False, True])
+@pytest.mark.parametrize("alpha", [5.0, 0.7])
+def test_temporal_row_loops_match_the_per_pixel_kernels(rng, size, large_flow, alpha):
+    inputs = temporal_inputs(rng, *size, large_flow)
+    seed = int(rng.integers(1 << 30))
+    native = temporal_terms(np.random.default_rng(seed), *inputs, per_pixel=False, alpha=alpha)
+    kernel = temporal_terms(np.random.default_rng(seed), *inputs, per_pixel=True, alpha=alpha)
+    for got, want in zip(native, kernel):
+        assert np.array_equal(got.view(np.uint8), want.view(np.uint8))
+
+
+def test_temporal_terms_on_strided_views_fall_back(rng):
+    from ivkernels.kernels.warp import energy_temporal as et
+
+    A, S, flow, occ = temporal_inputs(rng, 3, 9, 11, False)
+    spaced = np.zeros((3, 9, 22, 3), np.float32)
+    spaced[:, :, ::2] = A
+    wide = wp.array(spaced)[:, :, ::2, :]                                    # A, pixels 6 floats apart
+    assert not et._native_layout(wide, et.with_channel_axis(wp.array(S)), wp.array(flow), wp.array(occ),
+                                 wp.zeros(A.shape, dtype=float), et.with_channel_axis(wp.zeros(S.shape, dtype=float)),
+                                 wp.empty((2, 9, 11, 4), dtype=float))
+    gA, gS = wp.zeros(A.shape, dtype=float), wp.zeros(S.shape, dtype=float)
+    rows = wp.zeros(3 * 9, dtype=wp.float64)
+    et.temporal_terms(wide, wp.array(S), wp.array(flow), wp.array(occ), gA, gS, rows, 10.0, 1.0, 5.0)
+    gA2, gS2 = wp.zeros(A.shape, dtype=float), wp.zeros(S.shape, dtype=float)
+    rows2 = wp.zeros(3 * 9, dtype=wp.float64)
+    et.temporal_terms(wp.array(A), wp.array(S), wp.array(flow), wp.array(occ), gA2, gS2, rows2, 10.0, 1.0, 5.0)
+    assert same_bits(gA.numpy(), gA2.numpy()) and same_bits(gS.numpy(), gS2.numpy())
+    assert np.array_equal(rows.numpy(), rows2.numpy())
