@@ -154,3 +154,48 @@ def test_temporal_terms_on_strided_views_fall_back(rng):
     et.temporal_terms(wp.array(A), wp.array(S), wp.array(flow), wp.array(occ), gA2, gS2, rows2, 10.0, 1.0, 5.0)
     assert same_bits(gA.numpy(), gA2.numpy()) and same_bits(gS.numpy(), gS2.numpy())
     assert np.array_equal(rows.numpy(), rows2.numpy())
+
+
+@pytest.mark.parametrize("size", [(1, 1, 1), (2, 3, 5), (2, 9, 13), (3, 31, 40), (1, 7, 1100)])
+@pytest.mark.parametrize("spacing", [1, 3, 4, 12])
+def test_prolong_row_loop_matches_the_per_pixel_kernel(rng, size, spacing):
+    from ivkernels.kernels.host import grid_shape
+    from ivkernels.kernels.warp import coarse_basis
+
+    T, H, W = size
+    weights = wp.empty((T, H, W, 16), dtype=float)
+    coarse_basis.coarse_weights(wp.array(rng.normal(size=(T, H, W, 3)).astype(np.float32)), weights, spacing, 0.5)
+    z = wp.array(rng.normal(size=(T, *grid_shape(H, W, spacing))).astype(np.float32))
+    base = rng.normal(size=(T, H, W)).astype(np.float32)
+    native, kernel = wp.array(base), wp.array(base)
+    coarse_basis.prolong_add(z, weights, native, spacing)
+    launch_rows(coarse_basis.prolong_add_rows, T * H, [1, z, weights, kernel, spacing])
+    assert same_bits(native.numpy(), kernel.numpy())
+    # a strided output falls back to the kernel, with the same result
+    spaced = np.zeros((T, H, 2 * W), np.float32)
+    spaced[:, :, ::2] = base
+    view = wp.array(spaced)[:, :, ::2]
+    coarse_basis.prolong_add(z, weights, view, spacing)
+    assert same_bits(view.numpy(), kernel.numpy())
+
+
+@pytest.mark.parametrize("n", [1, 3, 5, 4095, 4097, 10003])
+def test_basis_dots_and_combine_loops_match_the_kernels(rng, n):
+    from ivkernels.kernels.warp import vecops
+
+    basis = wp.array(rng.normal(size=(6, n)).astype(np.float32))
+    x = wp.array(rng.normal(size=n).astype(np.float32))
+    rows, coeffs = [0, 5, 2, 3], [0.5, 0.0, -1.25, 3.0]
+    chunk = vecops.CHUNK
+    b, rows_wp, coeffs_wp = vecops._basis_rows(basis, rows, coeffs)
+    partial = wp.empty((len(rows), vecops._chunks(n, chunk)), dtype=wp.float64)
+    x4, = vecops._vec4(x)
+    launch_rows(vecops.basis_dots_chunks, vecops._chunks(n, chunk),
+                [b, x, vecops._basis_vec4(b, x4.shape[0]), x4, rows_wp, partial, chunk])
+    assert np.array_equal(vecops.dots(basis, x, rows), partial.numpy().sum(axis=1))
+    native, kernel = wp.empty(n, dtype=float), wp.empty(n, dtype=float)
+    vecops.combine(native, basis, rows, coeffs)
+    out4, = vecops._vec4(kernel)
+    launch_rows(vecops.basis_combine_chunks, vecops._chunks(n, chunk),
+                [kernel, b, out4, vecops._basis_vec4(b, out4.shape[0]), rows_wp, coeffs_wp, chunk])
+    assert same_bits(native.numpy(), kernel.numpy())
