@@ -199,3 +199,30 @@ def test_basis_dots_and_combine_loops_match_the_kernels(rng, n):
     launch_rows(vecops.basis_combine_chunks, vecops._chunks(n, chunk),
                 [kernel, b, out4, vecops._basis_vec4(b, out4.shape[0]), rows_wp, coeffs_wp, chunk])
     assert same_bits(native.numpy(), kernel.numpy())
+
+
+@pytest.mark.parametrize("size", [(1, 1, 1), (2, 2, 5), (2, 3, 2), (2, 9, 13), (3, 31, 40), (1, 5, 600)])
+@pytest.mark.parametrize("variant", ["plain", "gated", "paired"])
+def test_local_shading_row_loop_matches_the_kernel(rng, size, variant):
+    from ivkernels.kernels.warp import energy_shading as es
+
+    T, H, W = size
+    S = wp.array((rng.normal(size=size) * rng.choice([0.0, 0.01, 1.0], size=size)).astype(np.float32))
+    gate = wp.array(rng.choice([0.0, 0.3, 1.0], size=size).astype(np.float32))
+    base = rng.normal(size=size).astype(np.float32)
+    rows0 = np.linspace(0.0, 1.0, T * H)
+    native_g, kernel_g = wp.array(base), wp.array(base)
+    native_e, kernel_e = wp.array(rows0), wp.array(rows0)
+    pairs = wp.array(rng.choice([0.0, 0.5, 2.0], size=(H, W, 2)).astype(np.float32))
+    if variant == "paired":
+        es.shading_smoothness_paired(S, gate, pairs, native_g, native_e, lam=2.0, pair_gain=8.0, eps=0.001)
+    elif variant == "gated":
+        es.shading_smoothness_gated(S, gate, native_g, native_e, lam=2.0, eps=0.001)
+    else:
+        es.shading_smoothness(S, native_g, native_e, lam=2.0, eps=0.001)
+    gated, paired = variant != "plain", variant == "paired"
+    launch_rows(es._local_kernel_for(gated, paired), T * H,
+                [1, S, gate if gated else S, pairs if paired else S, kernel_g, kernel_e, 2.0,
+                 4.0 if paired else 0.0, 0.001])
+    assert same_bits(native_g.numpy(), kernel_g.numpy())
+    assert np.array_equal(native_e.numpy(), kernel_e.numpy())
