@@ -226,3 +226,15 @@ def test_local_shading_row_loop_matches_the_kernel(rng, size, variant):
                  4.0 if paired else 0.0, 0.001])
     assert same_bits(native_g.numpy(), kernel_g.numpy())
     assert np.array_equal(native_e.numpy(), kernel_e.numpy())
+
+
+@pytest.mark.parametrize("size", [(1, 1, 1), (2, 2, 3), (2, 9, 13), (3, 31, 40), (1, 4, 1300)])
+def test_rof_dual_step_row_loop_matches_the_kernel(rng, size):
+    from ivkernels.kernels.warp.flow_classic import rof
+
+    img = wp.array(rng.normal(size=size).astype(np.float32))
+    p_in = wp.array((rng.normal(size=(*size, 2)) * 0.7).astype(np.float32))
+    native, kernel = wp.empty((*size, 2), dtype=float), wp.empty((*size, 2), dtype=float)
+    rof.rof_dual_step(img, p_in, native, 0.125, 0.25)
+    launch_rows(rof.rof_dual_step_rows, size[0] * size[1], [1, img, p_in, kernel, 0.125, 0.25])
+    assert same_bits(native.numpy(), kernel.numpy())
