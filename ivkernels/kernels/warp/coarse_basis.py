@@ -128,7 +128,9 @@ def prolong_add_rows(row_begin: int, tiles: int, z: wp.array3d(dtype=float), wei
 # axes (:func:`_rows_contiguous`), else the kernel above runs.
 _PROLONG_ROW = r"""
 {
+#if !defined(__CUDA_ARCH__)
 #pragma clang fp contract(off)
+#endif
 #if defined(__CUDA_ARCH__)
 #define IVK_PROLONG_SIMD
 #else

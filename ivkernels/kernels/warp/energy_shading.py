@@ -132,7 +132,9 @@ def _local_kernel_for(gated: bool, paired: bool = False):
 # fused into a multiply-add: bit for bit the same.
 _LOCAL_ROW = r"""
 {
+#if !defined(__CUDA_ARCH__)
 #pragma clang fp contract(off)
+#endif
 #if defined(__CUDA_ARCH__)
 #define IVK_LOCAL_SIMD
 #else

@@ -234,7 +234,9 @@ _CORNERS = r"""
 
 _PAIR_GATHER_ROW = r"""
 {
+#if !defined(__CUDA_ARCH__)
 #pragma clang fp contract(off)
+#endif
 """ + _PAIR_ROW_COMMON + r"""
 const char* a_next = (const char*)A.data + (size_t)(t + 1) * A.strides[0];
 const char* s_next = (const char*)S.data + (size_t)(t + 1) * S.strides[0];
@@ -329,7 +331,9 @@ er[0] = er[0] + es;
 
 _PAIR_SPLAT_ROW = r"""
 {
+#if !defined(__CUDA_ARCH__)
 #pragma clang fp contract(off)
+#endif
 """ + _PAIR_ROW_COMMON + r"""
 char* ga_next = (char*)gA.data + (size_t)(t + 1) * gA.strides[0];
 char* gs_next = (char*)gS.data + (size_t)(t + 1) * gS.strides[0];

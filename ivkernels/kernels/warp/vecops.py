@@ -262,7 +262,9 @@ def basis_combine_chunks(row_begin: int, out: wp.array(dtype=float), basis: wp.a
 # :func:`basis_combine_chunks`, for contiguous vectors.
 _BASIS_DOTS_CHUNK = r"""
 {
+#if !defined(__CUDA_ARCH__)
 #pragma clang fp contract(off)
+#endif
 const int n = x.shape[0];
 const float* xv = (const float*)x.data;
 const float* bv = (const float*)basis.data;
@@ -297,7 +299,9 @@ for (int r = 0; r < rows.shape[0]; ++r) {
 
 _BASIS_COMBINE_CHUNK = r"""
 {
+#if !defined(__CUDA_ARCH__)
 #pragma clang fp contract(off)
+#endif
 #if defined(__CUDA_ARCH__)
 #define IVK_VEC_SIMD
 #else

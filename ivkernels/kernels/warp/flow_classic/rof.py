@@ -41,7 +41,9 @@ def rof_divergence(p: wp.array4d(dtype=float), t: int, y: int, x: int):
 # the kernel's operations in its order, none fused: bit for bit the same.
 _DUAL_STEP_ROW = r"""
 {
+#if !defined(__CUDA_ARCH__)
 #pragma clang fp contract(off)
+#endif
 #if defined(__CUDA_ARCH__)
 #define IVK_ROF_SIMD
 #else
