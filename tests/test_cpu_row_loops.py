@@ -143,9 +143,9 @@ def test_temporal_terms_on_strided_views_fall_back(rng):
     spaced = np.zeros((3, 9, 22, 3), np.float32)
     spaced[:, :, ::2] = A
     wide = wp.array(spaced)[:, :, ::2, :]                                    # A, pixels 6 floats apart
-    assert not et._native_layout(wide, et.with_channel_axis(wp.array(S)), wp.array(flow), wp.array(occ),
-                                 wp.zeros(A.shape, dtype=float), et.with_channel_axis(wp.zeros(S.shape, dtype=float)),
-                                 wp.empty((2, 9, 11, 4), dtype=float))
+    from ivkernels.kernels.warp._checks import rows_contiguous
+
+    assert not rows_contiguous(wide) and rows_contiguous(wp.array(A), et.with_channel_axis(wp.array(S)))
     gA, gS = wp.zeros(A.shape, dtype=float), wp.zeros(S.shape, dtype=float)
     rows = wp.zeros(3 * 9, dtype=wp.float64)
     et.temporal_terms(wide, wp.array(S), wp.array(flow), wp.array(occ), gA, gS, rows, 10.0, 1.0, 5.0)

@@ -47,3 +47,14 @@ class WarpFrontend(Frontend):
 
 
 FRONT = WarpFrontend()
+
+
+def rows_contiguous(*arrays) -> bool:
+    """Whether every array's rows are contiguous float32 runs: the last axis of a
+    (T, H, W) array, the last two (x, channel) of a (T, H, W, C) one.  The CPU's
+    native row loops read such rows with plain pointers; frames and rows may have
+    any strides."""
+    for a in arrays:
+        if a.strides[-1] != 4 or (a.ndim == 4 and a.strides[2] != 4 * a.shape[3]):
+            return False
+    return True

@@ -43,8 +43,8 @@ from ivkernels.kernels.contract import implements
 from ivkernels.kernels.host import MAX_EXPONENT, grid_shape
 from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.coarse_basis import FAMILY
-from ivkernels.kernels.warp._checks import FRONT
-from ivkernels.kernels.warp.row_tiles import row_span
+from ivkernels.kernels.warp._checks import FRONT, rows_contiguous
+from ivkernels.kernels.warp.row_tiles import frame_row, row_span
 
 host = implements(FAMILY, FRONT)
 
@@ -125,7 +125,7 @@ def prolong_add_rows(row_begin: int, tiles: int, z: wp.array3d(dtype=float), wei
 # pixel read with gathers), summing each pixel's 16 products in the order of
 # :func:`prolong_add_rows`, one rounding per product and per add: bit for bit
 # the same.  ``z``, ``weights`` and ``out`` must be contiguous along their last
-# axes (:func:`_rows_contiguous`), else the kernel above runs.
+# axes (:func:`~ivkernels.kernels.warp._checks.rows_contiguous`), else the kernel above runs.
 _PROLONG_ROW = r"""
 {
 #if !defined(__CUDA_ARCH__)
@@ -198,15 +198,8 @@ def prolong_add_row(z: wp.array3d(dtype=float), weights: wp.array4d(dtype=float)
 @wp.kernel
 def prolong_add_rows_cpu(row_begin: int, z: wp.array3d(dtype=float), weights: wp.array4d(dtype=float),
                          out: wp.array3d(dtype=float), spacing: int):
-    r = row_begin + wp.tid()
-    t = r // out.shape[1]
-    prolong_add_row(z, weights, out, spacing, t, r - t * out.shape[1])
-
-
-def _rows_contiguous(z, weights, out) -> bool:
-    """Whether the CPU's prolongation loop can read these arrays (last axes contiguous float32)."""
-    return (z.strides[2] == 4 and out.strides[2] == 4 and weights.strides[3] == 4
-            and weights.strides[2] == 16 * 4)
+    t, y = frame_row(row_begin + wp.tid(), out.shape[1])
+    prolong_add_row(z, weights, out, spacing, t, y)
 
 
 @wp.kernel
@@ -277,7 +270,7 @@ def prolong_add(z, weights, out, spacing: int) -> None:
     spacing : pixels between nodes, as for the weights.
     """
     t, h, w, _ = weights.shape
-    if weights.device.is_cpu and _rows_contiguous(z, weights, out):
+    if weights.device.is_cpu and rows_contiguous(z, weights, out):
         launch_rows(prolong_add_rows_cpu, t * h, [z, weights, out, spacing], device=weights.device)
         return
     tiles = row_tiles((w - 1) // spacing + 1, weights.device)

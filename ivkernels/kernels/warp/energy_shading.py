@@ -19,8 +19,8 @@ import warp as wp
 from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.energy_shading import FAMILY
-from ivkernels.kernels.warp._checks import FRONT
-from ivkernels.kernels.warp.row_tiles import row_span
+from ivkernels.kernels.warp._checks import FRONT, rows_contiguous
+from ivkernels.kernels.warp.row_tiles import frame_row, row_span
 from ivkernels.kernels.warp.energy_data import charbonnier
 
 host = implements(FAMILY, FRONT)
@@ -272,8 +272,8 @@ def local_rows_cpu(row_begin: int, S: wp.array3d(dtype=float), gate: wp.array3d(
                    energy_rows: wp.array(dtype=wp.float64), lam: float, eps: float, half_pair_gain: float,
                    gated: int, paired: int):
     r = row_begin + wp.tid()
-    t = r // S.shape[1]
-    local_row(S, gate, pairs, gS, energy_rows, lam, eps, half_pair_gain, gated, paired, t, r - t * S.shape[1], r)
+    t, y = frame_row(r, S.shape[1])
+    local_row(S, gate, pairs, gS, energy_rows, lam, eps, half_pair_gain, gated, paired, t, y, r)
 
 
 @wp.kernel
@@ -339,7 +339,7 @@ def _local_term(S, gate, gS, energy_rows, lam: float, eps: float, pairs=None, pa
     axis pairs' weights when ``pairs`` is given (``S`` stands in for the arrays a variant does
     not read)."""
     t, h, w = S.shape
-    if S.device.is_cpu and all(a.strides[2] == 4 for a in (S, gS, S if gate is None else gate)) \
+    if S.device.is_cpu and rows_contiguous(S, gS, S if gate is None else gate) \
             and (pairs is None or (pairs.strides[2] == 4 and pairs.strides[1] == 8)):
         launch_rows(local_rows_cpu, t * h,
                     [S, S if gate is None else gate, S if pairs is None else pairs, gS, energy_rows, float(lam),

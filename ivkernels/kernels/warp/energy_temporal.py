@@ -38,8 +38,8 @@ import warp as wp
 from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.energy_temporal import FAMILY
-from ivkernels.kernels.warp._checks import FRONT
-from ivkernels.kernels.warp.row_tiles import row_span
+from ivkernels.kernels.warp._checks import FRONT, rows_contiguous
+from ivkernels.kernels.warp.row_tiles import frame_row, row_span
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners
 from ivkernels.kernels.workspace import scratch_buffer
 
@@ -200,7 +200,8 @@ def temporal_pair_splat_rows(row_begin: int, tiles: int, flow: wp.array4d(dtype=
 # same operations in the same order, none fused into a multiply-add).  The
 # splat stays a scalar loop (neighbouring pixels add into the same corners), with
 # its addresses computed once per pixel.  Arrays must be contiguous along
-# (x, channel) (:func:`_native_layout`), else the kernels above run.
+# (x, channel) (:func:`~ivkernels.kernels.warp._checks.rows_contiguous`), else the
+# kernels above run.
 _PAIR_ROW_COMMON = r"""
 #if defined(__CUDA_ARCH__)
 #define IVK_TEMPORAL_SIMD
@@ -403,26 +404,16 @@ def temporal_pair_gather_rows_cpu(row_begin: int, A: wp.array4d(dtype=float), S:
                                   weight: wp.array4d(dtype=float), energy_rows: wp.array(dtype=wp.float64),
                                   lam_albedo: float, lam_shading: float, alpha: float):
     r = row_begin + wp.tid()
-    t = r // A.shape[1]
-    pair_gather_row(A, S, flow, occ, gA, gS, weight, energy_rows, t, r - t * A.shape[1], r, lam_albedo,
-                    lam_shading, alpha)
+    t, y = frame_row(r, A.shape[1])
+    pair_gather_row(A, S, flow, occ, gA, gS, weight, energy_rows, t, y, r, lam_albedo, lam_shading, alpha)
 
 
 @wp.kernel
 def temporal_pair_splat_rows_cpu(row_begin: int, A: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
                                  occ: wp.array3d(dtype=float), weight: wp.array4d(dtype=float),
                                  gA: wp.array4d(dtype=float), gS: wp.array4d(dtype=float)):
-    r = row_begin + wp.tid()
-    t = r // A.shape[1]
-    pair_splat_row(A, flow, occ, weight, gA, gS, t, r - t * A.shape[1])
-
-
-def _native_layout(A, S4, flow, occ, gA, gS4, weight) -> bool:
-    """Whether the CPU's row loops can read these arrays: float32 rows contiguous along
-    (x, channel) (frames and rows may have any strides)."""
-    return (A.device.is_cpu
-            and all(a.strides[-1] == 4 and a.strides[2] == 4 * a.shape[3] for a in (A, S4, flow, gA, gS4, weight))
-            and occ.strides[2] == 4)
+    t, y = frame_row(row_begin + wp.tid(), A.shape[1])
+    pair_splat_row(A, flow, occ, weight, gA, gS, t, y)
 
 
 def with_channel_axis(a):
@@ -512,7 +503,7 @@ def temporal_terms(A, S, flow, occ, gA, gS, energy_rows, lam_albedo: float, lam_
     weight = scratch_buffer(workspace, f"{__name__}.pair_splat_weight", shape, float,
                             lambda: wp.empty(shape, dtype=float, device=dev), dev)
     S4, gS4 = with_channel_axis(S), with_channel_axis(gS)
-    if _native_layout(A, S4, flow, occ, gA, gS4, weight):
+    if dev.is_cpu and rows_contiguous(A, S4, flow, occ, gA, gS4, weight):
         launch_rows(temporal_pair_gather_rows_cpu, (t - 1) * h,
                     [A, S4, flow, occ, gA, gS4, weight, energy_rows, float(lam_albedo), float(lam_shading),
                      float(alpha)], device=dev)

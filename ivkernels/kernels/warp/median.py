@@ -40,7 +40,7 @@ from ivkernels.kernels.host import (KMEANS_ITERATIONS, MIN_SEPARATION, flow_scra
 from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.median import FAMILY
 from ivkernels.kernels.warp._checks import FRONT
-from ivkernels.kernels.warp.row_tiles import row_span
+from ivkernels.kernels.warp.row_tiles import frame_row, row_span
 from ivkernels.kernels.workspace import scratch_buffer
 
 host = implements(FAMILY, FRONT)
@@ -416,9 +416,8 @@ def median5x5_row(src: wp.array4d(dtype=float), out: wp.array4d(dtype=float), t:
 
 @wp.kernel
 def median5x5_rows_cpu(row_begin: int, src: wp.array4d(dtype=float), out: wp.array4d(dtype=float)):
-    r = row_begin + wp.tid()
-    t = r // src.shape[1]
-    median5x5_row(src, out, t, r - t * src.shape[1])
+    t, y = frame_row(row_begin + wp.tid(), src.shape[1])
+    median5x5_row(src, out, t, y)
 
 
 @wp.kernel

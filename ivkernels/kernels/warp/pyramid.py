@@ -24,8 +24,8 @@ from ivkernels.kernels.contract import implements
 from ivkernels.kernels.host import gaussian_kernel
 from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.pyramid import FAMILY
-from ivkernels.kernels.warp._checks import FRONT
-from ivkernels.kernels.warp.row_tiles import row_span
+from ivkernels.kernels.warp._checks import FRONT, rows_contiguous
+from ivkernels.kernels.warp.row_tiles import frame_row, row_span
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners
 
 host = implements(FAMILY, FRONT)
@@ -163,22 +163,15 @@ def blur_y_row(src: wp.array4d(dtype=float), dst: wp.array4d(dtype=float), weigh
 @wp.kernel
 def blur_x_rows_cpu(row_begin: int, src: wp.array4d(dtype=float), dst: wp.array4d(dtype=float),
                     weights: wp.array(dtype=float), radius: int):
-    r = row_begin + wp.tid()
-    t = r // src.shape[1]
-    blur_x_row(src, dst, weights, radius, t, r - t * src.shape[1])
+    t, y = frame_row(row_begin + wp.tid(), src.shape[1])
+    blur_x_row(src, dst, weights, radius, t, y)
 
 
 @wp.kernel
 def blur_y_rows_cpu(row_begin: int, src: wp.array4d(dtype=float), dst: wp.array4d(dtype=float),
                     weights: wp.array(dtype=float), radius: int):
-    r = row_begin + wp.tid()
-    t = r // src.shape[1]
-    blur_y_row(src, dst, weights, radius, t, r - t * src.shape[1])
-
-
-def _contiguous_rows(*arrays) -> bool:
-    """Whether every array's rows are contiguous runs of (x, channel) float32."""
-    return all(a.strides[3] == 4 and a.strides[2] == 4 * a.shape[3] for a in arrays)
+    t, y = frame_row(row_begin + wp.tid(), src.shape[1])
+    blur_y_row(src, dst, weights, radius, t, y)
 
 
 @wp.kernel
@@ -253,7 +246,7 @@ def gaussian_blur(src, out, scratch, sigma: float) -> None:
     taps = gaussian_kernel(sigma)
     weights = wp.array(taps, dtype=wp.float32, device=src.device)
     radius = (len(taps) - 1) // 2
-    if src.device.is_cpu and _contiguous_rows(src, out, scratch):
+    if src.device.is_cpu and rows_contiguous(src, out, scratch):
         rows = src.shape[0] * src.shape[1]
         launch_rows(blur_x_rows_cpu, rows, [src, scratch, weights, radius], device=src.device)
         launch_rows(blur_y_rows_cpu, rows, [scratch, out, weights, radius], device=src.device)

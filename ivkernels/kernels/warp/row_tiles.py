@@ -23,3 +23,10 @@ def row_span(k: int, tiles: int, width: int):
     r = k // tiles
     j = k - r * tiles
     return r, (j * width) // tiles, ((j + 1) * width) // tiles
+
+
+@wp.func
+def frame_row(r: int, height: int):
+    """Frame ``t`` and row ``y`` of row ``r = t * height + y`` of a frame stack."""
+    t = r // height
+    return t, r - t * height

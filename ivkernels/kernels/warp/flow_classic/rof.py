@@ -14,8 +14,8 @@ import warp as wp
 from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.flow_classic import FAMILY
-from ivkernels.kernels.warp._checks import FRONT
-from ivkernels.kernels.warp.row_tiles import row_span
+from ivkernels.kernels.warp._checks import FRONT, rows_contiguous
+from ivkernels.kernels.warp.row_tiles import frame_row, row_span
 
 host = implements(FAMILY, FRONT)
 
@@ -113,9 +113,8 @@ def dual_step_row(img: wp.array3d(dtype=float), p_in: wp.array4d(dtype=float), p
 @wp.kernel
 def rof_dual_step_rows_cpu(row_begin: int, img: wp.array3d(dtype=float), p_in: wp.array4d(dtype=float),
                            p_out: wp.array4d(dtype=float), theta: float, delta: float):
-    r = row_begin + wp.tid()
-    t = r // img.shape[1]
-    dual_step_row(img, p_in, p_out, theta, delta, t, r - t * img.shape[1])
+    t, y = frame_row(row_begin + wp.tid(), img.shape[1])
+    dual_step_row(img, p_in, p_out, theta, delta, t, y)
 
 
 @wp.kernel
@@ -177,7 +176,7 @@ def rof_dual_step(img, p_in, p_out, theta: float, delta: float) -> None:
     On a GPU one pixel per thread (row tiles).
     """
     t, h, w = img.shape
-    if img.device.is_cpu and img.strides[2] == 4 and all(p.strides[3] == 4 and p.strides[2] == 8 for p in (p_in, p_out)):
+    if img.device.is_cpu and rows_contiguous(img, p_in, p_out):
         launch_rows(rof_dual_step_rows_cpu, t * h, [img, p_in, p_out, float(theta), float(delta)], img.device)
         return
     tiles = row_tiles(w, img.device)
