@@ -238,3 +238,13 @@ def test_rof_dual_step_row_loop_matches_the_kernel(rng, size):
     rof.rof_dual_step(img, p_in, native, 0.125, 0.25)
     launch_rows(rof.rof_dual_step_rows, size[0] * size[1], [1, img, p_in, kernel, 0.125, 0.25])
     assert same_bits(native.numpy(), kernel.numpy())
+
+
+def test_the_gpu_layouts_forced_for_tests_keep_the_per_pixel_kernels(monkeypatch, rng):
+    from ivkernels.kernels import launch
+    from ivkernels.kernels.warp._checks import native_rows
+
+    src = wp.array(values(rng, (1, 6, 7, 2), "normal"))
+    assert native_rows("cpu", src)
+    monkeypatch.setattr(launch, "FORCE_GPU_LAYOUT_TILES", 3)
+    assert not native_rows("cpu", src)            # tests/test_gpu_layouts*.py then run the GPU's layouts

@@ -12,6 +12,7 @@ from __future__ import annotations
 import warp as wp
 
 from ivkernels.kernels.contract import Frontend
+from ivkernels.kernels.launch import gpu_layout
 
 
 def memory_span(a):
@@ -47,6 +48,14 @@ class WarpFrontend(Frontend):
 
 
 FRONT = WarpFrontend()
+
+
+def native_rows(device, *arrays) -> bool:
+    """Whether a host function takes its CPU-only native row loop: the device has the
+    CPU's layout (not a GPU, nor the GPU layouts forced for the tests,
+    :func:`ivkernels.kernels.launch.gpu_layout`) and the arrays' rows are contiguous
+    (:func:`rows_contiguous`)."""
+    return not gpu_layout(device) and rows_contiguous(*arrays)
 
 
 def rows_contiguous(*arrays) -> bool:

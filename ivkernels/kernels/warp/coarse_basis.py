@@ -43,7 +43,7 @@ from ivkernels.kernels.contract import implements
 from ivkernels.kernels.host import MAX_EXPONENT, grid_shape
 from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.coarse_basis import FAMILY
-from ivkernels.kernels.warp._checks import FRONT, rows_contiguous
+from ivkernels.kernels.warp._checks import FRONT, native_rows
 from ivkernels.kernels.warp.row_tiles import frame_row, row_span
 
 host = implements(FAMILY, FRONT)
@@ -270,7 +270,7 @@ def prolong_add(z, weights, out, spacing: int) -> None:
     spacing : pixels between nodes, as for the weights.
     """
     t, h, w, _ = weights.shape
-    if weights.device.is_cpu and rows_contiguous(z, weights, out):
+    if native_rows(weights.device, z, weights, out):
         launch_rows(prolong_add_rows_cpu, t * h, [z, weights, out, spacing], device=weights.device)
         return
     tiles = row_tiles((w - 1) // spacing + 1, weights.device)

@@ -19,7 +19,7 @@ import warp as wp
 from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.energy_shading import FAMILY
-from ivkernels.kernels.warp._checks import FRONT, rows_contiguous
+from ivkernels.kernels.warp._checks import FRONT, native_rows
 from ivkernels.kernels.warp.row_tiles import frame_row, row_span
 from ivkernels.kernels.warp.energy_data import charbonnier
 
@@ -339,7 +339,7 @@ def _local_term(S, gate, gS, energy_rows, lam: float, eps: float, pairs=None, pa
     axis pairs' weights when ``pairs`` is given (``S`` stands in for the arrays a variant does
     not read)."""
     t, h, w = S.shape
-    if S.device.is_cpu and rows_contiguous(S, gS, S if gate is None else gate) \
+    if native_rows(S.device, S, gS, S if gate is None else gate) \
             and (pairs is None or (pairs.strides[2] == 4 and pairs.strides[1] == 8)):
         launch_rows(local_rows_cpu, t * h,
                     [S, S if gate is None else gate, S if pairs is None else pairs, gS, energy_rows, float(lam),

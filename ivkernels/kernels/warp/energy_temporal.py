@@ -38,7 +38,7 @@ import warp as wp
 from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.energy_temporal import FAMILY
-from ivkernels.kernels.warp._checks import FRONT, rows_contiguous
+from ivkernels.kernels.warp._checks import FRONT, native_rows
 from ivkernels.kernels.warp.row_tiles import frame_row, row_span
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners
 from ivkernels.kernels.workspace import scratch_buffer
@@ -503,7 +503,7 @@ def temporal_terms(A, S, flow, occ, gA, gS, energy_rows, lam_albedo: float, lam_
     weight = scratch_buffer(workspace, f"{__name__}.pair_splat_weight", shape, float,
                             lambda: wp.empty(shape, dtype=float, device=dev), dev)
     S4, gS4 = with_channel_axis(S), with_channel_axis(gS)
-    if dev.is_cpu and rows_contiguous(A, S4, flow, occ, gA, gS4, weight):
+    if native_rows(dev, A, S4, flow, occ, gA, gS4, weight):
         launch_rows(temporal_pair_gather_rows_cpu, (t - 1) * h,
                     [A, S4, flow, occ, gA, gS4, weight, energy_rows, float(lam_albedo), float(lam_shading),
                      float(alpha)], device=dev)

@@ -39,7 +39,7 @@ from ivkernels.kernels.host import (KMEANS_ITERATIONS, MIN_SEPARATION, flow_scra
                                     median_network, shading_scratch_shape, spatial_weights)
 from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.median import FAMILY
-from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.warp._checks import FRONT, native_rows
 from ivkernels.kernels.warp.row_tiles import frame_row, row_span
 from ivkernels.kernels.workspace import scratch_buffer
 
@@ -625,7 +625,7 @@ def median5x5(src, out) -> None:
     out : wp.array float32 (T, H, W, C), written.  Must not overlap ``src``.
     """
     t, h, w, c = src.shape
-    if src.device.is_cpu:
+    if native_rows(src.device):
         launch_rows(median5x5_rows_cpu, t * h, [src, out], device=src.device)
         return
     tiles = row_tiles(w, src.device)

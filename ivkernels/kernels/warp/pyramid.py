@@ -24,7 +24,7 @@ from ivkernels.kernels.contract import implements
 from ivkernels.kernels.host import gaussian_kernel
 from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.pyramid import FAMILY
-from ivkernels.kernels.warp._checks import FRONT, rows_contiguous
+from ivkernels.kernels.warp._checks import FRONT, native_rows
 from ivkernels.kernels.warp.row_tiles import frame_row, row_span
 from ivkernels.kernels.warp.sampling import bilinear_at, clamped_corners
 
@@ -246,7 +246,7 @@ def gaussian_blur(src, out, scratch, sigma: float) -> None:
     taps = gaussian_kernel(sigma)
     weights = wp.array(taps, dtype=wp.float32, device=src.device)
     radius = (len(taps) - 1) // 2
-    if src.device.is_cpu and rows_contiguous(src, out, scratch):
+    if native_rows(src.device, src, out, scratch):
         rows = src.shape[0] * src.shape[1]
         launch_rows(blur_x_rows_cpu, rows, [src, scratch, weights, radius], device=src.device)
         launch_rows(blur_y_rows_cpu, rows, [scratch, out, weights, radius], device=src.device)

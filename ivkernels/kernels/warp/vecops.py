@@ -34,7 +34,7 @@ import warp as wp
 from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import gpu_layout, launch_rows
 from ivkernels.kernels.reference.vecops import FAMILY
-from ivkernels.kernels.warp._checks import FRONT
+from ivkernels.kernels.warp._checks import FRONT, native_rows
 
 host = implements(FAMILY, FRONT)
 
@@ -507,7 +507,7 @@ def dots(basis, x, rows=None) -> np.ndarray:
     n_rows, n_chunks = rows_wp.shape[0], _chunks(n, chunk)
     partial = wp.empty((n_rows, n_chunks), dtype=wp.float64, device=x.device)
     x4, = _vec4(x)
-    if x.device.is_cpu and x.is_contiguous:
+    if native_rows(x.device, x):
         launch_rows(basis_dots_chunks_cpu, n_chunks, [basis, x, rows_wp, partial, x4.shape[0], chunk],
                     device=x.device)
         return partial.numpy().sum(axis=1)
@@ -529,7 +529,7 @@ def combine(out, basis, rows, coeffs) -> None:
     """
     n, chunk = out.shape[0], _chunk(out.device)
     basis, rows_wp, coeffs_wp = _basis_rows(basis, rows, coeffs)
-    if out.device.is_cpu and out.is_contiguous:
+    if native_rows(out.device, out):
         launch_rows(basis_combine_chunks_cpu, _chunks(n, chunk), [out, basis, rows_wp, coeffs_wp, chunk],
                     device=out.device)
         return

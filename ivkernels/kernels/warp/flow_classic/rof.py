@@ -14,7 +14,7 @@ import warp as wp
 from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.flow_classic import FAMILY
-from ivkernels.kernels.warp._checks import FRONT, rows_contiguous
+from ivkernels.kernels.warp._checks import FRONT, native_rows
 from ivkernels.kernels.warp.row_tiles import frame_row, row_span
 
 host = implements(FAMILY, FRONT)
@@ -176,7 +176,7 @@ def rof_dual_step(img, p_in, p_out, theta: float, delta: float) -> None:
     On a GPU one pixel per thread (row tiles).
     """
     t, h, w = img.shape
-    if img.device.is_cpu and rows_contiguous(img, p_in, p_out):
+    if native_rows(img.device, img, p_in, p_out):
         launch_rows(rof_dual_step_rows_cpu, t * h, [img, p_in, p_out, float(theta), float(delta)], img.device)
         return
     tiles = row_tiles(w, img.device)
