@@ -151,6 +151,8 @@ def test_vector_operations_with_the_gpu_chunks(be, gpu_layouts, n):
     np.testing.assert_allclose(be.numpy(Y), -1.5 * (3.5 * x - 2.0 * y), rtol=1e-5, atol=1e-5)
     v.fill(out, 0.25)
     assert np.all(be.numpy(out) == np.float32(0.25))
+    v.multiply(out, X)
+    np.testing.assert_array_equal(be.numpy(out), np.float32(0.25) * x)
     basis = rng.normal(size=(5, n)).astype(np.float32)
     B = be.asarray(basis.copy())
     for rows in ([0, 2, 4], [4, 1]):

@@ -136,7 +136,10 @@ class WindowEnergy:
             edge_gate = be.empty((T, h, w))
             be.maps.shading_gate(self.I, flow, edge_gate, params.shading_gate_tau,
                                  tau_chroma=params.shading_gate_chroma)
-            gate = edge_gate if gate is None else be.asarray(be.numpy(gate) * be.numpy(edge_gate))
+            if gate is None:
+                gate = edge_gate
+            else:
+                be.vecops.multiply(gate.reshape((T * h * w,)), edge_gate.reshape((T * h * w,)))
         if params.shading_step_gain > 0:
             if gate is None:
                 gate = be.empty((T, h, w))
@@ -147,9 +150,12 @@ class WindowEnergy:
                                static_flow=params.shading_step_static_flow,
                                share_radius=params.shading_step_share_radius)
         if self.temporal and params.shading_light_edge_tau > 0 and T >= 3:
-            factor = be.numpy(light_edge_factor(be, self.I, flow, params.shading_light_edge_tau,
-                                                params.shading_step_static_flow))
-            gate = be.asarray(factor if gate is None else be.numpy(gate) * factor)
+            factor = light_edge_factor(be, self.I, flow, params.shading_light_edge_tau,
+                                       params.shading_step_static_flow)
+            if gate is None:
+                gate = factor
+            else:
+                be.vecops.multiply(gate.reshape((T * h * w,)), factor.reshape((T * h * w,)))
         return gate
 
     def _stable_pairs(self):

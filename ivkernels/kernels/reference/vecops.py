@@ -18,6 +18,7 @@ FAMILY.declare("dot(a, b)", "``sum(a * b)``, accumulated in float64 (returns a f
 FAMILY.declare("norm_inf(x)", "``max |x|`` (returns a float).", x=Vector())
 FAMILY.declare("axpy(alpha, x, y)", "``y += alpha x``.", alpha=Real, x=Vector(), y=Vector(output=True))
 FAMILY.declare("scale(alpha, x)", "``x *= alpha``.", alpha=Real, x=Vector(output=True))
+FAMILY.declare("multiply(x, y)", "``x *= y``, element by element; y may be x.", x=Vector(output=True), y=Vector())
 FAMILY.declare("lincomb(out, a, x, b, y)", "``out = a x + b y``; out may be x or y.",
                out=Vector(output=True), a=Real, x=Vector(), b=Real, y=Vector())
 FAMILY.declare("copy(src, dst)", "``dst[:] = src``.", src=Vector(), dst=Vector(output=True))
@@ -43,6 +44,11 @@ def axpy(alpha: float, x, y) -> np.ndarray:
 
 def scale(alpha: float, x) -> np.ndarray:
     return alpha * np.asarray(x, np.float64)
+
+
+def multiply(x, y) -> np.ndarray:
+    """Returns ``x * y``."""
+    return np.asarray(x, np.float64) * np.asarray(y, np.float64)
 
 
 def lincomb(a: float, x, b: float, y) -> np.ndarray:

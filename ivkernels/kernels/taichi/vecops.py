@@ -60,6 +60,12 @@ def scale_flat(alpha: ti.f32, x: nd1):
 
 
 @ti.kernel
+def multiply_flat(x: nd1, y: nd1):
+    for i in range(x.shape[0]):
+        x[i] = x[i] * y[i]
+
+
+@ti.kernel
 def lincomb_flat(out: nd1, a: ti.f32, x: nd1, b: ti.f32, y: nd1):
     for i in range(x.shape[0]):
         out[i] = a * x[i] + b * y[i]
@@ -136,6 +142,12 @@ def axpy(alpha: float, x, y) -> None:
 def scale(alpha: float, x) -> None:
     """``x *= alpha`` (float32)."""
     scale_flat(float(alpha), x)
+
+
+@host("multiply")
+def multiply(x, y) -> None:
+    """``x *= y``, element by element (float32); ``y`` may be ``x``."""
+    multiply_flat(x, y)
 
 
 @host("lincomb")

@@ -146,6 +146,17 @@ def scale_chunks(row_begin: int, alpha: float, x: wp.array(dtype=float), x4: wp.
 
 
 @wp.kernel
+def multiply_chunks(row_begin: int, x: wp.array(dtype=float), y: wp.array(dtype=float),
+                    x4: wp.array(dtype=wp.vec4), y4: wp.array(dtype=wp.vec4), chunk: int):
+    k = row_begin + wp.tid()
+    n4 = x4.shape[0]
+    for i in range(chunk_begin(k, chunk) // 4, vec_range_end(k, chunk, n4)):
+        x4[i] = wp.cw_mul(x4[i], y4[i])
+    for i in range(tail_begin(k, chunk, n4), chunk_end(k, chunk, x.shape[0])):
+        x[i] = x[i] * y[i]
+
+
+@wp.kernel
 def lincomb_chunks(row_begin: int, out: wp.array(dtype=float), a: float, x: wp.array(dtype=float),
                    b: float, y: wp.array(dtype=float), out4: wp.array(dtype=wp.vec4),
                    x4: wp.array(dtype=wp.vec4), y4: wp.array(dtype=wp.vec4), chunk: int):
@@ -442,6 +453,16 @@ def scale(alpha: float, x) -> None:
     """``x *= alpha`` (float32).  ``x``: 1-D float32 wp.array."""
     n, chunk = x.shape[0], _chunk(x.device)
     launch_rows(scale_chunks, _chunks(n, chunk), [float(alpha), x, *_vec4(x), chunk], device=x.device)
+
+
+@host("multiply")
+def multiply(x, y) -> None:
+    """``x *= y``, element by element (float32); ``y`` may be ``x``.
+
+    ``x``, ``y``: 1-D float32 wp.arrays of equal length.
+    """
+    n, chunk = x.shape[0], _chunk(x.device)
+    launch_rows(multiply_chunks, _chunks(n, chunk), [x, y, *_vec4(x, y), chunk], device=x.device)
 
 
 @host("lincomb")
