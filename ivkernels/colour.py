@@ -8,7 +8,8 @@ kernels, readers and writers, pictures) can use it.
 * :func:`srgb_to_linear`   sRGB -> linear, float in, float out;
 * :func:`linear_to_srgb`   linear -> sRGB, float in, float out;
 * :func:`srgb_decode_table` integer sRGB codes -> linear, as a look-up table;
-* :func:`srgb_int_to_linear` uint8 / uint16 sRGB images -> float32 linear.
+* :func:`srgb_int_to_linear` uint8 / uint16 sRGB images -> float32 linear;
+* :data:`REC709_LUMINANCE`  the luminance weights of linear R, G, B.
 
 All follow IEC 61966-2-1.
 """
@@ -18,7 +19,11 @@ from functools import lru_cache
 
 import numpy as np
 
-__all__ = ["srgb_encode", "srgb_to_linear", "linear_to_srgb", "srgb_decode_table", "srgb_int_to_linear"]
+__all__ = ["srgb_encode", "srgb_to_linear", "linear_to_srgb", "srgb_decode_table", "srgb_int_to_linear",
+           "REC709_LUMINANCE"]
+
+#: Rec. 709 (sRGB primaries) luminance weights of linear R, G, B.
+REC709_LUMINANCE = (0.2126, 0.7152, 0.0722)
 
 
 def _check_float(x, name: str) -> np.ndarray:

@@ -29,7 +29,7 @@ import cv2
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
-from ivkernels.colour import linear_to_srgb
+from ivkernels.colour import REC709_LUMINANCE, linear_to_srgb
 from ivkernels.flowio import valid_flow_mask
 
 __all__ = [
@@ -47,7 +47,7 @@ __all__ = [
     "tracked_albedo_change",
 ]
 
-_REC709 = np.array([0.2126, 0.7152, 0.0722])
+_REC709 = np.array(REC709_LUMINANCE)
 
 
 # ----------------------------------------------------------------------------

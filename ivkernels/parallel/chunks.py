@@ -67,6 +67,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from ivkernels.colour import REC709_LUMINANCE
 from ivkernels.decompose import IntrinsicVideo
 from ivkernels.params import Params
 
@@ -78,7 +79,7 @@ CHUNK_WINDOW_FACTOR = 2
 #: (:func:`residual_field`); chosen on training videos (perf/RESULTS.md, "The chunks' residual field").
 FIELD_SIGMA = 0.1
 #: Rec. 709 luminance weights: the residual field is the log albedo's difference in luminance.
-_REC709 = np.array([0.2126, 0.7152, 0.0722], np.float32)
+_REC709 = np.array(REC709_LUMINANCE, np.float32)
 
 
 def chunk_ranges(n_frames: int, chunk_frames: int | None, overlap: int) -> list[tuple[int, int]]:

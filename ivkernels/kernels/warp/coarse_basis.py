@@ -125,7 +125,7 @@ def prolong_add_rows(row_begin: int, tiles: int, z: wp.array3d(dtype=float), wei
 # pixel read with gathers), summing each pixel's 16 products in the order of
 # :func:`prolong_add_rows`, one rounding per product and per add: bit for bit
 # the same.  ``z``, ``weights`` and ``out`` must be contiguous along their last
-# axes (:func:`~ivkernels.kernels.warp._checks.rows_contiguous`), else the kernel above runs.
+# axes (:func:`~ivkernels.kernels.warp._checks.native_rows`), else the kernel above runs.
 _PROLONG_ROW = r"""
 {
 #if !defined(__CUDA_ARCH__)

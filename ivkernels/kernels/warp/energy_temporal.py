@@ -200,7 +200,7 @@ def temporal_pair_splat_rows(row_begin: int, tiles: int, flow: wp.array4d(dtype=
 # same operations in the same order, none fused into a multiply-add).  The
 # splat stays a scalar loop (neighbouring pixels add into the same corners), with
 # its addresses computed once per pixel.  Arrays must be contiguous along
-# (x, channel) (:func:`~ivkernels.kernels.warp._checks.rows_contiguous`), else the
+# (x, channel) (:func:`~ivkernels.kernels.warp._checks.native_rows`), else the
 # kernels above run.
 _PAIR_ROW_COMMON = r"""
 #if defined(__CUDA_ARCH__)

@@ -277,6 +277,7 @@ _BASIS_DOTS_CHUNK = r"""
 #pragma clang fp contract(off)
 #endif
 const int n = x.shape[0];
+const int n4 = n / 4;       // the elements the kernels' vec4 view covers, over 4 (x is contiguous)
 const float* xv = (const float*)x.data;
 const float* bv = (const float*)basis.data;
 const int begin = k * chunk;
@@ -344,9 +345,8 @@ for (int r = 0; r < rows.shape[0]; ++r) {
 
 @wp.func_native(_BASIS_DOTS_CHUNK)
 def basis_dots_chunk(basis: wp.array2d(dtype=float), x: wp.array(dtype=float), rows: wp.array(dtype=int),
-                     partial: wp.array2d(dtype=wp.float64), n4: int, k: int, chunk: int):
-    """Chunk ``k`` of :func:`basis_dots_chunks` (CPU, contiguous; ``n4``: the elements a vec4
-    view would cover, over 4)."""
+                     partial: wp.array2d(dtype=wp.float64), k: int, chunk: int):
+    """Chunk ``k`` of :func:`basis_dots_chunks` (CPU, contiguous)."""
     ...
 
 
@@ -359,8 +359,8 @@ def basis_combine_chunk(out: wp.array(dtype=float), basis: wp.array2d(dtype=floa
 
 @wp.kernel
 def basis_dots_chunks_cpu(row_begin: int, basis: wp.array2d(dtype=float), x: wp.array(dtype=float),
-                          rows: wp.array(dtype=int), partial: wp.array2d(dtype=wp.float64), n4: int, chunk: int):
-    basis_dots_chunk(basis, x, rows, partial, n4, row_begin + wp.tid(), chunk)
+                          rows: wp.array(dtype=int), partial: wp.array2d(dtype=wp.float64), chunk: int):
+    basis_dots_chunk(basis, x, rows, partial, row_begin + wp.tid(), chunk)
 
 
 @wp.kernel
@@ -527,11 +527,10 @@ def dots(basis, x, rows=None) -> np.ndarray:
     basis, rows_wp = _basis_rows(basis, rows)
     n_rows, n_chunks = rows_wp.shape[0], _chunks(n, chunk)
     partial = wp.empty((n_rows, n_chunks), dtype=wp.float64, device=x.device)
-    x4, = _vec4(x)
     if native_rows(x.device, x):
-        launch_rows(basis_dots_chunks_cpu, n_chunks, [basis, x, rows_wp, partial, x4.shape[0], chunk],
-                    device=x.device)
+        launch_rows(basis_dots_chunks_cpu, n_chunks, [basis, x, rows_wp, partial, chunk], device=x.device)
         return partial.numpy().sum(axis=1)
+    x4, = _vec4(x)
     args = [basis, x, _basis_vec4(basis, x4.shape[0]), x4, rows_wp, partial, chunk]
     if gpu_layout(x.device):
         launch_rows(basis_dots_cells, n_rows * n_chunks, args, device=x.device)
