@@ -111,3 +111,61 @@ def test_a_grey_checkerboard_stays_in_the_albedo_with_the_cue():
     without = board_contrast(iv.Params(shading_step_gain=0.0))
     assert abs(with_cue - truth) < abs(without - truth)
     assert with_cue < 0.6
+
+
+def _dark_disc(noise_channels: int, seed: int = 0):
+    """Eight still frames of a dark grey disc (albedo 0.08) on a grey floor (0.5) under a
+    smooth static light, with a camera's Gaussian noise (std 0.003, linear) drawn per colour
+    channel (3) or shared by them (1, greyscale footage); the disc's inside, 2 px from its
+    edge; and the floor, 2 px from it."""
+    h, w, T = 48, 64, 8
+    yy, xx = np.mgrid[0:h, 0:w]
+    r2 = (yy - 24) ** 2 + (xx - 32) ** 2
+    disc = r2 < 12 ** 2
+    albedo = np.where(disc, 0.08, 0.5)
+    light = 0.4 + 0.6 * (xx / w) * (0.6 + 0.4 * yy / h)
+    frames = np.repeat((albedo * light)[None, :, :, None], 3, -1).repeat(T, 0)
+    rng = np.random.default_rng(seed)
+    frames = frames + rng.normal(0, 0.003, (T, h, w, noise_channels))
+    return (np.clip(frames, 0, 1).astype(np.float32), np.zeros((T - 1, h, w, 2), np.float32),
+            r2 < 10 ** 2, r2 > 14 ** 2)
+
+
+def _disc_ratio(frames, flow, inside, outside, params):
+    """Median albedo luminance inside the disc over that of the floor."""
+    albedo = iv.decompose(frames, flow=flow, params=params, flow_passes=1).albedo.mean(-1)
+    return float(np.median(albedo[:, inside]) / np.median(albedo[:, outside]))
+
+
+def test_a_dark_grey_disc_under_colour_noise_stays_in_the_albedo():
+    """A colour camera's noise in a dark grey material changes every pair's chromaticity
+    and makes it step; read as it is, the disc's edge looks coloured and the step evidence
+    lets the disc go into the shading.  Read net of the local noise floor
+    (``Params.shading_step_noise``), the edge stays a grey step and the disc dark."""
+    frames, flow, inside, outside = _dark_disc(noise_channels=3)
+    truth = 0.08 / 0.5
+    kept = _disc_ratio(frames, flow, inside, outside, iv.Params(shading_step_noise=2.5))
+    lost = _disc_ratio(frames, flow, inside, outside, iv.Params())       # the default reads the steps as they are
+    assert abs(kept - truth) < 0.1, kept
+    assert lost > 0.6, lost          # what the floor is there for: without it the disc goes to the shading
+
+
+def test_a_dark_grey_disc_in_greyscale_noise_stays_in_the_albedo():
+    """Noise shared by the channels (greyscale footage) leaves the chromaticity alone."""
+    frames, flow, inside, outside = _dark_disc(noise_channels=1)
+    assert abs(_disc_ratio(frames, flow, inside, outside, iv.Params()) - 0.08 / 0.5) < 0.1
+
+
+def test_the_noise_floor_is_the_twice_taken_5x5_median_of_the_typical_steps():
+    from ivkernels.backends.registry import get_backend
+    from ivkernels.kernels.reference import median as ref_median
+    from ivkernels.kernels.reference import step_evidence as ref
+    from ivkernels.solver.step_evidence import NOISE_FLOOR_PASSES, noise_floor
+
+    be = get_backend("warp")
+    rng = np.random.default_rng(3)
+    offset = np.log(rng.uniform(0.02, 1.0, (2, 11, 13, 3))).astype(np.float32)
+    want = ref.typical_steps(offset)
+    for _ in range(NOISE_FLOOR_PASSES):
+        want = ref_median.median5x5(want)
+    np.testing.assert_allclose(be.numpy(noise_floor(be, be.asarray(offset))), want, atol=1e-6)

@@ -1377,6 +1377,7 @@ SCENE_KINDS = {
     "colour_fast_light_noisy": SceneKind("fast_light", noise=("poisson", 400.0), compression=("jpeg", 70)),
     "ground_turning_soft": SceneKind("turning_objects", "ground"),
     "ground_objects_soft": SceneKind("objects_camera", "ground"),
+    "grey_turning_noisy": SceneKind("turning_objects", "grey", noise=("poisson", 400.0), compression=("jpeg", 85)),
 }
 
 

@@ -42,6 +42,12 @@ The other half of the cue, :func:`light_edge_factor`
 median in one frame is the light's, and Eq. 9's weight of its pixels in that
 frame falls by ``exp(-((s_t - m) / tau)^2)``.
 
+With ``Params.shading_step_noise`` > 0 the steps of both the evidence and
+the share are read net of the local noise floor (:func:`noise_floor`): in a
+dark material a colour camera's noise changes every pair's colour and
+brightness, which would otherwise make a grey edge look coloured and the
+noise itself look like sharp steps.
+
 The formula is computed by the kernels of the ``step_evidence`` family on
 the backend's arrays (:mod:`ivkernels.kernels.warp.step_evidence`, the
 Taichi mirror, and the NumPy reference
@@ -66,6 +72,9 @@ __all__ = ["chromatic_share", "local_chromatic_share", "grey_step_gate", "light_
 #: the default of ``Params.shading_step_static_flow``, read from there.
 STATIC_FLOW = Params.shading_step_static_flow
 
+
+#: Passes of the 5x5 median that make the noise floor (:func:`noise_floor`).
+NOISE_FLOOR_PASSES = 2
 
 #: Weight of the whole video's chromatic share in a window's (:func:`local_chromatic_share`),
 #: in steps: a window with few sharp steps of its own leans on the video's share.
@@ -160,8 +169,26 @@ def grey_step_gate(log_image: np.ndarray, gain: float, tau: float, tau_chroma: f
     return (1.0 + gain * (1.0 - chromatic_share(log_image, tau, tau_chroma)) ** 2 * evidence).astype(np.float32)
 
 
+def noise_floor(be, offset_image):
+    """The local noise floor of the steps of ``offset_image`` (T, h, w, 3), ``log(i + DARK_OFFSET)``:
+    per pixel the larger step of its right and lower pairs (``step_evidence.typical_steps``:
+    ``dL`` in channel 0, ``dC`` in channel 1), then their median over the neighbourhood
+    (``median.median5x5``, :data:`NOISE_FLOOR_PASSES` times).  In sensor noise every pair
+    steps by about the floor; along an edge the edge's pairs are a minority of the window.
+    Returns a (T, h, w, 2) backend array."""
+    T, h, w, _ = offset_image.shape
+    steps = be.empty((T, h, w, 2))
+    be.step_evidence.typical_steps(offset_image, steps)
+    floor = be.empty((T, h, w, 2))
+    for _ in range(NOISE_FLOOR_PASSES):
+        be.median.median5x5(steps, floor)
+        steps, floor = floor, steps
+    return steps
+
+
 def multiply_step_gate(be, log_image, gate, gain: float, tau: float, tau_chroma: float = 0.0, flow=None,
-                       stability: float = 0.0, static_flow: float = STATIC_FLOW, share_radius: float = 0.0) -> None:
+                       stability: float = 0.0, static_flow: float = STATIC_FLOW, share_radius: float = 0.0,
+                       noise: float = 0.0) -> None:
     """Multiply the step weight of Eq. 9's local term into ``gate``, on the backend's arrays.
 
     ``gate *= 1 + gain (1 - s)^2 w evidence``: ``s`` the chromatic share
@@ -186,11 +213,14 @@ def multiply_step_gate(be, log_image, gate, gain: float, tau: float, tau_chroma:
         pixel (:func:`local_chromatic_share`, by the kernels ``pixel_counts`` and
         ``share_weight``, bit for bit) and ``(1 - s)^2`` goes into ``w`` instead of the
         gain (``Params.shading_step_share_radius``, 0.3 by default).
+    noise : >= 0; > 0: every step is read net of ``noise`` times the local noise floor
+        (:func:`noise_floor`; ``Params.shading_step_noise``), 0: as it is.
     """
     T, h, w, _ = log_image.shape
     kernels = be.step_evidence
     offset = be.empty((T, h, w, 3))
     kernels.offset_log(log_image, offset, DARK_OFFSET)
+    floor = noise_floor(be, offset) if noise > 0 else None
     weight = be.empty((T, h, w))
     if flow is not None and T > 1 and stability > 0:
         kernels.still_stability(log_image, flow, weight, stability, static_flow)
@@ -198,13 +228,13 @@ def multiply_step_gate(be, log_image, gate, gain: float, tau: float, tau_chroma:
         be.vecops.fill(weight.reshape((T * h * w,)), 1.0)
     if share_radius > 0 and tau_chroma > 0:
         pixel_counts = be.empty((T, h, w, 2), np.int32)
-        kernels.pixel_counts(log_image, pixel_counts, DARK_OFFSET, tau, tau_chroma)
+        kernels.pixel_counts(log_image, pixel_counts, DARK_OFFSET, tau, tau_chroma, floor, noise)
         kernels.share_weight(pixel_counts, weight, share_radius_pixels(share_radius, h, w), SHARE_PRIOR_STEPS)
         counts = be.zeros((T * h, 2), np.int32)                 # the share is in the weight: none counted
     else:
         counts = be.empty((T * h, 2), np.int32)
-        kernels.step_counts(offset, counts, tau, tau_chroma)
-    kernels.step_gate(offset, counts, weight, gate, gain, tau, tau_chroma)
+        kernels.step_counts(offset, counts, tau, tau_chroma, floor, noise)
+    kernels.step_gate(offset, counts, weight, gate, gain, tau, tau_chroma, floor, noise)
 
 
 def stable_pair_weights(be, log_image, flow, tau: float, stability: float, floor: float,

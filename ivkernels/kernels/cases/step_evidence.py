@@ -30,19 +30,35 @@ def steps_image(rng, T: int, H: int, W: int) -> np.ndarray:
     return img.astype(F32)
 
 
-def _pair_ties(log_image, tau, tau_chroma):
-    """Per row (T*H,): whether a horizontal or vertical pair the row counts lies within :data:`TIE`
-    of ``tau`` or ``tau_chroma``."""
+def _pair_ties(log_image, tau, tau_chroma, floor=None, k=0.0, band=TIE):
+    """Per pixel (T, H, W): whether one of its horizontal or vertical pairs, its steps net of
+    the noise ``floor`` at ``k``, lies within ``band`` of ``tau`` or ``tau_chroma``."""
     L, C = ref.luminance_chroma(log_image)
-    t, h, _ = L.shape
-    tied = np.zeros((t, h), bool)
+    near = np.zeros(L.shape, bool)
     for dy, dx in ref.AXIS_NEIGHBOURS:
         a, b = ref.pair_slices(L.shape, dy, dx)
-        near = np.abs(np.abs(L[a] - L[b]) - tau) < TIE
+        dL, dC = ref.net_steps(np.abs(L[a] - L[b]), np.abs(C[a] - C[b]).max(axis=-1), floor, k, a, b)
+        close = np.abs(dL - tau) < band
         if tau_chroma > 0:
-            near |= np.abs(np.abs(C[a] - C[b]).max(axis=-1) - tau_chroma) < TIE
-        tied[:, : h - dy] |= near.any(axis=-1)
-    return tied.reshape(t * h)
+            close |= np.abs(dC - tau_chroma) < band
+        near[a] |= close
+    return near
+
+
+def noise_floor(rng, T: int, H: int, W: int) -> np.ndarray:
+    """A noise floor (T, H, W, 2) as ``median5x5(typical_steps)`` gives: 0 over most of the frame,
+    up to the size of :func:`steps_image`'s noise steps elsewhere."""
+    f = uniform(rng, (T, H, W, 2), 0.0, 0.06)
+    f[:, : H // 2] = 0.0
+    return f.astype(F32)
+
+
+def _typical_steps():
+    def make(rng, T, H, W):
+        return {"log_image": steps_image(rng, T, H, W), "steps": nans((T, H, W, 2))}
+
+    return Case("step_evidence", "typical_steps", make, ("log_image", "steps"), ("steps",),
+                lambda v: {"steps": ref.typical_steps(v["log_image"])}, tol=Tol(1e-5, 1e-6))
 
 
 def _offset_log(offset):
@@ -55,41 +71,47 @@ def _offset_log(offset):
                 tol=Tol(1e-6, 1e-6), in_place=(("log_image", "out"),))
 
 
-def _counts(tau, tau_chroma):
+def _floor_args(rng, T, H, W, k):
+    """The ``floor`` and ``k`` arguments of a case: none at ``k = 0``."""
+    return {"floor": noise_floor(rng, T, H, W), "k": k} if k > 0 else {}
+
+
+def _counts(tau, tau_chroma, k=0.0):
     def make(rng, T, H, W):
         return {"log_image": steps_image(rng, T, H, W), "counts": np.full((T * H, 2), -1, np.int32),
-                "tau": tau, "tau_chroma": tau_chroma}
+                "tau": tau, "tau_chroma": tau_chroma, **_floor_args(rng, T, H, W, k)}
 
     def tied(v):
-        return {"counts": np.repeat(_pair_ties(v["log_image"], v["tau"], v["tau_chroma"])[:, None], 2, axis=1)}
+        near = _pair_ties(v["log_image"], v["tau"], v["tau_chroma"], v.get("floor"), v.get("k", 0.0)).any(axis=2)
+        return {"counts": np.repeat(near.reshape(-1)[:, None], 2, axis=1)}
 
-    return Case("step_evidence", "step_counts", make, ("log_image", "counts", "tau", "tau_chroma"), ("counts",),
-                lambda v: {"counts": ref.step_counts(v["log_image"], v["tau"], v["tau_chroma"])},
-                variant=f"tau={tau:g},tau_chroma={tau_chroma:g}", tol=EXACT, ignore=tied)
+    args = ("log_image", "counts", "tau", "tau_chroma") + (("floor", "k") if k > 0 else ())
+    return Case("step_evidence", "step_counts", make, args, ("counts",),
+                lambda v: {"counts": ref.step_counts(v["log_image"], v["tau"], v["tau_chroma"], v.get("floor"),
+                                                     v.get("k", 0.0))},
+                variant=f"tau={tau:g},tau_chroma={tau_chroma:g}" + (f",k={k:g}" if k > 0 else ""), tol=EXACT,
+                ignore=tied)
 
 
-def _pixel_counts(tau, tau_chroma):
+def _pixel_counts(tau, tau_chroma, k=0.0):
     def make(rng, T, H, W):
         return {"log_image": steps_image(rng, T, H, W), "counts": np.full((T, H, W, 2), -1, np.int32),
-                "offset": ref.DARK_OFFSET, "tau": tau, "tau_chroma": tau_chroma}
+                "offset": ref.DARK_OFFSET, "tau": tau, "tau_chroma": tau_chroma, **_floor_args(rng, T, H, W, k)}
 
     def tied(v):
         """Pixels with a pair within :data:`FLOAT64_TIE` of a threshold: a last-place difference of
         ``exp`` or ``log`` between libraries could decide them differently."""
-        L, C = ref.luminance_chroma(ref.offset_log(v["log_image"], v["offset"]))
-        near = np.zeros(L.shape, bool)
-        for dy, dx in ref.AXIS_NEIGHBOURS:
-            a, b = ref.pair_slices(L.shape, dy, dx)
-            close = np.abs(np.abs(L[a] - L[b]) - v["tau"]) < FLOAT64_TIE
-            if v["tau_chroma"] > 0:
-                close |= np.abs(np.abs(C[a] - C[b]).max(axis=-1) - v["tau_chroma"]) < FLOAT64_TIE
-            near[a] |= close
+        near = _pair_ties(ref.offset_log(v["log_image"], v["offset"]), v["tau"], v["tau_chroma"], v.get("floor"),
+                          v.get("k", 0.0), FLOAT64_TIE)
         return {"counts": np.repeat(near[..., None], 2, axis=-1)}
 
-    return Case("step_evidence", "pixel_counts", make, ("log_image", "counts", "offset", "tau", "tau_chroma"),
+    args = ("log_image", "counts", "offset", "tau", "tau_chroma") + (("floor", "k") if k > 0 else ())
+    return Case("step_evidence", "pixel_counts", make, args,
                 ("counts",), lambda v: {"counts": ref.pixel_counts(v["log_image"], v["offset"], v["tau"],
-                                                                   v["tau_chroma"])},
-                variant=f"tau={tau:g},tau_chroma={tau_chroma:g}", tol=EXACT, ignore=tied)
+                                                                   v["tau_chroma"], v.get("floor"),
+                                                                   v.get("k", 0.0))},
+                variant=f"tau={tau:g},tau_chroma={tau_chroma:g}" + (f",k={k:g}" if k > 0 else ""), tol=EXACT,
+                ignore=tied)
 
 
 def _share_weight(radius, counts):
@@ -111,29 +133,32 @@ def _share_weight(radius, counts):
                 variant=f"radius={radius},{counts}", updates=("weight",), tol=EXACT)
 
 
-def _gate(tau, tau_chroma, counts):
+def _gate(tau, tau_chroma, counts, k=0.0):
     """``counts``: "image" (those of the image, as the solver passes them), "random", or "none"
-    (no sharp step: the gain is not scaled)."""
+    (no sharp step: the gain is not scaled); ``k > 0``: the steps net of a noise floor."""
     def make(rng, T, H, W):
         img = steps_image(rng, T, H, W)
+        extra = _floor_args(rng, T, H, W, k)
         if counts == "image":
-            c = ref.step_counts(img, tau, tau_chroma)
+            c = ref.step_counts(img, tau, tau_chroma, extra.get("floor"), k)
         elif counts == "random":
             sharp = rng.integers(0, 2 * W + 1, (T * H, 1))
             c = np.concatenate([sharp, rng.integers(0, sharp + 1)], axis=1).astype(np.int32)
         else:
             c = np.zeros((T * H, 2), np.int32)
         return {"log_image": img, "counts": c, "weight": uniform(rng, (T, H, W), 0.0, 1.0),
-                "gate": uniform(rng, (T, H, W), 0.0, 1.0), "gain": 8.0, "tau": tau, "tau_chroma": tau_chroma}
+                "gate": uniform(rng, (T, H, W), 0.0, 1.0), "gain": 8.0, "tau": tau, "tau_chroma": tau_chroma,
+                **extra}
 
     def reference(v):
         return {"gate": ref.step_gate(v["log_image"], v["counts"], v["weight"], v["gate"], v["gain"], v["tau"],
-                                      v["tau_chroma"])}
+                                      v["tau_chroma"], v.get("floor"), v.get("k", 0.0))}
 
     # float32 steps of log values up to 5 in size: the evidence to about 4e-6, the gate to 8 times that
-    return Case("step_evidence", "step_gate", make,
-                ("log_image", "counts", "weight", "gate", "gain", "tau", "tau_chroma"), ("gate",), reference,
-                variant=f"tau={tau:g},tau_chroma={tau_chroma:g},{counts}", updates=("gate",),
+    args = ("log_image", "counts", "weight", "gate", "gain", "tau", "tau_chroma") + (("floor", "k") if k > 0 else ())
+    return Case("step_evidence", "step_gate", make, args, ("gate",), reference,
+                variant=f"tau={tau:g},tau_chroma={tau_chroma:g},{counts}" + (f",k={k:g}" if k > 0 else ""),
+                updates=("gate",),
                 tol=Tol(1e-5, 4e-5), in_place=(("weight", "gate"),))
 
 
@@ -228,10 +253,13 @@ def _moving(tau):
 CASES = (
     _offset_log(ref.DARK_OFFSET),
     _offset_log(0.5),
+    _typical_steps(),
     _counts(0.1, 0.05),
     _counts(0.3, 0.0),
+    _counts(0.1, 0.05, k=3.5),
     _pixel_counts(0.1, 0.05),
     _pixel_counts(0.3, 0.0),
+    _pixel_counts(0.1, 0.05, k=3.5),
     _share_weight(2, "random"),
     _share_weight(0, "random"),
     _share_weight(1000, "random"),
@@ -239,6 +267,7 @@ CASES = (
     _gate(0.1, 0.05, "image"),
     _gate(0.1, 0.05, "random"),
     _gate(0.25, 0.0, "none"),
+    _gate(0.1, 0.05, "image", k=3.5),
     _still(0.3, 0.25),
     _still(0.1, 1.0),
     _stable(0.01, 0.3),

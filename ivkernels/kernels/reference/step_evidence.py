@@ -18,6 +18,12 @@ Per pair of neighbours ``x, y`` with ``d = I'(x) - I'(y)`` (3 channels):
 * its evidence is ``(1 - exp(-(dL / tau)^2)) * exp(-(dC / tau_chroma)^2)``
   (the second factor 1 with ``tau_chroma = 0``).
 
+With a noise ``floor`` (T, H, W, 2) and ``k > 0``, ``dL`` and ``dC`` are read net
+of it: ``dL' = sqrt(max(dL^2 - k^2 (f_L(x)^2 + f_L(y)^2) / 2, 0))`` and the same
+for ``dC`` with ``f_C``, ``f`` the 5x5 median of :func:`typical_steps` (the
+local typical step: in a region of sensor noise every pair steps by about it,
+while an edge's pairs are a minority of the window and leave it near 0).
+
 A pixel's evidence is the largest over its 8 neighbours inside the image.
 Weiss's cue, the ``weight`` of the evidence, is ``maps.shading_gate`` of the
 log input (:func:`still_stability`) where the scene holds still, 1 where it moves.
@@ -85,24 +91,32 @@ def _finite_gain(sizes, args):
 FAMILY.declare("offset_log(log_image, out, offset)",
                "``out = log(exp(log_image) + offset)``: the log image read with a linear offset; ``offset > 0``.",
                log_image="T H W 3", out=Out("T H W 3"), offset=FinitePositive)
-FAMILY.declare("step_counts(log_image, counts, tau, tau_chroma=0.0)",
+_FLOOR = Array("T H W 2", optional=True)
+
+FAMILY.declare("typical_steps(log_image, steps)",
+               "Per pixel, the larger log-luminance step and the larger log-chromaticity change of its right and "
+               "lower pairs (0 without one); their 5x5 median is the local noise floor of the steps.",
+               log_image="T H W 3", steps=Out("T H W 2"),
+               separate=(("steps", "log_image", "the steps are written while log_image is read"),))
+FAMILY.declare("step_counts(log_image, counts, tau, tau_chroma=0.0, floor=None, k=0.0)",
                "Per row, the sharp and the chromatic steps of the horizontal and vertical pairs it starts.",
                log_image="T H W 3", counts=Out("T*H 2", "int32", layout="(T*H, 2)"), tau=FinitePositive,
-               tau_chroma=NonNegative)
-FAMILY.declare("pixel_counts(log_image, counts, offset, tau, tau_chroma=0.0)",
+               tau_chroma=NonNegative, floor=_FLOOR, k=NonNegative)
+FAMILY.declare("pixel_counts(log_image, counts, offset, tau, tau_chroma=0.0, floor=None, k=0.0)",
                "Per pixel, the sharp and the chromatic steps of its horizontal and vertical pairs, read in "
                "float64 on ``log(exp(log_image) + offset)``.",
                log_image="T H W 3", counts=Out("T H W 2", "int32", layout="(T, H, W, 2)"), offset=FinitePositive,
-               tau=FinitePositive, tau_chroma=NonNegative)
+               tau=FinitePositive, tau_chroma=NonNegative, floor=_FLOOR, k=NonNegative)
 FAMILY.declare("share_weight(counts, weight, radius, prior_steps)",
                "``weight *= (1 - s)^2``, ``s`` the chromatic share of ``counts`` in the (2 radius + 1)^2 window "
                "of each pixel with ``prior_steps`` steps of the whole video's share.",
                counts=Array("T H W 2", "int32", layout="(T, H, W, 2)"), weight=Out("T H W"),
                radius=Int(0, "(pixels)"), prior_steps=FinitePositive)
-FAMILY.declare("step_gate(log_image, counts, weight, gate, gain, tau, tau_chroma=0.0)",
+FAMILY.declare("step_gate(log_image, counts, weight, gate, gain, tau, tau_chroma=0.0, floor=None, k=0.0)",
                "``gate *= 1 + gain (1 - s)^2 weight evidence``, ``s`` the chromatic share of ``counts``.",
                log_image="T H W 3", counts=Array("T*H 2", "int32", layout="(T*H, 2)"), weight="T H W",
-               gate=Out("T H W"), gain=NonNegative, tau=FinitePositive, tau_chroma=NonNegative,
+               gate=Out("T H W"), gain=NonNegative, tau=FinitePositive, tau_chroma=NonNegative, floor=_FLOOR,
+               k=NonNegative,
                rules=(Rule(_finite_gain),),
                separate=(("gate", "log_image", "the gate is written while log_image is read"),))
 FAMILY.declare("still_stability(log_image, flow, weight, tau, static_flow)",
@@ -158,41 +172,74 @@ def _chroma_change(C, a, b) -> np.ndarray:
     return np.abs(C[a] - C[b]).max(axis=-1)
 
 
-def pixel_step_counts(log_image, tau: float, tau_chroma: float = 0.0) -> np.ndarray:
+def typical_steps(log_image) -> np.ndarray:
+    """(T, H, W, 2) float64: per pixel the larger ``dL`` (channel 0) and the larger ``dC``
+    (channel 1) of its pairs ``(x, x + (0, 1))`` and ``(x, x + (1, 0))`` inside the image, 0 without one.
+
+    log_image : (T, H, W, 3), ``I'`` (:func:`offset_log`).
+    """
+    L, C = luminance_chroma(log_image)
+    out = np.zeros(L.shape + (2,))
+    for dy, dx in AXIS_NEIGHBOURS:
+        a, b = pair_slices(L.shape, dy, dx)
+        np.maximum(out[a + (0,)], np.abs(L[a] - L[b]), out=out[a + (0,)])
+        np.maximum(out[a + (1,)], _chroma_change(C, a, b), out=out[a + (1,)])
+    return out
+
+
+def net_steps(dL, dC, floor, k: float, a, b):
+    """``(dL, dC)`` of the pairs ``(a, b)`` net of the noise ``floor`` (T, H, W, 2) at ``k``
+    (unchanged without a floor or with ``k = 0``): ``sqrt(max(d^2 - k^2 (f(a)^2 + f(b)^2) / 2, 0))``."""
+    if floor is None or k <= 0:
+        return dL, dC
+    f = np.asarray(floor, np.float64)
+    out = []
+    for d, c in ((dL, 0), (dC, 1)):
+        noise = k * k * (f[a + (c,)] ** 2 + f[b + (c,)] ** 2) / 2.0
+        out.append(np.sqrt(np.maximum(np.asarray(d, np.float64) ** 2 - noise, 0.0)))
+    return out[0], out[1]
+
+
+def pixel_step_counts(log_image, tau: float, tau_chroma: float = 0.0, floor=None, k: float = 0.0) -> np.ndarray:
     """(T, H, W, 2) int64: per pixel ``x``, the sharp steps (channel 0) and the chromatic ones
     (channel 1) among its pairs ``(x, x + (0, 1))`` and ``(x, x + (1, 0))``.
 
     log_image : (T, H, W, 3), ``I'`` (:func:`offset_log`).
     tau_chroma : 0: no step is chromatic.
+    floor, k : the noise floor (:func:`net_steps`); ``None`` or 0: steps as read.
     """
     L, C = luminance_chroma(log_image)
     counts = np.zeros(L.shape + (2,), np.int64)
     for dy, dx in AXIS_NEIGHBOURS:
         a, b = pair_slices(L.shape, dy, dx)
-        chromatic = _chroma_change(C, a, b) > tau_chroma if tau_chroma > 0 else np.zeros(L[a].shape, bool)
-        counts[a + (0,)] += chromatic | (np.abs(L[a] - L[b]) > tau)
+        dL, dC = net_steps(np.abs(L[a] - L[b]), _chroma_change(C, a, b), floor, k, a, b)
+        chromatic = dC > tau_chroma if tau_chroma > 0 else np.zeros(L[a].shape, bool)
+        counts[a + (0,)] += chromatic | (dL > tau)
         counts[a + (1,)] += chromatic
     return counts
 
 
-def step_counts(log_image, tau: float, tau_chroma: float = 0.0) -> np.ndarray:
+def step_counts(log_image, tau: float, tau_chroma: float = 0.0, floor=None, k: float = 0.0) -> np.ndarray:
     """(T*H, 2) int32: per row ``t * H + y``, the sharp steps (column 0) and the chromatic ones
     (column 1) among the pairs ``(x, x + (0, 1))`` and ``(x, x + (1, 0))`` of its pixels ``x``
     (:func:`pixel_step_counts` summed over the row).
 
     log_image : (T, H, W, 3), ``I'`` (:func:`offset_log`).
     tau_chroma : 0: no step is chromatic.
+    floor, k : the noise floor (:func:`net_steps`).
     """
-    counts = pixel_step_counts(log_image, tau, tau_chroma).sum(axis=2)
+    counts = pixel_step_counts(log_image, tau, tau_chroma, floor, k).sum(axis=2)
     return counts.reshape(-1, 2).astype(np.int32)
 
 
-def pixel_counts(log_image, offset: float, tau: float, tau_chroma: float = 0.0) -> np.ndarray:
+def pixel_counts(log_image, offset: float, tau: float, tau_chroma: float = 0.0, floor=None,
+                 k: float = 0.0) -> np.ndarray:
     """(T, H, W, 2) int32: :func:`pixel_step_counts` of ``offset_log(log_image, offset)``, all in float64.
 
     log_image : (T, H, W, 3), ``log i`` (not offset).
+    floor, k : the noise floor (:func:`net_steps`), of the offset log image's steps.
     """
-    return pixel_step_counts(offset_log(log_image, offset), tau, tau_chroma).astype(np.int32)
+    return pixel_step_counts(offset_log(log_image, offset), tau, tau_chroma, floor, k).astype(np.int32)
 
 
 def window_sums(counts, radius: int) -> np.ndarray:
@@ -230,26 +277,29 @@ def share(counts) -> float:
     return chromatic / sharp if sharp else 0.0
 
 
-def evidence(log_image, tau: float, tau_chroma: float = 0.0) -> np.ndarray:
+def evidence(log_image, tau: float, tau_chroma: float = 0.0, floor=None, k: float = 0.0) -> np.ndarray:
     """(T, H, W) float64 in [0, 1): the largest pair evidence over a pixel's 8 neighbours
-    (0 for a pixel without any); ``log_image`` is ``I'``, ``tau_chroma = 0``: colour is not looked at."""
+    (0 for a pixel without any); ``log_image`` is ``I'``, ``tau_chroma = 0``: colour is not looked at;
+    ``floor``, ``k``: the steps net of the noise floor (:func:`net_steps`)."""
     L, C = luminance_chroma(log_image)
     out = np.zeros(L.shape)
     for dy, dx in HALF_NEIGHBOURS:
         a, b = pair_slices(L.shape, dy, dx)
-        ev = 1.0 - np.exp(-((L[a] - L[b]) / tau) ** 2)
+        dL, dC = net_steps(np.abs(L[a] - L[b]), _chroma_change(C, a, b), floor, k, a, b)
+        ev = 1.0 - np.exp(-(dL / tau) ** 2)
         if tau_chroma > 0:
-            ev *= np.exp(-(_chroma_change(C, a, b) / tau_chroma) ** 2)
+            ev *= np.exp(-(dC / tau_chroma) ** 2)
         np.maximum(out[a], ev, out=out[a])
         np.maximum(out[b], ev, out=out[b])
     return out
 
 
-def step_gate(log_image, counts, weight, gate, gain: float, tau: float, tau_chroma: float = 0.0) -> np.ndarray:
+def step_gate(log_image, counts, weight, gate, gain: float, tau: float, tau_chroma: float = 0.0, floor=None,
+              k: float = 0.0) -> np.ndarray:
     """``gate * (1 + gain (1 - share(counts))^2 weight evidence)`` (T, H, W), float64."""
     scaled = gain * (1.0 - share(counts)) ** 2
     return np.asarray(gate, np.float64) * (1.0 + scaled * np.asarray(weight, np.float64)
-                                           * evidence(log_image, tau, tau_chroma))
+                                           * evidence(log_image, tau, tau_chroma, floor, k))
 
 
 def moving(flow, n_frames: int, static_flow: float) -> np.ndarray:

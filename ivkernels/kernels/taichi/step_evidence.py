@@ -58,9 +58,28 @@ def pair_step(img: ti.template(), t, y, x, yy, xx):
 
 
 @ti.func
-def pair_counts(img: ti.template(), t, y, x, yy, xx, tau, tau_chroma):
-    """``(sharp, chromatic)``, each 0 or 1, of one pair of neighbours."""
+def net_of_floor(d, floor: ti.template(), t, y, x, yy, xx, c, k):
+    """``sqrt(max(d^2 - k^2 (f(y, x)^2 + f(yy, xx)^2) / 2, 0))``, ``f = floor[t, ..., c]``; ``d`` for ``k = 0``
+    (see the Warp module)."""
+    out = d
+    if k > 0.0:
+        fa = floor[t, y, x, c]
+        fb = floor[t, yy, xx, c]
+        out = ti.sqrt(ti.max(d * d - k * k * (fa * fa + fb * fb) / 2.0, 0.0))
+    return out
+
+
+@ti.func
+def net_step(img: ti.template(), floor: ti.template(), t, y, x, yy, xx, k):
+    """:func:`pair_step` net of the noise ``floor`` at ``k``."""
     dl, dc = pair_step(img, t, y, x, yy, xx)
+    return net_of_floor(dl, floor, t, y, x, yy, xx, 0, k), net_of_floor(dc, floor, t, y, x, yy, xx, 1, k)
+
+
+@ti.func
+def pair_counts(img: ti.template(), floor: ti.template(), t, y, x, yy, xx, tau, tau_chroma, k):
+    """``(sharp, chromatic)``, each 0 or 1, of one pair of neighbours."""
+    dl, dc = net_step(img, floor, t, y, x, yy, xx, k)
     chromatic = 0
     if tau_chroma > 0.0 and dc > tau_chroma:
         chromatic = 1
@@ -71,15 +90,38 @@ def pair_counts(img: ti.template(), t, y, x, yy, xx, tau, tau_chroma):
 
 
 @ti.func
-def pair_evidence(img: ti.template(), t, y, x, yy, xx, tau, tau_chroma):
-    """``(1 - exp(-(dL / tau)^2)) * exp(-(dC / tau_chroma)^2)`` (the second factor 1 for ``tau_chroma = 0``)."""
-    dl, dc = pair_step(img, t, y, x, yy, xx)
+def pair_evidence(img: ti.template(), floor: ti.template(), t, y, x, yy, xx, tau, tau_chroma, k):
+    """``(1 - exp(-(dL / tau)^2)) * exp(-(dC / tau_chroma)^2)`` (the second factor 1 for ``tau_chroma = 0``),
+    the steps net of the noise ``floor`` at ``k``."""
+    dl, dc = net_step(img, floor, t, y, x, yy, xx, k)
     q = dl / tau
     ev = one_minus_exp_neg(q * q)
     if tau_chroma > 0.0:
         qc = dc / tau_chroma
         ev = ev * exp_neg(qc * qc)
     return ev
+
+
+@ti.kernel
+def typical_steps_rows(img: nd4, steps: nd4):
+    height = img.shape[1]
+    width = img.shape[2]
+    for r in range(img.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for x in range(width):
+            sl = 0.0
+            sc = 0.0
+            if x + 1 < width:
+                dl, dc = pair_step(img, t, y, x, y, x + 1)
+                sl = ti.max(sl, dl)
+                sc = ti.max(sc, dc)
+            if y + 1 < height:
+                dl, dc = pair_step(img, t, y, x, y + 1, x)
+                sl = ti.max(sl, dl)
+                sc = ti.max(sc, dc)
+            steps[t, y, x, 0] = sl
+            steps[t, y, x, 1] = sc
 
 
 @ti.kernel
@@ -94,7 +136,7 @@ def offset_log_rows(img: nd4, out: nd4, offset: ti.f32):
 
 
 @ti.kernel
-def step_counts_rows(img: nd4, counts: nd2_i32, tau: ti.f32, tau_chroma: ti.f32):
+def step_counts_rows(img: nd4, counts: nd2_i32, tau: ti.f32, tau_chroma: ti.f32, floor: nd4, k: ti.f32):
     height = img.shape[1]
     width = img.shape[2]
     for r in range(img.shape[0] * height):
@@ -104,11 +146,11 @@ def step_counts_rows(img: nd4, counts: nd2_i32, tau: ti.f32, tau_chroma: ti.f32)
         chromatic = 0
         for x in range(width):
             if x + 1 < width:
-                s, c = pair_counts(img, t, y, x, y, x + 1, tau, tau_chroma)
+                s, c = pair_counts(img, floor, t, y, x, y, x + 1, tau, tau_chroma, k)
                 sharp += s
                 chromatic += c
             if y + 1 < height:
-                s, c = pair_counts(img, t, y, x, y + 1, x, tau, tau_chroma)
+                s, c = pair_counts(img, floor, t, y, x, y + 1, x, tau, tau_chroma, k)
                 sharp += s
                 chromatic += c
         counts[r, 0] = sharp
@@ -116,21 +158,35 @@ def step_counts_rows(img: nd4, counts: nd2_i32, tau: ti.f32, tau_chroma: ti.f32)
 
 
 @ti.func
-def pair_counts64(lc: ti.template(), t, y, x, yy, xx, tau, tau_chroma):
-    """``(sharp, chromatic)`` of one pair from the float64 ``(L, C_0, C_1, C_2)`` of ``lc`` (see the Warp module)."""
+def net_of_floor64(d, floor: ti.template(), t, y, x, yy, xx, c, k):
+    """:func:`net_of_floor` in float64 (the floor read as float64)."""
+    out = d
+    if k > 0.0:
+        fa = ti.cast(floor[t, y, x, c], ti.f64)
+        fb = ti.cast(floor[t, yy, xx, c], ti.f64)
+        out = ti.sqrt(ti.max(d * d - k * k * (fa * fa + fb * fb) / 2.0, 0.0))
+    return out
+
+
+@ti.func
+def pair_counts64(lc: ti.template(), floor: ti.template(), t, y, x, yy, xx, tau, tau_chroma, k):
+    """``(sharp, chromatic)`` of one pair from the float64 ``(L, C_0, C_1, C_2)`` of ``lc`` (see the Warp module),
+    the steps net of the noise ``floor`` at ``k``."""
     dc = ti.max(ti.max(ti.abs(lc[t, y, x, 1] - lc[t, yy, xx, 1]), ti.abs(lc[t, y, x, 2] - lc[t, yy, xx, 2])),
                 ti.abs(lc[t, y, x, 3] - lc[t, yy, xx, 3]))
+    dc = net_of_floor64(dc, floor, t, y, x, yy, xx, 1, k)
+    dl = net_of_floor64(ti.abs(lc[t, y, x, 0] - lc[t, yy, xx, 0]), floor, t, y, x, yy, xx, 0, k)
     chromatic = 0
     if tau_chroma > 0.0 and dc > tau_chroma:
         chromatic = 1
     sharp = chromatic
-    if ti.abs(lc[t, y, x, 0] - lc[t, yy, xx, 0]) > tau:
+    if dl > tau:
         sharp = 1
     return sharp, chromatic
 
 
 @ti.kernel
-def pixel_counts_rows(lc: nd4_f64, counts: nd4_i32, tau: ti.f64, tau_chroma: ti.f64):
+def pixel_counts_rows(lc: nd4_f64, counts: nd4_i32, tau: ti.f64, tau_chroma: ti.f64, floor: nd4, k: ti.f64):
     height = lc.shape[1]
     width = lc.shape[2]
     for r in range(lc.shape[0] * height):
@@ -140,11 +196,11 @@ def pixel_counts_rows(lc: nd4_f64, counts: nd4_i32, tau: ti.f64, tau_chroma: ti.
             sharp = 0
             chromatic = 0
             if x + 1 < width:
-                s, c = pair_counts64(lc, t, y, x, y, x + 1, tau, tau_chroma)
+                s, c = pair_counts64(lc, floor, t, y, x, y, x + 1, tau, tau_chroma, k)
                 sharp += s
                 chromatic += c
             if y + 1 < height:
-                s, c = pair_counts64(lc, t, y, x, y + 1, x, tau, tau_chroma)
+                s, c = pair_counts64(lc, floor, t, y, x, y + 1, x, tau, tau_chroma, k)
                 sharp += s
                 chromatic += c
             counts[t, y, x, 0] = sharp
@@ -201,7 +257,7 @@ def share_weight_columns(sums: nd4_i32, weight: nd3, radius: ti.i32, prior_whole
 
 
 @ti.kernel
-def half_pair_evidence_rows(img: nd4, pairs: nd4, tau: ti.f32, tau_chroma: ti.f32):
+def half_pair_evidence_rows(img: nd4, pairs: nd4, tau: ti.f32, tau_chroma: ti.f32, floor: nd4, k: ti.f32):
     """``pairs[t, y, x, k]``: the evidence of the pair of ``(y, x)`` with ``(y, x) + HALF_NEIGHBOURS[k]``."""
     height = img.shape[1]
     width = img.shape[2]
@@ -214,13 +270,13 @@ def half_pair_evidence_rows(img: nd4, pairs: nd4, tau: ti.f32, tau_chroma: ti.f3
             e2 = 0.0
             e3 = 0.0
             if x + 1 < width:
-                e0 = pair_evidence(img, t, y, x, y, x + 1, tau, tau_chroma)
+                e0 = pair_evidence(img, floor, t, y, x, y, x + 1, tau, tau_chroma, k)
             if y + 1 < height:
-                e1 = pair_evidence(img, t, y, x, y + 1, x, tau, tau_chroma)
+                e1 = pair_evidence(img, floor, t, y, x, y + 1, x, tau, tau_chroma, k)
                 if x + 1 < width:
-                    e2 = pair_evidence(img, t, y, x, y + 1, x + 1, tau, tau_chroma)
+                    e2 = pair_evidence(img, floor, t, y, x, y + 1, x + 1, tau, tau_chroma, k)
                 if x >= 1:
-                    e3 = pair_evidence(img, t, y, x, y + 1, x - 1, tau, tau_chroma)
+                    e3 = pair_evidence(img, floor, t, y, x, y + 1, x - 1, tau, tau_chroma, k)
             pairs[t, y, x, 0] = e0
             pairs[t, y, x, 1] = e1
             pairs[t, y, x, 2] = e2
@@ -425,15 +481,29 @@ def offset_log(log_image, out, offset: float) -> None:
         offset_log_rows(log_image, out, offset)
 
 
+def _floor_or_none(floor) -> np.ndarray:
+    """``floor``, or a (1, 1, 1, 2) zero array standing for none (read only with ``k > 0``)."""
+    return floor if floor is not None else np.zeros((1, 1, 1, 2), np.float32)
+
+
+@host("typical_steps")
+def typical_steps(log_image, steps) -> None:
+    """Per pixel, the larger step of its right and lower pairs; see
+    :func:`ivkernels.kernels.warp.step_evidence.typical_steps`."""
+    if steps.size:
+        typical_steps_rows(log_image, steps)
+
+
 @host("step_counts")
-def step_counts(log_image, counts, tau: float, tau_chroma: float = 0.0) -> None:
+def step_counts(log_image, counts, tau: float, tau_chroma: float = 0.0, floor=None, k: float = 0.0) -> None:
     """Per row, the sharp and the chromatic steps; see :func:`ivkernels.kernels.warp.step_evidence.step_counts`."""
     if counts.size:
-        step_counts_rows(log_image, counts, tau, tau_chroma)
+        step_counts_rows(log_image, counts, tau, tau_chroma, _floor_or_none(floor), k)
 
 
 @host("pixel_counts")
-def pixel_counts(log_image, counts, offset: float, tau: float, tau_chroma: float = 0.0) -> None:
+def pixel_counts(log_image, counts, offset: float, tau: float, tau_chroma: float = 0.0, floor=None,
+                 k: float = 0.0) -> None:
     """Per pixel, the sharp and the chromatic steps in float64; see
     :func:`ivkernels.kernels.warp.step_evidence.pixel_counts`."""
     if counts.size:
@@ -443,7 +513,7 @@ def pixel_counts(log_image, counts, offset: float, tau: float, tau_chroma: float
         lc = np.empty((*counts.shape[:3], 4), np.float64)
         lc[..., 0] = L
         lc[..., 1:] = C
-        pixel_counts_rows(lc, counts, tau, tau_chroma)
+        pixel_counts_rows(lc, counts, tau, tau_chroma, _floor_or_none(floor), k)
 
 
 @host("share_weight")
@@ -460,11 +530,12 @@ def share_weight(counts, weight, radius: int, prior_steps: float) -> None:
 
 
 @host("step_gate")
-def step_gate(log_image, counts, weight, gate, gain: float, tau: float, tau_chroma: float = 0.0) -> None:
+def step_gate(log_image, counts, weight, gate, gain: float, tau: float, tau_chroma: float = 0.0, floor=None,
+              k: float = 0.0) -> None:
     """``gate *= 1 + gain (1 - s)^2 weight evidence``; see :func:`ivkernels.kernels.warp.step_evidence.step_gate`."""
     if gate.size:
         pairs = np.empty((*gate.shape, 4), np.float32)         # each pair once, then each pixel's largest
-        half_pair_evidence_rows(log_image, pairs, tau, tau_chroma)
+        half_pair_evidence_rows(log_image, pairs, tau, tau_chroma, _floor_or_none(floor), k)
         step_gate_rows(pairs, weight, gate, gain * (1.0 - share(counts)) ** 2)
 
 

@@ -79,10 +79,29 @@ def pair_step(img: wp.array4d(dtype=float), t: int, y: int, x: int, yy: int, xx:
 
 
 @wp.func
-def pair_counts(img: wp.array4d(dtype=float), t: int, y: int, x: int, yy: int, xx: int, tau: float,
-                tau_chroma: float):
-    """``(sharp, chromatic)``, each 0 or 1, of one pair of neighbours."""
+def net_of_floor(d: float, floor: wp.array4d(dtype=float), t: int, y: int, x: int, yy: int, xx: int, c: int,
+                 k: float):
+    """``sqrt(max(d^2 - k^2 (f(y, x)^2 + f(yy, xx)^2) / 2, 0))`` with ``f = floor[t, ..., c]``; ``d`` for ``k = 0``."""
+    if k <= 0.0:
+        return d
+    fa = floor[t, y, x, c]
+    fb = floor[t, yy, xx, c]
+    return wp.sqrt(wp.max(d * d - k * k * (fa * fa + fb * fb) / 2.0, 0.0))
+
+
+@wp.func
+def net_step(img: wp.array4d(dtype=float), floor: wp.array4d(dtype=float), t: int, y: int, x: int, yy: int,
+             xx: int, k: float):
+    """:func:`pair_step` net of the noise ``floor`` (channel 0 for ``dL``, 1 for ``dC``) at ``k``."""
     dl, dc = pair_step(img, t, y, x, yy, xx)
+    return net_of_floor(dl, floor, t, y, x, yy, xx, 0, k), net_of_floor(dc, floor, t, y, x, yy, xx, 1, k)
+
+
+@wp.func
+def pair_counts(img: wp.array4d(dtype=float), floor: wp.array4d(dtype=float), t: int, y: int, x: int, yy: int,
+                xx: int, tau: float, tau_chroma: float, k: float):
+    """``(sharp, chromatic)``, each 0 or 1, of one pair of neighbours."""
+    dl, dc = net_step(img, floor, t, y, x, yy, xx, k)
     chromatic = int(0)
     if tau_chroma > 0.0:
         if dc > tau_chroma:
@@ -94,10 +113,11 @@ def pair_counts(img: wp.array4d(dtype=float), t: int, y: int, x: int, yy: int, x
 
 
 @wp.func
-def pair_evidence(img: wp.array4d(dtype=float), t: int, y: int, x: int, yy: int, xx: int, tau: float,
-                  tau_chroma: float):
-    """``(1 - exp(-(dL / tau)^2)) * exp(-(dC / tau_chroma)^2)`` (the second factor 1 for ``tau_chroma = 0``)."""
-    dl, dc = pair_step(img, t, y, x, yy, xx)
+def pair_evidence(img: wp.array4d(dtype=float), floor: wp.array4d(dtype=float), t: int, y: int, x: int, yy: int,
+                  xx: int, tau: float, tau_chroma: float, k: float):
+    """``(1 - exp(-(dL / tau)^2)) * exp(-(dC / tau_chroma)^2)`` (the second factor 1 for ``tau_chroma = 0``),
+    the steps net of the noise ``floor`` at ``k``."""
+    dl, dc = net_step(img, floor, t, y, x, yy, xx, k)
     q = dl / tau
     ev = one_minus_exp_neg(q * q)
     if tau_chroma > 0.0:
@@ -109,6 +129,28 @@ def pair_evidence(img: wp.array4d(dtype=float), t: int, y: int, x: int, yy: int,
 # ----------------------------------------------------------------------------
 # Kernels
 # ----------------------------------------------------------------------------
+
+@wp.kernel
+def typical_steps_rows(row_begin: int, img: wp.array4d(dtype=float), steps: wp.array4d(dtype=float)):
+    r = row_begin + wp.tid()
+    height = img.shape[1]
+    width = img.shape[2]
+    t = r // height
+    y = r - t * height
+    for x in range(width):
+        sl = float(0.0)
+        sc = float(0.0)
+        if x + 1 < width:
+            dl, dc = pair_step(img, t, y, x, y, x + 1)
+            sl = wp.max(sl, dl)
+            sc = wp.max(sc, dc)
+        if y + 1 < height:
+            dl, dc = pair_step(img, t, y, x, y + 1, x)
+            sl = wp.max(sl, dl)
+            sc = wp.max(sc, dc)
+        steps[t, y, x, 0] = sl
+        steps[t, y, x, 1] = sc
+
 
 @wp.kernel
 def offset_log_rows(row_begin: int, img: wp.array4d(dtype=float), out: wp.array4d(dtype=float), offset: float):
@@ -123,7 +165,7 @@ def offset_log_rows(row_begin: int, img: wp.array4d(dtype=float), out: wp.array4
 
 @wp.kernel
 def step_counts_rows(row_begin: int, img: wp.array4d(dtype=float), counts: wp.array2d(dtype=wp.int32),
-                     tau: float, tau_chroma: float):
+                     tau: float, tau_chroma: float, floor: wp.array4d(dtype=float), k: float):
     r = row_begin + wp.tid()
     height = img.shape[1]
     width = img.shape[2]
@@ -133,11 +175,11 @@ def step_counts_rows(row_begin: int, img: wp.array4d(dtype=float), counts: wp.ar
     chromatic = int(0)
     for x in range(width):
         if x + 1 < width:
-            s, c = pair_counts(img, t, y, x, y, x + 1, tau, tau_chroma)
+            s, c = pair_counts(img, floor, t, y, x, y, x + 1, tau, tau_chroma, k)
             sharp += s
             chromatic += c
         if y + 1 < height:
-            s, c = pair_counts(img, t, y, x, y + 1, x, tau, tau_chroma)
+            s, c = pair_counts(img, floor, t, y, x, y + 1, x, tau, tau_chroma, k)
             sharp += s
             chromatic += c
     counts[r, 0] = sharp
@@ -165,24 +207,38 @@ def luminance_chroma_rows(row_begin: int, img: wp.array4d(dtype=float), lc: wp.a
 
 
 @wp.func
-def pair_counts64(lc: wp.array4d(dtype=wp.float64), t: int, y: int, x: int, yy: int, xx: int,
-                  tau: wp.float64, tau_chroma: wp.float64):
-    """``(sharp, chromatic)``, each 0 or 1, of one pair from the float64 ``(L, C)`` of :func:`luminance_chroma_rows`."""
+def net_of_floor64(d: wp.float64, floor: wp.array4d(dtype=float), t: int, y: int, x: int, yy: int, xx: int,
+                   c: int, k: wp.float64):
+    """:func:`net_of_floor` in float64 (the floor read as float64)."""
+    if k <= wp.float64(0.0):
+        return d
+    fa = wp.float64(floor[t, y, x, c])
+    fb = wp.float64(floor[t, yy, xx, c])
+    return wp.sqrt(wp.max(d * d - k * k * (fa * fa + fb * fb) / wp.float64(2.0), wp.float64(0.0)))
+
+
+@wp.func
+def pair_counts64(lc: wp.array4d(dtype=wp.float64), floor: wp.array4d(dtype=float), t: int, y: int, x: int,
+                  yy: int, xx: int, tau: wp.float64, tau_chroma: wp.float64, k: wp.float64):
+    """``(sharp, chromatic)``, each 0 or 1, of one pair from the float64 ``(L, C)`` of :func:`luminance_chroma_rows`,
+    the steps net of the noise ``floor`` at ``k``."""
     dc = wp.max(wp.max(wp.abs(lc[t, y, x, 1] - lc[t, yy, xx, 1]), wp.abs(lc[t, y, x, 2] - lc[t, yy, xx, 2])),
                 wp.abs(lc[t, y, x, 3] - lc[t, yy, xx, 3]))
+    dc = net_of_floor64(dc, floor, t, y, x, yy, xx, 1, k)
+    dl = net_of_floor64(wp.abs(lc[t, y, x, 0] - lc[t, yy, xx, 0]), floor, t, y, x, yy, xx, 0, k)
     chromatic = int(0)
     if tau_chroma > wp.float64(0.0):
         if dc > tau_chroma:
             chromatic = 1
     sharp = chromatic
-    if wp.abs(lc[t, y, x, 0] - lc[t, yy, xx, 0]) > tau:
+    if dl > tau:
         sharp = 1
     return sharp, chromatic
 
 
 @wp.kernel
 def pixel_counts_rows(row_begin: int, lc: wp.array4d(dtype=wp.float64), counts: wp.array4d(dtype=wp.int32),
-                      tau: wp.float64, tau_chroma: wp.float64):
+                      tau: wp.float64, tau_chroma: wp.float64, floor: wp.array4d(dtype=float), k: wp.float64):
     r = row_begin + wp.tid()
     height = lc.shape[1]
     width = lc.shape[2]
@@ -192,11 +248,11 @@ def pixel_counts_rows(row_begin: int, lc: wp.array4d(dtype=wp.float64), counts: 
         sharp = int(0)
         chromatic = int(0)
         if x + 1 < width:
-            s, c = pair_counts64(lc, t, y, x, y, x + 1, tau, tau_chroma)
+            s, c = pair_counts64(lc, floor, t, y, x, y, x + 1, tau, tau_chroma, k)
             sharp += s
             chromatic += c
         if y + 1 < height:
-            s, c = pair_counts64(lc, t, y, x, y + 1, x, tau, tau_chroma)
+            s, c = pair_counts64(lc, floor, t, y, x, y + 1, x, tau, tau_chroma, k)
             sharp += s
             chromatic += c
         counts[t, y, x, 0] = sharp
@@ -289,7 +345,7 @@ def scaled_gain(counts: wp.array2d(dtype=wp.int32), gain: float, out: wp.array(d
 
 @wp.kernel
 def half_pair_evidence_rows(row_begin: int, img: wp.array4d(dtype=float), pairs: wp.array4d(dtype=float),
-                            tau: float, tau_chroma: float):
+                            tau: float, tau_chroma: float, floor: wp.array4d(dtype=float), k: float):
     """``pairs[t, y, x, k]``: the evidence of the pair of ``(y, x)`` with its neighbour
     ``(y, x) + HALF_NEIGHBOURS[k]`` = (0, 1), (1, 0), (1, 1), (1, -1); 0 where it lies outside."""
     r = row_begin + wp.tid()
@@ -305,13 +361,13 @@ def half_pair_evidence_rows(row_begin: int, img: wp.array4d(dtype=float), pairs:
         e2 = float(0.0)
         e3 = float(0.0)
         if right:
-            e0 = pair_evidence(img, t, y, x, y, x + 1, tau, tau_chroma)
+            e0 = pair_evidence(img, floor, t, y, x, y, x + 1, tau, tau_chroma, k)
         if below:
-            e1 = pair_evidence(img, t, y, x, y + 1, x, tau, tau_chroma)
+            e1 = pair_evidence(img, floor, t, y, x, y + 1, x, tau, tau_chroma, k)
             if right:
-                e2 = pair_evidence(img, t, y, x, y + 1, x + 1, tau, tau_chroma)
+                e2 = pair_evidence(img, floor, t, y, x, y + 1, x + 1, tau, tau_chroma, k)
             if x >= 1:
-                e3 = pair_evidence(img, t, y, x, y + 1, x - 1, tau, tau_chroma)
+                e3 = pair_evidence(img, floor, t, y, x, y + 1, x - 1, tau, tau_chroma, k)
         pairs[t, y, x, 0] = e0
         pairs[t, y, x, 1] = e1
         pairs[t, y, x, 2] = e2
@@ -545,8 +601,27 @@ def offset_log(log_image, out, offset: float) -> None:
     launch_rows(offset_log_rows, t * h, [log_image, out, offset], device=log_image.device)
 
 
+def _floor_or_none(floor, device):
+    """``floor``, or a (1, 1, 1, 2) zero array standing for none (read only with ``k > 0``)."""
+    return floor if floor is not None else wp.zeros((1, 1, 1, 2), dtype=float, device=device)
+
+
+@host("typical_steps")
+def typical_steps(log_image, steps) -> None:
+    """Per pixel, the larger step of its right and lower pairs: ``steps[..., 0]`` the log-luminance
+    step ``dL``, ``steps[..., 1]`` the log-chromaticity change ``dC`` (0 without a pair).  Their
+    5x5 median (``median.median5x5``) is the noise floor of :func:`step_counts`,
+    :func:`pixel_counts` and :func:`step_gate`.
+
+    log_image : wp.array float32 (T, H, W, 3), the offset log image (:func:`offset_log`).
+    steps : wp.array float32 (T, H, W, 2), written.
+    """
+    t, h, _, _ = log_image.shape
+    launch_rows(typical_steps_rows, t * h, [log_image, steps], device=log_image.device)
+
+
 @host("step_counts")
-def step_counts(log_image, counts, tau: float, tau_chroma: float = 0.0) -> None:
+def step_counts(log_image, counts, tau: float, tau_chroma: float = 0.0, floor=None, k: float = 0.0) -> None:
     """Counts of the steps of the chromatic share.
 
     For each row ``r = t * H + y``, over the pairs ``(x, x + (0, 1))`` and
@@ -558,13 +633,18 @@ def step_counts(log_image, counts, tau: float, tau_chroma: float = 0.0) -> None:
     log_image : wp.array float32 (T, H, W, 3), the offset log image (:func:`offset_log`).
     counts : wp.array int32 (T*H, 2), written.
     tau, tau_chroma : log units.
+    floor, k : the steps are read net of the noise ``floor`` (T, H, W, 2) at ``k``
+        (:func:`ivkernels.kernels.reference.step_evidence.net_steps`); ``None`` or 0: as they are.
     """
     t, h, _, _ = log_image.shape
-    launch_rows(step_counts_rows, t * h, [log_image, counts, tau, tau_chroma], device=log_image.device)
+    dev = log_image.device
+    launch_rows(step_counts_rows, t * h, [log_image, counts, tau, tau_chroma, _floor_or_none(floor, dev), k],
+                device=dev)
 
 
 @host("pixel_counts")
-def pixel_counts(log_image, counts, offset: float, tau: float, tau_chroma: float = 0.0) -> None:
+def pixel_counts(log_image, counts, offset: float, tau: float, tau_chroma: float = 0.0, floor=None,
+                 k: float = 0.0) -> None:
     """Counts of the steps of the chromatic share, per pixel and in float64.
 
     For each pixel ``x``, over its pairs ``(x, x + (0, 1))`` and ``(x, x + (1, 0))``
@@ -580,12 +660,13 @@ def pixel_counts(log_image, counts, offset: float, tau: float, tau_chroma: float
     log_image : wp.array float32 (T, H, W, 3), ``log i`` (not offset).
     counts : wp.array int32 (T, H, W, 2), written.
     offset : > 0 (``DARK_OFFSET``); tau, tau_chroma : log units.
+    floor, k : as for :func:`step_counts` (the floor of the offset log image's steps).
     """
     t, h, w, _ = log_image.shape
     dev = log_image.device
     lc = wp.empty((t, h, w, 4), dtype=wp.float64, device=dev)
     launch_rows(luminance_chroma_rows, t * h, [log_image, lc, offset], device=dev)
-    launch_rows(pixel_counts_rows, t * h, [lc, counts, tau, tau_chroma], device=dev)
+    launch_rows(pixel_counts_rows, t * h, [lc, counts, tau, tau_chroma, _floor_or_none(floor, dev), k], device=dev)
 
 
 @host("share_weight")
@@ -621,7 +702,8 @@ def share_weight(counts, weight, radius: int, prior_steps: float) -> None:
 
 
 @host("step_gate")
-def step_gate(log_image, counts, weight, gate, gain: float, tau: float, tau_chroma: float = 0.0) -> None:
+def step_gate(log_image, counts, weight, gate, gain: float, tau: float, tau_chroma: float = 0.0, floor=None,
+              k: float = 0.0) -> None:
     """Multiply the step weight of Eq. 9's local term into ``gate``.
 
     ``gate *= 1 + gain (1 - s)^2 weight evidence`` with ``s`` the chromatic
@@ -637,6 +719,7 @@ def step_gate(log_image, counts, weight, gate, gain: float, tau: float, tau_chro
     weight : wp.array float32 (T, H, W), per pixel factor on the evidence (Weiss's cue, or 1); may be ``gate``.
     gate : wp.array float32 (T, H, W), updated.
     gain : >= 0; tau, tau_chroma : log units (``tau_chroma = 0``: colour is not looked at).
+    floor, k : as for :func:`step_counts`.
     """
     t, h, w, _ = log_image.shape
     dev = log_image.device
@@ -644,7 +727,8 @@ def step_gate(log_image, counts, weight, gate, gain: float, tau: float, tau_chro
     wp.launch(scaled_gain, dim=1, inputs=[counts, gain, scaled], device=dev)
     # each pair once (a (T, H, W, 4) float32 buffer for this call), then each pixel's largest
     pairs = wp.empty((t, h, w, 4), dtype=float, device=dev)
-    launch_rows(half_pair_evidence_rows, t * h, [log_image, pairs, tau, tau_chroma], device=dev)
+    launch_rows(half_pair_evidence_rows, t * h, [log_image, pairs, tau, tau_chroma, _floor_or_none(floor, dev), k],
+                device=dev)
     launch_rows(step_gate_rows, t * h, [pairs, weight, gate, scaled], device=dev)
 
 
