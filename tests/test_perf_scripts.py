@@ -382,6 +382,22 @@ def test_tune_baselines_searches_the_luminance_threshold():
     assert "best: threshold_gray=" in out                  # the colour search ran too
 
 
+def test_dark_disc_prints_a_row_per_noise_channels_and_setting():
+    proc = subprocess.run(
+        [sys.executable, str(PERF / "dark_disc.py"), "--size", "32", "40", "--frames", "3", "--radius", "8",
+         "--noise", "0", "0.003", "--grid", "shading_step_noise=0,2.5"],
+        capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    rows = [line.split() for line in proc.stdout.splitlines() if line.strip().startswith(("0.0000", "0.0030"))]
+    assert [(r[1], r[2]) for r in rows] == [("-", "shading_step_noise=0"), ("-", "shading_step_noise=2.5"),
+                                            ("per", "shading_step_noise=0"), ("per", "shading_step_noise=2.5"),
+                                            ("shared", "shading_step_noise=0"), ("shared", "shading_step_noise=2.5")]
+    assert all(0.0 < float(r[3]) < 2.0 for r in rows) and "truth 0.160" in proc.stdout
+    bad = subprocess.run([sys.executable, str(PERF / "dark_disc.py"), "--size", "32", "40", "--radius", "30"],
+                         capture_output=True, text=True, timeout=300)
+    assert bad.returncode != 0 and "--radius" in bad.stderr
+
+
 def test_perf_scripts_import_only_the_common_module():
     """The evaluation scripts share perf/common.py and never import each other."""
     scripts = {p.stem for p in PERF.glob("*.py")} - {"common"}
