@@ -19,23 +19,7 @@ import numpy as np
 
 import ivkernels as iv
 from common import parse_grid
-
-FLOOR_ALBEDO = 0.5
-
-
-def disc_frames(size, frames: int, radius: int, dark: float, noise: float, per_channel: bool, seed: int = 0):
-    """``(frames (T, H, W, 3) float32 in [0, 1], inside mask, floor mask)``; the masks leave 2 px
-    either side of the disc's edge out."""
-    h, w = size
-    yy, xx = np.mgrid[0:h, 0:w]
-    r2 = (yy - h / 2) ** 2 + (xx - w / 2) ** 2
-    albedo = np.where(r2 < radius ** 2, dark, FLOOR_ALBEDO)
-    light = 0.4 + 0.6 * (xx / w) * (0.6 + 0.4 * yy / h)
-    video = np.repeat((albedo * light)[None, :, :, None], 3, axis=-1).repeat(frames, axis=0)
-    rng = np.random.default_rng(seed)
-    video = video + rng.normal(0.0, noise, video.shape[:3] + ((3,) if per_channel else (1,)))
-    return np.clip(video, 0.0, 1.0).astype(np.float32), r2 < (radius - 2) ** 2, r2 > (radius + 2) ** 2
-
+from ivkernels.evaluation.synthetic import DISC_FLOOR_ALBEDO, dark_disc
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -48,16 +32,16 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if not 2 < args.radius < min(args.size) // 2 - 2:
         raise SystemExit(f"--radius must leave the disc and a floor around it inside the frame; got {args.radius}")
-    truth = args.dark / FLOOR_ALBEDO
-    print(f"dark disc (albedo {args.dark:g}, radius {args.radius} px) on a floor of {FLOOR_ALBEDO:g}, "
+    truth = args.dark / DISC_FLOOR_ALBEDO
+    print(f"dark disc (albedo {args.dark:g}, radius {args.radius} px) on a floor of {DISC_FLOOR_ALBEDO:g}, "
           f"{args.frames} still frames at {args.size[1]}x{args.size[0]}; albedo ratio inside / floor, truth {truth:.3f}")
     print(f"{'noise':>7} {'channels':>9} {'setting':<32} {'ratio':>7}")
     for noise in args.noise:
         for per_channel in (True, False):
             if noise == 0 and not per_channel:
                 continue
-            frames, inside, floor = disc_frames(tuple(args.size), args.frames, args.radius, args.dark, noise,
-                                                per_channel)
+            frames, inside, floor = dark_disc(tuple(args.size), args.frames, args.radius, args.dark, noise,
+                                              per_channel)
             flow = np.zeros((args.frames - 1, *args.size, 2), np.float32)
             for fields in parse_grid(args.grid):
                 albedo = iv.decompose(frames, flow=flow, params=iv.Params(**fields)).albedo.mean(axis=-1)

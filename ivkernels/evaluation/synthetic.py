@@ -1186,6 +1186,31 @@ def degrade_frames(frames: np.ndarray, noise=None, compression=None, seed: int =
     return out.astype(np.float32)
 
 
+#: Albedo of the floor around :func:`dark_disc`'s disc.
+DISC_FLOOR_ALBEDO = 0.5
+
+
+def dark_disc(size: tuple[int, int] = (120, 160), n_frames: int = 8, radius: int = 20, dark: float = 0.08,
+              noise: float = 0.0, per_channel: bool = True, seed: int = 0):
+    """The smallest case of a dark material: a still disc of albedo ``dark`` on a floor of
+    :data:`DISC_FLOOR_ALBEDO` under a smooth static light, with a camera's Gaussian noise
+    (``noise``, std in linear units) drawn per colour channel (a colour camera) or shared by
+    the channels (greyscale footage).  No motion: the flow is zero.
+
+    Returns ``(frames (T, H, W, 3) float32 in [0, 1], inside (H, W) bool, floor (H, W) bool)``,
+    the masks leaving 2 px either side of the disc's edge out.
+    """
+    h, w = size
+    yy, xx = np.mgrid[0:h, 0:w]
+    r2 = (yy - h / 2) ** 2 + (xx - w / 2) ** 2
+    albedo = np.where(r2 < radius ** 2, dark, DISC_FLOOR_ALBEDO)
+    light = 0.4 + 0.6 * (xx / w) * (0.6 + 0.4 * yy / h)
+    video = np.repeat((albedo * light)[None, :, :, None], 3, axis=-1).repeat(n_frames, axis=0)
+    rng = np.random.default_rng(seed)
+    video = video + rng.normal(0.0, noise, video.shape[:3] + ((3,) if per_channel else (1,)))
+    return np.clip(video, 0.0, 1.0).astype(np.float32), r2 < (radius - 2) ** 2, r2 > (radius + 2) ** 2
+
+
 def render_sequence(kind: str, n_frames: int = 8, size: tuple[int, int] = (240, 320),
                     seed: int = 0, *, palette: str = "colour", light: str = "soft", light_colour=None,
                     noise=None, compression=None) -> SyntheticSequence:

@@ -481,9 +481,13 @@ def offset_log(log_image, out, offset: float) -> None:
         offset_log_rows(log_image, out, offset)
 
 
-def _floor_or_none(floor) -> np.ndarray:
-    """``floor``, or a (1, 1, 1, 2) zero array standing for none (read only with ``k > 0``)."""
-    return floor if floor is not None else np.zeros((1, 1, 1, 2), np.float32)
+#: The kernels' placeholder ``floor`` when there is none (never read: ``k`` is then 0).
+_NO_FLOOR = np.zeros((1, 1, 1, 2), np.float32)
+
+
+def _floor_args(floor, k: float) -> tuple:
+    """The kernels' ``floor, k``: without a floor, ``k = 0`` (the steps as read, as the reference does)."""
+    return (floor, k) if floor is not None else (_NO_FLOOR, 0.0)
 
 
 @host("typical_steps")
@@ -498,7 +502,7 @@ def typical_steps(log_image, steps) -> None:
 def step_counts(log_image, counts, tau: float, tau_chroma: float = 0.0, floor=None, k: float = 0.0) -> None:
     """Per row, the sharp and the chromatic steps; see :func:`ivkernels.kernels.warp.step_evidence.step_counts`."""
     if counts.size:
-        step_counts_rows(log_image, counts, tau, tau_chroma, _floor_or_none(floor), k)
+        step_counts_rows(log_image, counts, tau, tau_chroma, *_floor_args(floor, k))
 
 
 @host("pixel_counts")
@@ -513,7 +517,7 @@ def pixel_counts(log_image, counts, offset: float, tau: float, tau_chroma: float
         lc = np.empty((*counts.shape[:3], 4), np.float64)
         lc[..., 0] = L
         lc[..., 1:] = C
-        pixel_counts_rows(lc, counts, tau, tau_chroma, _floor_or_none(floor), k)
+        pixel_counts_rows(lc, counts, tau, tau_chroma, *_floor_args(floor, k))
 
 
 @host("share_weight")
@@ -535,7 +539,7 @@ def step_gate(log_image, counts, weight, gate, gain: float, tau: float, tau_chro
     """``gate *= 1 + gain (1 - s)^2 weight evidence``; see :func:`ivkernels.kernels.warp.step_evidence.step_gate`."""
     if gate.size:
         pairs = np.empty((*gate.shape, 4), np.float32)         # each pair once, then each pixel's largest
-        half_pair_evidence_rows(log_image, pairs, tau, tau_chroma, _floor_or_none(floor), k)
+        half_pair_evidence_rows(log_image, pairs, tau, tau_chroma, *_floor_args(floor, k))
         step_gate_rows(pairs, weight, gate, gain * (1.0 - share(counts)) ** 2)
 
 

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import warp as wp
 
+from ivkernels.kernels.cache import cached
 from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows, row_tiles
 from ivkernels.kernels.reference.step_evidence import FAMILY, MAX_STABLE_STEP, least_stable_step
@@ -601,9 +602,13 @@ def offset_log(log_image, out, offset: float) -> None:
     launch_rows(offset_log_rows, t * h, [log_image, out, offset], device=log_image.device)
 
 
-def _floor_or_none(floor, device):
-    """``floor``, or a (1, 1, 1, 2) zero array standing for none (read only with ``k > 0``)."""
-    return floor if floor is not None else wp.zeros((1, 1, 1, 2), dtype=float, device=device)
+def _floor_args(floor, k: float, device) -> list:
+    """The kernels' ``floor, k``: without a floor, ``k = 0`` (the steps as read, as the reference
+    does) and one shared (1, 1, 1, 2) placeholder that is never read."""
+    if floor is not None:
+        return [floor, k]
+    return [cached((__name__, "no_floor", str(device)), lambda: wp.zeros((1, 1, 1, 2), dtype=float, device=device)),
+            0.0]
 
 
 @host("typical_steps")
@@ -638,7 +643,7 @@ def step_counts(log_image, counts, tau: float, tau_chroma: float = 0.0, floor=No
     """
     t, h, _, _ = log_image.shape
     dev = log_image.device
-    launch_rows(step_counts_rows, t * h, [log_image, counts, tau, tau_chroma, _floor_or_none(floor, dev), k],
+    launch_rows(step_counts_rows, t * h, [log_image, counts, tau, tau_chroma, *_floor_args(floor, k, dev)],
                 device=dev)
 
 
@@ -666,7 +671,7 @@ def pixel_counts(log_image, counts, offset: float, tau: float, tau_chroma: float
     dev = log_image.device
     lc = wp.empty((t, h, w, 4), dtype=wp.float64, device=dev)
     launch_rows(luminance_chroma_rows, t * h, [log_image, lc, offset], device=dev)
-    launch_rows(pixel_counts_rows, t * h, [lc, counts, tau, tau_chroma, _floor_or_none(floor, dev), k], device=dev)
+    launch_rows(pixel_counts_rows, t * h, [lc, counts, tau, tau_chroma, *_floor_args(floor, k, dev)], device=dev)
 
 
 @host("share_weight")
@@ -727,7 +732,7 @@ def step_gate(log_image, counts, weight, gate, gain: float, tau: float, tau_chro
     wp.launch(scaled_gain, dim=1, inputs=[counts, gain, scaled], device=dev)
     # each pair once (a (T, H, W, 4) float32 buffer for this call), then each pixel's largest
     pairs = wp.empty((t, h, w, 4), dtype=float, device=dev)
-    launch_rows(half_pair_evidence_rows, t * h, [log_image, pairs, tau, tau_chroma, _floor_or_none(floor, dev), k],
+    launch_rows(half_pair_evidence_rows, t * h, [log_image, pairs, tau, tau_chroma, *_floor_args(floor, k, dev)],
                 device=dev)
     launch_rows(step_gate_rows, t * h, [pairs, weight, gate, scaled], device=dev)
 
