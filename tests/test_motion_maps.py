@@ -87,10 +87,13 @@ def test_a_flow_onto_another_colour_is_an_occlusion(any_backend, striped):
 def test_the_chromaticity_test_limits_the_harm_of_a_wrong_flow(seed):
     """A static scene under a moving lamp given a flow that shifts every pixel by (2, 3) px:
     the links it makes between different surfaces are cleared, so the albedo stays closer
-    to the truth than with the test switched off."""
+    to the truth than with the test switched off.  The step evidence's noise floor is off in
+    both runs: it is read along the same flow, and a flow this wrong makes it take the texture
+    for noise, a harm the chromaticity test does not guard against (with it on, 0.89 of the
+    albedo's error without the test at seed 3 instead of under 0.85; README, "Where it fails")."""
     seq = synthetic.render_sequence("static_moving_light", n_frames=5, size=(48, 64), seed=seed)
     wrong = np.zeros_like(seq.flow)
     wrong[..., 0], wrong[..., 1] = 2.0, 3.0
-    with_test = iv.decompose(seq.frames, flow=wrong)
-    without = iv.decompose(seq.frames, flow=wrong, params=iv.Params(chroma_change_max=0.0))
+    with_test = iv.decompose(seq.frames, flow=wrong, params=iv.Params(shading_step_noise=0.0))
+    without = iv.decompose(seq.frames, flow=wrong, params=iv.Params(chroma_change_max=0.0, shading_step_noise=0.0))
     assert metrics.lmse(with_test.albedo, seq.albedo) < 0.85 * metrics.lmse(without.albedo, seq.albedo)

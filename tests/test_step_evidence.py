@@ -147,16 +147,63 @@ def test_a_dark_grey_disc_in_greyscale_noise_stays_in_the_albedo():
     assert abs(_disc_ratio(frames, flow, inside, outside, iv.Params()) - 0.08 / 0.5) < 0.1
 
 
-def test_the_noise_floor_is_the_twice_taken_5x5_median_of_the_typical_steps():
-    from ivkernels.backends.registry import get_backend
+def _reference_floor(offset, flow=None):
+    """The noise floor by the references: the twice-taken 5x5 median of the temporal steps
+    (with a flow) or of the frame's own steps."""
     from ivkernels.kernels.reference import median as ref_median
     from ivkernels.kernels.reference import step_evidence as ref
-    from ivkernels.solver.step_evidence import NOISE_FLOOR_PASSES, noise_floor
+    from ivkernels.solver.step_evidence import NOISE_FLOOR_PASSES
+
+    steps = ref.temporal_steps(offset, flow) if flow is not None and offset.shape[0] > 1 else ref.typical_steps(offset)
+    for _ in range(NOISE_FLOOR_PASSES):
+        steps = ref_median.median5x5(steps)
+    return steps
+
+
+@pytest.mark.parametrize("backend_name", ["warp", "taichi", "numpy"])
+def test_the_noise_floor_is_the_twice_taken_5x5_median_of_the_steps(backend_name):
+    """With a flow: of the changes between frames along it; one frame or none: of the frame's own steps."""
+    from ivkernels.backends.registry import get_backend
+    from ivkernels.solver.step_evidence import noise_floor
+
+    be = get_backend(backend_name)
+    rng = np.random.default_rng(4)
+    offset = np.log(rng.uniform(0.02, 1.0, (3, 11, 13, 3))).astype(np.float32)
+    flow = (rng.integers(-2, 3, (2, 11, 13, 2)) + rng.uniform(-0.4, 0.4, (2, 11, 13, 2))).astype(np.float32)
+    got = be.numpy(noise_floor(be, be.asarray(offset), be.asarray(flow)))
+    np.testing.assert_allclose(got, _reference_floor(offset, flow), atol=1e-6)
+    single = be.numpy(noise_floor(be, be.asarray(offset[:1]), be.asarray(flow[:0])))
+    np.testing.assert_allclose(single, _reference_floor(offset[:1]), atol=1e-6)
+    without = be.numpy(noise_floor(be, be.asarray(offset)))
+    np.testing.assert_allclose(without, _reference_floor(offset), atol=1e-6)
+
+
+def test_the_noise_floor_over_a_flow_sees_the_noise_and_not_the_print():
+    """Fine print (a random grey pattern of one-pixel cells) moving one pixel a frame under
+    noise new in every frame: the floor read from the change along the flow is the noise's
+    (that of the noise alone on a flat grey), while the frame's own steps take the print for noise."""
+    from ivkernels.backends.registry import get_backend
+    from ivkernels.kernels.reference import step_evidence as ref
+    from ivkernels.solver.step_evidence import noise_floor
 
     be = get_backend("warp")
-    rng = np.random.default_rng(3)
-    offset = np.log(rng.uniform(0.02, 1.0, (2, 11, 13, 3))).astype(np.float32)
-    want = ref.typical_steps(offset)
-    for _ in range(NOISE_FLOOR_PASSES):
-        want = ref_median.median5x5(want)
-    np.testing.assert_allclose(be.numpy(noise_floor(be, be.asarray(offset))), want, atol=1e-6)
+    rng = np.random.default_rng(5)
+    T, h, w, sigma = 4, 40, 56, 0.02
+    print_ = np.log(np.where(rng.random((h, w + T)) < 0.5, 0.2, 0.6))
+    frames = np.stack([print_[:, t: t + w] for t in range(T)])[..., None].repeat(3, -1)     # moves 1 px left a frame
+    noise = rng.normal(0.0, sigma, (T, h, w, 3))
+    flow = np.zeros((T - 1, h, w, 2), np.float32)
+    flow[..., 0] = -1.0
+    inner = (slice(None), slice(3, -3), slice(3, -4))                                    # clear of the frame's edge
+
+    def floor_of(img, f=None):
+        out = noise_floor(be, be.asarray(img.astype(np.float32)), None if f is None else be.asarray(f))
+        return be.numpy(out)[inner]
+
+    noise_only = floor_of(np.log(0.4) + noise)
+    temporal = floor_of(frames + noise, flow)
+    spatial = floor_of(frames + noise)
+    for c in range(2):
+        assert abs(np.median(temporal[..., c]) / np.median(noise_only[..., c]) - 1.0) < 0.15
+        assert np.median(spatial[..., 0]) > 5 * np.median(temporal[..., 0])
+    assert ref.temporal_steps(frames, flow)[inner].max() < 1e-12            # print alone: no change along the flow

@@ -8,6 +8,7 @@ import pytest
 from ivkernels import Params
 from ivkernels.evaluation import synthetic
 from ivkernels.kernels.reference import maps as ref_maps
+from ivkernels.kernels.reference import step_evidence as ref
 from ivkernels.priors import load_albedo_prior
 from ivkernels.solver.energy import WindowEnergy
 from ivkernels.solver.motion_maps import shading_cut_gate
@@ -18,9 +19,10 @@ SIZES = {"odd": (3, 9, 13), "two-frames": (2, 7, 11), "one-frame": (1, 5, 7), "o
          "one-row": (2, 1, 9)}
 
 
-def _pairs_of(I, t, y, x, axes_only=False):
+def _pairs_of(I, t, y, x, axes_only=False, floor=None, k=0.0):
     """``(d L, d C)`` of pixel ``(t, y, x)`` of ``I`` (T, h, w, 3) with each neighbour inside the image
-    (the 8 neighbours, or only the right and lower ones)."""
+    (the 8 neighbours, or only the right and lower ones); with a noise ``floor`` (T, h, w, 2) and
+    ``k > 0``, each net of it: ``sqrt(max(d^2 - k^2 (f(x)^2 + f(y)^2) / 2, 0))``."""
     T, h, w, _ = I.shape
     offsets = ((0, 1), (1, 0)) if axes_only else \
         [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if (dy, dx) != (0, 0)]
@@ -28,7 +30,11 @@ def _pairs_of(I, t, y, x, axes_only=False):
         yy, xx = y + dy, x + dx
         if 0 <= yy < h and 0 <= xx < w:
             a, b = I[t, y, x], I[t, yy, xx]
-            yield abs(a.mean() - b.mean()), np.abs((a - a.mean()) - (b - b.mean())).max()
+            steps = [abs(a.mean() - b.mean()), np.abs((a - a.mean()) - (b - b.mean())).max()]
+            if floor is not None and k > 0:
+                steps = [np.sqrt(max(d * d - k * k * (floor[t, y, x, c] ** 2 + floor[t, yy, xx, c] ** 2) / 2, 0.0))
+                         for c, d in enumerate(steps)]
+            yield steps[0], steps[1]
 
 
 def host_step_weight(log_image, flow, gain, tau, tau_chroma, stability):
@@ -37,19 +43,33 @@ def host_step_weight(log_image, flow, gain, tau, tau_chroma, stability):
     return 1.0 + gain * (1.0 - s) ** 2 * weight * ev
 
 
-def host_parts(log_image, flow, tau, tau_chroma, stability):
+def host_floor(log_image, flow):
+    """The noise floor (T, h, w, 2) by the references: the 5x5 median, twice, of the steps of what
+    changes between frames along ``flow`` (of the frame's own steps without one)."""
+    from ivkernels.kernels.reference import median as ref_median
+    from ivkernels.kernels.reference import step_evidence as ref
+    from ivkernels.solver.step_evidence import NOISE_FLOOR_PASSES
+
+    I = np.log(np.exp(np.asarray(log_image, np.float64)) + DARK_OFFSET).astype(np.float32)
+    steps = ref.temporal_steps(I, flow) if flow is not None and I.shape[0] > 1 else ref.typical_steps(I)
+    for _ in range(NOISE_FLOOR_PASSES):
+        steps = ref_median.median5x5(steps)
+    return steps
+
+
+def host_parts(log_image, flow, tau, tau_chroma, stability, floor=None, k=0.0):
     """``(s, w, evidence)``: the chromatic share, Weiss's cue where still (1 elsewhere) and the
-    evidence (T, h, w), float64, pixel by pixel."""
+    evidence (T, h, w), float64, pixel by pixel; the steps net of the noise ``floor`` at ``k``."""
     I = np.log(np.exp(np.asarray(log_image, np.float64)) + DARK_OFFSET)
     T, h, w, _ = I.shape
     sharp = chromatic = 0
     ev = np.zeros((T, h, w))
     for t, y, x in np.ndindex(T, h, w):
-        for dl, dc in _pairs_of(I, t, y, x, axes_only=True):
+        for dl, dc in _pairs_of(I, t, y, x, axes_only=True, floor=floor, k=k):
             chromatic += bool(dc > tau_chroma)
             sharp += bool(dc > tau_chroma or dl > tau)
         ev[t, y, x] = max([(1 - np.exp(-(dl / tau) ** 2)) * np.exp(-(dc / tau_chroma) ** 2)
-                           for dl, dc in _pairs_of(I, t, y, x)], default=0.0)
+                           for dl, dc in _pairs_of(I, t, y, x, floor=floor, k=k)], default=0.0)
     s = chromatic / sharp if sharp else 0.0
     weight = np.ones((T, h, w))
     if flow is not None and T > 1 and stability > 0:
@@ -104,7 +124,8 @@ def test_without_colour_or_flow_the_gain_is_not_scaled(any_backend):
 @pytest.mark.parametrize("share_radius", [None, 0.0], ids=["default", "whole-video-share"])
 def test_window_energy_gate_is_the_cut_times_the_host_step_weight(any_backend, size, share_radius):
     """The energy's gate with the default Params (and with the whole video's share): the cut at
-    flow jumps (where there is a flow) times the step weight, computed on the host."""
+    flow jumps (where there is a flow) times the step weight, computed on the host, its steps
+    net of the noise floor."""
     be = any_backend
     T, h, w = size
     log_image, flow = scene(T, h, w, seed=2)
@@ -115,10 +136,15 @@ def test_window_energy_gate_is_the_cut_times_the_host_step_weight(any_backend, s
                           be.asarray(np.ones((T - 1, h, w), np.float32)) if temporal else None,
                           be.asarray(np.zeros((T - 1, h, w), np.float32)) if temporal else None,
                           params, load_albedo_prior())
+    floor = host_floor(log_image, flow if temporal else None)
+    k = params.shading_step_noise
     s_whole, weight, evidence = host_parts(log_image, flow if temporal else None, params.shading_step_tau,
-                                           params.shading_step_chroma, params.shading_step_stability)
-    share = s_whole if params.shading_step_share_radius == 0 else local_chromatic_share(
-        log_image, params.shading_step_tau, params.shading_step_chroma, params.shading_step_share_radius)
+                                           params.shading_step_chroma, params.shading_step_stability, floor, k)
+    share = s_whole
+    if params.shading_step_share_radius > 0:
+        counts = ref.pixel_counts(log_image, DARK_OFFSET, params.shading_step_tau, params.shading_step_chroma,
+                                  floor, k)
+        share = ref.local_share(counts, share_radius_pixels(params.shading_step_share_radius, h, w), SHARE_PRIOR_STEPS)
     want = 1.0 + params.shading_step_gain * (1.0 - share) ** 2 * weight * evidence
     if temporal:
         want = want * be.numpy(shading_cut_gate(be, be.asarray(flow), params.shading_cut_threshold, T))

@@ -46,7 +46,9 @@ With ``Params.shading_step_noise`` > 0 the steps of both the evidence and
 the share are read net of the local noise floor (:func:`noise_floor`): in a
 dark material a colour camera's noise changes every pair's colour and
 brightness, which would otherwise make a grey edge look coloured and the
-noise itself look like sharp steps.
+noise itself look like sharp steps.  The floor is read from what changes
+between frames along the flow, where noise is new in every frame and fine
+print, which moves with the surface, cancels.
 
 The formula is computed by the kernels of the ``step_evidence`` family on
 the backend's arrays (:mod:`ivkernels.kernels.warp.step_evidence`, the
@@ -169,16 +171,24 @@ def grey_step_gate(log_image: np.ndarray, gain: float, tau: float, tau_chroma: f
     return (1.0 + gain * (1.0 - chromatic_share(log_image, tau, tau_chroma)) ** 2 * evidence).astype(np.float32)
 
 
-def noise_floor(be, offset_image):
-    """The local noise floor of the steps of ``offset_image`` (T, h, w, 3), ``log(i + DARK_OFFSET)``:
-    per pixel the larger step of its right and lower pairs (``step_evidence.typical_steps``:
-    ``dL`` in channel 0, ``dC`` in channel 1), then their median over the neighbourhood
-    (``median.median5x5``, :data:`NOISE_FLOOR_PASSES` times).  In sensor noise every pair
-    steps by about the floor; along an edge the edge's pairs are a minority of the window.
+def noise_floor(be, offset_image, flow=None):
+    """The local noise floor of the steps of ``offset_image`` (T, h, w, 3), ``log(i + DARK_OFFSET)``.
+
+    Over frames joined by a ``flow`` (T-1, h, w, 2), per pixel the larger step of its right and
+    lower pairs of what changes from one frame to the next along the flow, over ``sqrt 2``
+    (``step_evidence.temporal_steps``): sensor noise is new in every frame, while print and
+    edges move with the flow and cancel, so fine print does not raise the floor.  Without a
+    flow or with one frame, the steps of the frame itself (``step_evidence.typical_steps``):
+    in sensor noise every pair steps by about the floor, and along an edge the edge's pairs
+    are a minority of the window.  ``dL`` in channel 0, ``dC`` in channel 1; then their median
+    over the neighbourhood (``median.median5x5``, :data:`NOISE_FLOOR_PASSES` times).
     Returns a (T, h, w, 2) backend array."""
     T, h, w, _ = offset_image.shape
     steps = be.empty((T, h, w, 2))
-    be.step_evidence.typical_steps(offset_image, steps)
+    if flow is not None and T > 1:
+        be.step_evidence.temporal_steps(offset_image, flow, steps)
+    else:
+        be.step_evidence.typical_steps(offset_image, steps)
     floor = be.empty((T, h, w, 2))
     for _ in range(NOISE_FLOOR_PASSES):
         be.median.median5x5(steps, floor)
@@ -214,13 +224,14 @@ def multiply_step_gate(be, log_image, gate, gain: float, tau: float, tau_chroma:
         ``share_weight``, bit for bit) and ``(1 - s)^2`` goes into ``w`` instead of the
         gain (``Params.shading_step_share_radius``, 0.3 by default).
     noise : >= 0; > 0: every step is read net of ``noise`` times the local noise floor
-        (:func:`noise_floor`; ``Params.shading_step_noise``), 0: as it is.
+        (:func:`noise_floor`, from what changes between frames along ``flow`` when there is
+        one; ``Params.shading_step_noise``), 0: as it is.
     """
     T, h, w, _ = log_image.shape
     kernels = be.step_evidence
     offset = be.empty((T, h, w, 3))
     kernels.offset_log(log_image, offset, DARK_OFFSET)
-    floor = noise_floor(be, offset) if noise > 0 else None
+    floor = noise_floor(be, offset, flow) if noise > 0 else None
     weight = be.empty((T, h, w))
     if flow is not None and T > 1 and stability > 0:
         kernels.still_stability(log_image, flow, weight, stability, static_flow)

@@ -61,6 +61,18 @@ def _typical_steps():
                 lambda v: {"steps": ref.typical_steps(v["log_image"])}, tol=Tol(1e-5, 1e-6))
 
 
+def _temporal_steps():
+    def make(rng, T, H, W):
+        # whole-pixel shifts with a fractional part away from the rounding tie (float32 and
+        # float64 round alike), some carrying samples out of the frame
+        f = rng.integers(-3, 4, (pairs(T), H, W, 2)) + uniform(rng, (pairs(T), H, W, 2), -0.4, 0.4)
+        f[:, :, :2, 0] -= W + 2.0
+        return {"log_image": steps_image(rng, T, H, W), "flow": f.astype(F32), "steps": nans((T, H, W, 2))}
+
+    return Case("step_evidence", "temporal_steps", make, ("log_image", "flow", "steps"), ("steps",),
+                lambda v: {"steps": ref.temporal_steps(v["log_image"], v["flow"])}, tol=Tol(1e-5, 1e-6))
+
+
 def _offset_log(offset):
     def make(rng, T, H, W):
         img = np.log(uniform(rng, (T, H, W, 3), 1e-6, 1.0)).astype(F32)      # down to the darkest pixels
@@ -254,6 +266,7 @@ CASES = (
     _offset_log(ref.DARK_OFFSET),
     _offset_log(0.5),
     _typical_steps(),
+    _temporal_steps(),
     _counts(0.1, 0.05),
     _counts(0.3, 0.0),
     _counts(0.1, 0.05, k=3.5),

@@ -22,7 +22,10 @@ With a noise ``floor`` (T, H, W, 2) and ``k > 0``, ``dL`` and ``dC`` are read ne
 of it: ``dL' = sqrt(max(dL^2 - k^2 (f_L(x)^2 + f_L(y)^2) / 2, 0))`` and the same
 for ``dC`` with ``f_C``, ``f`` the 5x5 median of :func:`typical_steps` (the
 local typical step: in a region of sensor noise every pair steps by about it,
-while an edge's pairs are a minority of the window and leave it near 0).
+while an edge's pairs are a minority of the window and leave it near 0), or,
+over frames joined by a flow, of :func:`temporal_steps`: the same steps of what
+changes from one frame to the next along the flow, where the noise is new in
+every frame and print and edges, which move with the flow, cancel.
 
 A pixel's evidence is the largest over its 8 neighbours inside the image.
 Weiss's cue, the ``weight`` of the evidence, is ``maps.shading_gate`` of the
@@ -98,6 +101,14 @@ FAMILY.declare("typical_steps(log_image, steps)",
                "lower pairs (0 without one); their 5x5 median is the local noise floor of the steps.",
                log_image="T H W 3", steps=Out("T H W 2"),
                separate=(("steps", "log_image", "the steps are written while log_image is read"),))
+FAMILY.declare("temporal_steps(log_image, flow, steps)",
+               "Per pixel of frame ``t``, :func:`typical_steps` of the change along the flow to frame ``t + 1``, "
+               "``e(x) = log_image[t + 1, x + round(u(x))] - log_image[t, x]`` (clamped to the frame), over "
+               "``sqrt 2``: the steps of the noise, new in every frame, while what moves with the flow cancels. "
+               "The last frame takes the one before; one frame alone gives 0.",
+               log_image="T H W 3", flow=Array("T-1 H W 2", layout="(T-1, H, W, 2)"), steps=Out("T H W 2"),
+               separate=(("steps", "log_image", "the steps are written while log_image is read"),
+                         ("steps", "flow", "the steps are written while flow is read")))
 FAMILY.declare("step_counts(log_image, counts, tau, tau_chroma=0.0, floor=None, k=0.0)",
                "Per row, the sharp and the chromatic steps of the horizontal and vertical pairs it starts.",
                log_image="T H W 3", counts=Out("T*H 2", "int32", layout="(T*H, 2)"), tau=FinitePositive,
@@ -184,6 +195,41 @@ def typical_steps(log_image) -> np.ndarray:
         a, b = pair_slices(L.shape, dy, dx)
         np.maximum(out[a + (0,)], np.abs(L[a] - L[b]), out=out[a + (0,)])
         np.maximum(out[a + (1,)], _chroma_change(C, a, b), out=out[a + (1,)])
+    return out
+
+
+def rounded_target(position, flow_component, size: int) -> np.ndarray:
+    """The pixel ``position + flow_component`` rounds to, ``floor(. + 0.5)``, clamped to
+    ``[0, size - 1]`` (int64); a NaN flow gives 0, as the kernels read it."""
+    target = np.floor(np.asarray(position, np.float64) + np.asarray(flow_component, np.float64) + 0.5)
+    return np.clip(np.nan_to_num(target, nan=0.0, posinf=size - 1, neginf=0.0), 0, size - 1).astype(np.int64)
+
+
+def temporal_steps(log_image, flow) -> np.ndarray:
+    """(T, H, W, 2) float64: :func:`typical_steps` of the change between frames along the flow, over ``sqrt 2``.
+
+    For frame ``t < T - 1``, ``e_t(x) = I'(t + 1, x + round(u_t(x))) - I'(t, x)`` (the target
+    clamped to the frame, each pixel with its own flow); its steps are the noise's, twice
+    its variance (a difference of two frames), hence the ``sqrt 2``; print and edges that
+    move with the flow cancel.  Frame ``T - 1`` takes frame ``T - 2``'s; ``T = 1`` gives 0.
+
+    log_image : (T, H, W, 3), ``I'`` (:func:`offset_log`).
+    flow : (T-1, H, W, 2), pixels, ``(dx, dy)`` from frame ``t`` to ``t + 1``.
+    """
+    img = np.asarray(log_image, np.float64)
+    flow = np.asarray(flow, np.float64)
+    T, H, W, _ = img.shape
+    out = np.zeros((T, H, W, 2))
+    if T < 2:
+        return out
+    yy, xx = np.mgrid[0:H, 0:W]
+    change = np.empty((T - 1, H, W, 3))
+    for t in range(T - 1):
+        ty = rounded_target(yy, flow[t, ..., 1], H)
+        tx = rounded_target(xx, flow[t, ..., 0], W)
+        change[t] = img[t + 1][ty, tx] - img[t]
+    out[: T - 1] = typical_steps(change) / math.sqrt(2.0)
+    out[T - 1] = out[T - 2]
     return out
 
 

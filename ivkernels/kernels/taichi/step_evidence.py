@@ -102,6 +102,59 @@ def pair_evidence(img: ti.template(), floor: ti.template(), t, y, x, yy, xx, tau
     return ev
 
 
+@ti.func
+def rounded_target(position, shift, size):
+    """The pixel ``position + shift`` rounds to, clamped to the frame (see the Warp module)."""
+    target = ti.floor(ti.cast(position, ti.f32) + shift + 0.5)
+    index = 0
+    if target > 0.0:
+        index = ti.cast(ti.min(target, ti.cast(size - 1, ti.f32)), ti.i32)
+    return index
+
+
+@ti.func
+def change_along_flow(img: ti.template(), flow: ti.template(), p, y, x):
+    """``img[p + 1, x + round(u(x))] - img[p, x]`` (3 channels), the target clamped to the frame."""
+    ty = rounded_target(y, flow[p, y, x, 1], img.shape[1])
+    tx = rounded_target(x, flow[p, y, x, 0], img.shape[2])
+    return ti.Vector([img[p + 1, ty, tx, 0] - img[p, y, x, 0], img[p + 1, ty, tx, 1] - img[p, y, x, 1],
+                      img[p + 1, ty, tx, 2] - img[p, y, x, 2]])
+
+
+@ti.func
+def vec_step(a, b):
+    """``(dL, dC)`` of two 3-channel values, as :func:`pair_step`."""
+    d = a - b
+    m = (d[0] + d[1] + d[2]) / 3.0
+    return ti.abs(m), ti.max(ti.max(ti.abs(d[0] - m), ti.abs(d[1] - m)), ti.abs(d[2] - m))
+
+
+@ti.kernel
+def temporal_steps_rows(img: nd4, flow: nd4, steps: nd4):
+    height = img.shape[1]
+    width = img.shape[2]
+    n_pairs = flow.shape[0]
+    for r in range(img.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        p = ti.min(t, n_pairs - 1)
+        for x in range(width):
+            sl = 0.0
+            sc = 0.0
+            if n_pairs > 0:
+                e = change_along_flow(img, flow, p, y, x)
+                if x + 1 < width:
+                    dl, dc = vec_step(e, change_along_flow(img, flow, p, y, x + 1))
+                    sl = ti.max(sl, dl)
+                    sc = ti.max(sc, dc)
+                if y + 1 < height:
+                    dl, dc = vec_step(e, change_along_flow(img, flow, p, y + 1, x))
+                    sl = ti.max(sl, dl)
+                    sc = ti.max(sc, dc)
+            steps[t, y, x, 0] = sl / ti.sqrt(2.0)
+            steps[t, y, x, 1] = sc / ti.sqrt(2.0)
+
+
 @ti.kernel
 def typical_steps_rows(img: nd4, steps: nd4):
     height = img.shape[1]
@@ -496,6 +549,14 @@ def typical_steps(log_image, steps) -> None:
     :func:`ivkernels.kernels.warp.step_evidence.typical_steps`."""
     if steps.size:
         typical_steps_rows(log_image, steps)
+
+
+@host("temporal_steps")
+def temporal_steps(log_image, flow, steps) -> None:
+    """The steps of what changes between frames along the flow; see
+    :func:`ivkernels.kernels.warp.step_evidence.temporal_steps`."""
+    if steps.size:
+        temporal_steps_rows(log_image, flow, steps)
 
 
 @host("step_counts")

@@ -80,6 +80,34 @@ def pair_step(img: wp.array4d(dtype=float), t: int, y: int, x: int, yy: int, xx:
 
 
 @wp.func
+def rounded_target(position: int, shift: float, size: int):
+    """The pixel ``position + shift`` rounds to, ``floor(. + 0.5)``, clamped to ``[0, size - 1]``
+    (a NaN shift gives 0)."""
+    target = wp.floor(float(position) + shift + 0.5)
+    index = int(0)
+    if target > 0.0:
+        index = int(wp.min(target, float(size - 1)))
+    return index
+
+
+@wp.func
+def change_along_flow(img: wp.array4d(dtype=float), flow: wp.array4d(dtype=float), p: int, y: int, x: int):
+    """``img[p + 1, x + round(u(x))] - img[p, x]`` (3 channels), the target clamped to the frame."""
+    ty = rounded_target(y, flow[p, y, x, 1], img.shape[1])
+    tx = rounded_target(x, flow[p, y, x, 0], img.shape[2])
+    return wp.vec3(img[p + 1, ty, tx, 0] - img[p, y, x, 0], img[p + 1, ty, tx, 1] - img[p, y, x, 1],
+                   img[p + 1, ty, tx, 2] - img[p, y, x, 2])
+
+
+@wp.func
+def vec_step(a: wp.vec3, b: wp.vec3):
+    """``(dL, dC)`` of two 3-channel values, as :func:`pair_step`."""
+    d = a - b
+    m = (d[0] + d[1] + d[2]) / 3.0
+    return wp.abs(m), wp.max(wp.max(wp.abs(d[0] - m), wp.abs(d[1] - m)), wp.abs(d[2] - m))
+
+
+@wp.func
 def net_of_floor(d: float, floor: wp.array4d(dtype=float), t: int, y: int, x: int, yy: int, xx: int, c: int,
                  k: float):
     """``sqrt(max(d^2 - k^2 (f(y, x)^2 + f(yy, xx)^2) / 2, 0))`` with ``f = floor[t, ..., c]``; ``d`` for ``k = 0``."""
@@ -151,6 +179,35 @@ def typical_steps_rows(row_begin: int, img: wp.array4d(dtype=float), steps: wp.a
             sc = wp.max(sc, dc)
         steps[t, y, x, 0] = sl
         steps[t, y, x, 1] = sc
+
+
+@wp.kernel
+def temporal_steps_rows(row_begin: int, img: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
+                        steps: wp.array4d(dtype=float)):
+    """Row ``t * H + y``: :func:`typical_steps_rows` of the change along the flow of the frame's pair
+    (the last frame's: the pair before), over ``sqrt 2``; 0 without a pair."""
+    r = row_begin + wp.tid()
+    height = img.shape[1]
+    width = img.shape[2]
+    t = r // height
+    y = r - t * height
+    n_pairs = flow.shape[0]
+    p = wp.min(t, n_pairs - 1)
+    for x in range(width):
+        sl = float(0.0)
+        sc = float(0.0)
+        if n_pairs > 0:
+            e = change_along_flow(img, flow, p, y, x)
+            if x + 1 < width:
+                dl, dc = vec_step(e, change_along_flow(img, flow, p, y, x + 1))
+                sl = wp.max(sl, dl)
+                sc = wp.max(sc, dc)
+            if y + 1 < height:
+                dl, dc = vec_step(e, change_along_flow(img, flow, p, y + 1, x))
+                sl = wp.max(sl, dl)
+                sc = wp.max(sc, dc)
+        steps[t, y, x, 0] = sl / wp.sqrt(2.0)
+        steps[t, y, x, 1] = sc / wp.sqrt(2.0)
 
 
 @wp.kernel
@@ -623,6 +680,23 @@ def typical_steps(log_image, steps) -> None:
     """
     t, h, _, _ = log_image.shape
     launch_rows(typical_steps_rows, t * h, [log_image, steps], device=log_image.device)
+
+
+@host("temporal_steps")
+def temporal_steps(log_image, flow, steps) -> None:
+    """The steps of what changes between frames: per pixel of frame ``t``, :func:`typical_steps` of
+    ``e(x) = log_image[t + 1, x + round(u(x))] - log_image[t, x]`` (the target clamped to the frame),
+    over ``sqrt 2`` (a difference of two frames doubles the noise's variance); the last frame takes
+    the pair before, one frame alone 0.  Sensor noise is new in every frame, while print and edges
+    move with the flow and cancel: the 5x5 median of these steps is a noise floor that fine print
+    does not raise.
+
+    log_image : wp.array float32 (T, H, W, 3), the offset log image (:func:`offset_log`).
+    flow : wp.array float32 (T-1, H, W, 2), pixels, ``(dx, dy)`` from frame ``t`` to ``t + 1``.
+    steps : wp.array float32 (T, H, W, 2), written.
+    """
+    t, h, _, _ = log_image.shape
+    launch_rows(temporal_steps_rows, t * h, [log_image, flow, steps], device=log_image.device)
 
 
 @host("step_counts")
