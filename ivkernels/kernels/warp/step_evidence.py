@@ -1,6 +1,9 @@
 """The step evidence on Eq. 9's local shading term (Retinex's and Weiss's cues), on the backend's arrays.
 
 * :func:`offset_log`: the log image read with a linear offset, ``log(i + offset)``,
+* :func:`typical_steps` and :func:`temporal_steps`: per pixel, the larger step
+  of its right and lower pairs, of the frame itself or of what changes from
+  one frame to the next along the flow (their 5x5 median is the noise floor),
 * :func:`step_counts`: per row, the sharp and the chromatic steps of the
   horizontal and vertical pairs it starts (the chromatic share's counts),
 * :func:`pixel_counts`: per pixel, the same counts read in float64 (the
