@@ -21,6 +21,7 @@ import ivkernels as iv
 from common import parse_grid
 from ivkernels.evaluation.synthetic import DISC_FLOOR_ALBEDO, dark_disc
 
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, nargs=2, default=(120, 160), metavar=("H", "W"))

@@ -48,13 +48,23 @@ def one_minus_exp_neg(a):
 
 
 @ti.func
+def vec_step(a, b):
+    """``(dL, dC)`` of two 3-channel log values (see the Warp module)."""
+    d = a - b
+    m = (d[0] + d[1] + d[2]) / 3.0
+    return ti.abs(m), ti.max(ti.max(ti.abs(d[0] - m), ti.abs(d[1] - m)), ti.abs(d[2] - m))
+
+
+@ti.func
+def pixel(img: ti.template(), t, y, x):
+    """The 3 channels of a pixel."""
+    return ti.Vector([img[t, y, x, 0], img[t, y, x, 1], img[t, y, x, 2]])
+
+
+@ti.func
 def pair_step(img: ti.template(), t, y, x, yy, xx):
-    """``(dL, dC)`` of the pixels ``(y, x)`` and ``(yy, xx)`` of frame ``t`` (see the Warp module)."""
-    d0 = img[t, y, x, 0] - img[t, yy, xx, 0]
-    d1 = img[t, y, x, 1] - img[t, yy, xx, 1]
-    d2 = img[t, y, x, 2] - img[t, yy, xx, 2]
-    m = (d0 + d1 + d2) / 3.0
-    return ti.abs(m), ti.max(ti.max(ti.abs(d0 - m), ti.abs(d1 - m)), ti.abs(d2 - m))
+    """:func:`vec_step` of the pixels ``(y, x)`` and ``(yy, xx)`` of frame ``t``."""
+    return vec_step(pixel(img, t, y, x), pixel(img, t, yy, xx))
 
 
 @ti.func
@@ -117,16 +127,7 @@ def change_along_flow(img: ti.template(), flow: ti.template(), p, y, x):
     """``img[p + 1, x + round(u(x))] - img[p, x]`` (3 channels), the target clamped to the frame."""
     ty = rounded_target(y, flow[p, y, x, 1], img.shape[1])
     tx = rounded_target(x, flow[p, y, x, 0], img.shape[2])
-    return ti.Vector([img[p + 1, ty, tx, 0] - img[p, y, x, 0], img[p + 1, ty, tx, 1] - img[p, y, x, 1],
-                      img[p + 1, ty, tx, 2] - img[p, y, x, 2]])
-
-
-@ti.func
-def vec_step(a, b):
-    """``(dL, dC)`` of two 3-channel values, as :func:`pair_step`."""
-    d = a - b
-    m = (d[0] + d[1] + d[2]) / 3.0
-    return ti.abs(m), ti.max(ti.max(ti.abs(d[0] - m), ti.abs(d[1] - m)), ti.abs(d[2] - m))
+    return pixel(img, p + 1, ty, tx) - pixel(img, p, y, x)
 
 
 @ti.kernel

@@ -72,14 +72,24 @@ def one_minus_exp_neg(a: float):
 
 
 @wp.func
+def vec_step(a: wp.vec3, b: wp.vec3):
+    """``(dL, dC)`` of two 3-channel log values: the step of the mean over channels and the
+    largest change of the rest (the log chromaticity)."""
+    d = a - b
+    m = (d[0] + d[1] + d[2]) / 3.0
+    return wp.abs(m), wp.max(wp.max(wp.abs(d[0] - m), wp.abs(d[1] - m)), wp.abs(d[2] - m))
+
+
+@wp.func
+def pixel(img: wp.array4d(dtype=float), t: int, y: int, x: int):
+    """The 3 channels of a pixel."""
+    return wp.vec3(img[t, y, x, 0], img[t, y, x, 1], img[t, y, x, 2])
+
+
+@wp.func
 def pair_step(img: wp.array4d(dtype=float), t: int, y: int, x: int, yy: int, xx: int):
-    """``(dL, dC)`` of the pixels ``(y, x)`` and ``(yy, xx)`` of frame ``t``: the step of the
-    mean over channels and the largest change of the rest (the log chromaticity)."""
-    d0 = img[t, y, x, 0] - img[t, yy, xx, 0]
-    d1 = img[t, y, x, 1] - img[t, yy, xx, 1]
-    d2 = img[t, y, x, 2] - img[t, yy, xx, 2]
-    m = (d0 + d1 + d2) / 3.0
-    return wp.abs(m), wp.max(wp.max(wp.abs(d0 - m), wp.abs(d1 - m)), wp.abs(d2 - m))
+    """:func:`vec_step` of the pixels ``(y, x)`` and ``(yy, xx)`` of frame ``t``."""
+    return vec_step(pixel(img, t, y, x), pixel(img, t, yy, xx))
 
 
 @wp.func
@@ -98,16 +108,7 @@ def change_along_flow(img: wp.array4d(dtype=float), flow: wp.array4d(dtype=float
     """``img[p + 1, x + round(u(x))] - img[p, x]`` (3 channels), the target clamped to the frame."""
     ty = rounded_target(y, flow[p, y, x, 1], img.shape[1])
     tx = rounded_target(x, flow[p, y, x, 0], img.shape[2])
-    return wp.vec3(img[p + 1, ty, tx, 0] - img[p, y, x, 0], img[p + 1, ty, tx, 1] - img[p, y, x, 1],
-                   img[p + 1, ty, tx, 2] - img[p, y, x, 2])
-
-
-@wp.func
-def vec_step(a: wp.vec3, b: wp.vec3):
-    """``(dL, dC)`` of two 3-channel values, as :func:`pair_step`."""
-    d = a - b
-    m = (d[0] + d[1] + d[2]) / 3.0
-    return wp.abs(m), wp.max(wp.max(wp.abs(d[0] - m), wp.abs(d[1] - m)), wp.abs(d[2] - m))
+    return pixel(img, p + 1, ty, tx) - pixel(img, p, y, x)
 
 
 @wp.func
