@@ -12,13 +12,17 @@ differences in S can tip at ties, so a second alternation starts each
 backend from a slightly different problem (measured: 0.06% Warp-Taichi, 0.6%
 NumPy-Warp on this input; perf/RESULTS.md, "Backends agree once converged").
 
-Thirty-two L-BFGS pairs (``lbfgs_memory=32``): with fewer the tolerance
+Sixty-four L-BFGS pairs (``lbfgs_memory=64``): with fewer the tolerance
 stops each backend on a slow mode of the step-evidence-gated energy, above
 the minimum and apart (with ``Params.shading_step_static_flow = 1``, four
 pairs: energies 255391, 255391 and 255366 against 255191 for all three with
 sixteen pairs; with ``Params.shading_step_share_radius = 0.1``, whose share
 window is under 2 px on this 16x24 input, sixteen pairs stop at 255718.4-.6
-with NumPy 0.59% from the others, thirty-two reach 255717.6 within 0.15%).
+with NumPy 0.59% from the others, thirty-two reach 255717.6 within 0.15%;
+with the noise floor capped at the noise level function,
+``Params.shading_step_noise_cap = 3``, the floors agree to 3e-7 but thirty-two
+pairs stop at 256561.54 / .66 / .63 with NumPy 0.54% from Warp, sixty-four
+at 256561.55 / .59 / .58 within 0.41%).
 """
 from __future__ import annotations
 
@@ -32,7 +36,7 @@ from ivkernels.params import Params
 from ivkernels.solver import lbfgs
 
 CONVERGE = Params(lbfgs_iterations=3000, lbfgs_iterations_coarse=3000, outer_iterations=1,
-                  start_from_guide=False, lbfgs_memory=32)
+                  start_from_guide=False, lbfgs_memory=64)
 
 
 def _relative(a, b) -> float:

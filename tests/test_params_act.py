@@ -50,6 +50,7 @@ MOVES = {
     "shading_step_chroma": (0.0, {}, "truth"),
     "shading_step_share_radius": (0.0, {}, "truth"),
     "shading_step_noise": (0.0, {}, "truth"),
+    "shading_step_noise_cap": (0.5, {}, "truth"),
     # Weiss's cue is read where the scene holds still: a static scene under a moving light
     "shading_step_stability": (0.0, {"shading_step_stability_changing_light": False}, "truth:static_moving_light"),
     "shading_step_static_flow": (0.01, {"shading_step_stability_changing_light": False}, "truth:objects_camera"),

@@ -147,35 +147,42 @@ def test_a_dark_grey_disc_in_greyscale_noise_stays_in_the_albedo():
     assert abs(_disc_ratio(frames, flow, inside, outside, iv.Params()) - 0.08 / 0.5) < 0.1
 
 
-def _reference_floor(offset, flow=None):
+def _reference_floor(offset, flow=None, cap=0.0):
     """The noise floor by the references: the twice-taken 5x5 median of the temporal steps
-    (with a flow) or of the frame's own steps."""
+    (with a flow) or of the frame's own steps, capped at ``cap`` times the noise level
+    function of the same steps (0: not capped)."""
     from ivkernels.kernels.reference import median as ref_median
     from ivkernels.kernels.reference import step_evidence as ref
     from ivkernels.solver.step_evidence import NOISE_FLOOR_PASSES
 
     steps = ref.temporal_steps(offset, flow) if flow is not None and offset.shape[0] > 1 else ref.typical_steps(offset)
+    table = ref.level_medians(ref.step_histogram(offset, steps.astype(np.float32))).astype(np.float32)
     for _ in range(NOISE_FLOOR_PASSES):
         steps = ref_median.median5x5(steps)
-    return steps
+    return ref.cap_at_level(offset, table, cap, steps) if cap > 0 else steps
 
 
+@pytest.mark.parametrize("cap", [0.0, 0.8, 3.0])
 @pytest.mark.parametrize("backend_name", ["warp", "taichi", "numpy"])
-def test_the_noise_floor_is_the_twice_taken_5x5_median_of_the_steps(backend_name):
-    """With a flow: of the changes between frames along it; one frame or none: of the frame's own steps."""
+def test_the_noise_floor_is_the_twice_taken_5x5_median_of_the_steps(backend_name, cap):
+    """With a flow: of the changes between frames along it; one frame or none: of the frame's own
+    steps; with a cap, capped at that many times the noise level function of the same steps."""
     from ivkernels.backends.registry import get_backend
     from ivkernels.solver.step_evidence import noise_floor
 
     be = get_backend(backend_name)
     rng = np.random.default_rng(4)
-    offset = np.log(rng.uniform(0.02, 1.0, (3, 11, 13, 3))).astype(np.float32)
-    flow = (rng.integers(-2, 3, (2, 11, 13, 2)) + rng.uniform(-0.4, 0.4, (2, 11, 13, 2))).astype(np.float32)
-    got = be.numpy(noise_floor(be, be.asarray(offset), be.asarray(flow)))
-    np.testing.assert_allclose(got, _reference_floor(offset, flow), atol=1e-6)
-    single = be.numpy(noise_floor(be, be.asarray(offset[:1]), be.asarray(flow[:0])))
-    np.testing.assert_allclose(single, _reference_floor(offset[:1]), atol=1e-6)
-    without = be.numpy(noise_floor(be, be.asarray(offset)))
-    np.testing.assert_allclose(without, _reference_floor(offset), atol=1e-6)
+    offset = np.log(rng.uniform(0.02, 1.0, (3, 31, 33, 3))).astype(np.float32)
+    flow = (rng.integers(-2, 3, (2, 31, 33, 2)) + rng.uniform(-0.4, 0.4, (2, 31, 33, 2))).astype(np.float32)
+    got = be.numpy(noise_floor(be, be.asarray(offset), be.asarray(flow), cap))
+    want = _reference_floor(offset, flow, cap)
+    np.testing.assert_allclose(got, want, rtol=1e-4, atol=1e-6)
+    if cap == 0.8:
+        assert np.mean(got < _reference_floor(offset, flow) - 1e-6) > 0.2          # the cap binds
+    single = be.numpy(noise_floor(be, be.asarray(offset[:1]), be.asarray(flow[:0]), cap))
+    np.testing.assert_allclose(single, _reference_floor(offset[:1], None, cap), rtol=1e-4, atol=1e-6)
+    without = be.numpy(noise_floor(be, be.asarray(offset), None, cap))
+    np.testing.assert_allclose(without, _reference_floor(offset, None, cap), rtol=1e-4, atol=1e-6)
 
 
 def test_the_noise_floor_over_a_flow_sees_the_noise_and_not_the_print():
@@ -207,3 +214,32 @@ def test_the_noise_floor_over_a_flow_sees_the_noise_and_not_the_print():
         assert abs(np.median(temporal[..., c]) / np.median(noise_only[..., c]) - 1.0) < 0.15
         assert np.median(spatial[..., 0]) > 5 * np.median(temporal[..., 0])
     assert ref.temporal_steps(frames, flow)[inner].max() < 1e-12            # print alone: no change along the flow
+
+
+def test_the_cap_keeps_a_region_where_the_flow_misses_from_reading_the_print_as_noise():
+    """The same fine print under noise, its flow right on three quarters of the frame and zero
+    (a miss) on the right quarter: there the local floor reads the print's change, many times
+    the noise, while the cap at 3 times the noise level function holds it near the noise;
+    where the flow is right the cap does not bind."""
+    from ivkernels.backends.registry import get_backend
+    from ivkernels.solver.step_evidence import noise_floor
+
+    be = get_backend("warp")
+    rng = np.random.default_rng(7)
+    T, h, w, sigma = 4, 48, 64, 0.02
+    print_ = np.log(np.where(rng.random((h, w + T)) < 0.5, 0.2, 0.6))
+    frames = np.stack([print_[:, t: t + w] for t in range(T)])[..., None].repeat(3, -1)     # moves 1 px left a frame
+    img = (frames + rng.normal(0.0, sigma, (T, h, w, 3))).astype(np.float32)
+    flow = np.zeros((T - 1, h, w, 2), np.float32)
+    flow[:, :, : 3 * w // 4, 0] = -1.0
+    right = (slice(None), slice(3, -3), slice(3, 3 * w // 4 - 3))
+    missed = (slice(None), slice(3, -3), slice(3 * w // 4 + 3, -3))
+    noise_only = be.numpy(noise_floor(be, be.asarray((np.log(0.4) + rng.normal(0.0, sigma, img.shape))
+                                                     .astype(np.float32))))
+    local = be.numpy(noise_floor(be, be.asarray(img), be.asarray(flow)))
+    capped = be.numpy(noise_floor(be, be.asarray(img), be.asarray(flow), 3.0))
+    noise = np.median(noise_only[..., 0])
+    assert np.median(local[missed][..., 0]) > 6 * noise                       # the print read as noise
+    assert np.median(capped[missed][..., 0]) < 0.5 * np.median(local[missed][..., 0])
+    assert np.median(capped[missed][..., 0]) < 3.0 * 1.5 * noise
+    np.testing.assert_array_equal(np.median(capped[right], axis=(0, 1, 2)), np.median(local[right], axis=(0, 1, 2)))

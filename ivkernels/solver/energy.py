@@ -148,7 +148,8 @@ class WindowEnergy:
                                params.shading_step_chroma, flow=flow if self.temporal else None,
                                stability=params.shading_step_stability,
                                static_flow=params.shading_step_static_flow,
-                               share_radius=params.shading_step_share_radius, noise=params.shading_step_noise)
+                               share_radius=params.shading_step_share_radius, noise=params.shading_step_noise,
+                               noise_cap=params.shading_step_noise_cap)
         if self.temporal and params.shading_light_edge_tau > 0 and T >= 3:
             factor = light_edge_factor(be, self.I, flow, params.shading_light_edge_tau,
                                        params.shading_step_static_flow)

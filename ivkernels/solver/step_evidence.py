@@ -48,7 +48,11 @@ dark material a colour camera's noise changes every pair's colour and
 brightness, which would otherwise make a grey edge look coloured and the
 noise itself look like sharp steps.  The floor is read from what changes
 between frames along the flow, where noise is new in every frame and fine
-print, which moves with the surface, cancels.
+print, which moves with the surface, cancels; with
+``Params.shading_step_noise_cap`` > 0 it is capped at that many times the
+window's noise level function (the median step per brightness), so that
+where the flow misses over a region the texture's change is not read as
+noise.
 
 The formula is computed by the kernels of the ``step_evidence`` family on
 the backend's arrays (:mod:`ivkernels.kernels.warp.step_evidence`, the
@@ -171,7 +175,7 @@ def grey_step_gate(log_image: np.ndarray, gain: float, tau: float, tau_chroma: f
     return (1.0 + gain * (1.0 - chromatic_share(log_image, tau, tau_chroma)) ** 2 * evidence).astype(np.float32)
 
 
-def noise_floor(be, offset_image, flow=None):
+def noise_floor(be, offset_image, flow=None, cap: float = 0.0):
     """The local noise floor of the steps of ``offset_image`` (T, h, w, 3), ``log(i + DARK_OFFSET)``.
 
     Over frames joined by a ``flow`` (T-1, h, w, 2), per pixel the larger step of its right and
@@ -182,23 +186,38 @@ def noise_floor(be, offset_image, flow=None):
     in sensor noise every pair steps by about the floor, and along an edge the edge's pairs
     are a minority of the window.  ``dL`` in channel 0, ``dC`` in channel 1; then their median
     over the neighbourhood (``median.median5x5``, :data:`NOISE_FLOOR_PASSES` times).
-    Returns a (T, h, w, 2) backend array."""
+
+    ``cap`` > 0: the floor is capped at ``cap`` times the window's noise level function, the
+    median of the same steps in each brightness bin read at the pixel's brightness
+    (``step_evidence.step_histogram``, ``level_medians``, ``cap_at_level``, all on the
+    device): a camera's noise depends on the brightness, while where the flow misses over a
+    region (a periodic texture, a large motion) the texture's change is large there but a
+    minority of every bin.  Returns a (T, h, w, 2) backend array."""
     T, h, w, _ = offset_image.shape
+    kernels = be.step_evidence
     steps = be.empty((T, h, w, 2))
     if flow is not None and T > 1:
-        be.step_evidence.temporal_steps(offset_image, flow, steps)
+        kernels.temporal_steps(offset_image, flow, steps)
     else:
-        be.step_evidence.typical_steps(offset_image, steps)
+        kernels.typical_steps(offset_image, steps)
+    table = None
+    if cap > 0:
+        counts = be.empty((2, ref.NOISE_LEVEL_BINS, ref.NOISE_STEP_BINS), np.int32)
+        kernels.step_histogram(offset_image, steps, counts)
+        table = be.empty((2, ref.NOISE_LEVEL_BINS))
+        kernels.level_medians(counts, table)
     floor = be.empty((T, h, w, 2))
     for _ in range(NOISE_FLOOR_PASSES):
         be.median.median5x5(steps, floor)
         steps, floor = floor, steps
+    if table is not None:
+        kernels.cap_at_level(offset_image, table, cap, steps)
     return steps
 
 
 def multiply_step_gate(be, log_image, gate, gain: float, tau: float, tau_chroma: float = 0.0, flow=None,
                        stability: float = 0.0, static_flow: float = STATIC_FLOW, share_radius: float = 0.0,
-                       noise: float = 0.0) -> None:
+                       noise: float = 0.0, noise_cap: float = 0.0) -> None:
     """Multiply the step weight of Eq. 9's local term into ``gate``, on the backend's arrays.
 
     ``gate *= 1 + gain (1 - s)^2 w evidence``: ``s`` the chromatic share
@@ -226,12 +245,14 @@ def multiply_step_gate(be, log_image, gate, gain: float, tau: float, tau_chroma:
     noise : >= 0; > 0: every step is read net of ``noise`` times the local noise floor
         (:func:`noise_floor`, from what changes between frames along ``flow`` when there is
         one; ``Params.shading_step_noise``), 0: as it is.
+    noise_cap : >= 0; > 0: that floor capped at ``noise_cap`` times the window's noise level
+        function (``Params.shading_step_noise_cap``), 0: not capped.
     """
     T, h, w, _ = log_image.shape
     kernels = be.step_evidence
     offset = be.empty((T, h, w, 3))
     kernels.offset_log(log_image, offset, DARK_OFFSET)
-    floor = noise_floor(be, offset, flow) if noise > 0 else None
+    floor = noise_floor(be, offset, flow, noise_cap) if noise > 0 else None
     weight = be.empty((T, h, w))
     if flow is not None and T > 1 and stability > 0:
         kernels.still_stability(log_image, flow, weight, stability, static_flow)

@@ -73,6 +73,54 @@ def _temporal_steps():
                 lambda v: {"steps": ref.temporal_steps(v["log_image"], v["flow"])}, tol=Tol(1e-5, 1e-6))
 
 
+def _noise_image(rng, T, H, W):
+    """An offset log image over the whole brightness range (some pixels beyond it), and steps
+    over the whole range of the step bins and beyond, zeros included.  Every side compares the
+    same float32 values with the same float32 edges, so the bins agree exactly."""
+    img = uniform(rng, (T, H, W, 3), np.log(ref.DARK_OFFSET) - 0.3, 0.3)
+    steps = np.exp(uniform(rng, (T, H, W, 2), np.log(1e-5), np.log(3.0))).astype(F32)
+    steps[:, ::4, ::3] = 0.0
+    return img, steps
+
+
+def _step_histogram():
+    def make(rng, T, H, W):
+        img, steps = _noise_image(rng, T, H, W)
+        shape = (2, ref.NOISE_LEVEL_BINS, ref.NOISE_STEP_BINS)
+        return {"log_image": img, "steps": steps, "counts": np.full(shape, -1, np.int32)}
+
+    return Case("step_evidence", "step_histogram", make, ("log_image", "steps", "counts"), ("counts",),
+                lambda v: {"counts": ref.step_histogram(v["log_image"], v["steps"])}, tol=EXACT)
+
+
+def _level_medians():
+    def make(rng, T, H, W):
+        # per bin a few hundred pixels or fewer than NOISE_LEVEL_MIN_COUNT (the first and last
+        # bins of channel 0, inner runs of both), or none at all; channel 1 has one counted bin
+        counts = rng.integers(0, 6, (2, ref.NOISE_LEVEL_BINS, ref.NOISE_STEP_BINS)).astype(np.int32)
+        counts[:, :, : rng.integers(0, 60)] = 0
+        for b in (0, 5, 6, ref.NOISE_LEVEL_BINS - 1):
+            counts[0, b] = 0
+            counts[0, b, rng.integers(0, ref.NOISE_STEP_BINS)] = ref.NOISE_LEVEL_MIN_COUNT - 1
+        counts[1, :] = 0
+        counts[1, 9, 40] = ref.NOISE_LEVEL_MIN_COUNT
+        return {"counts": counts, "table": nans((2, ref.NOISE_LEVEL_BINS))}
+
+    return Case("step_evidence", "level_medians", make, ("counts", "table"), ("table",),
+                lambda v: {"table": ref.level_medians(v["counts"])}, tol=Tol(1e-5, 1e-7))
+
+
+def _cap_at_level(scale):
+    def make(rng, T, H, W):
+        img, steps = _noise_image(rng, T, H, W)
+        return {"log_image": img, "table": uniform(rng, (2, ref.NOISE_LEVEL_BINS), 0.0, 0.2), "scale": scale,
+                "floor": (steps * 0.1).astype(F32)}
+
+    return Case("step_evidence", "cap_at_level", make, ("log_image", "table", "scale", "floor"), ("floor",),
+                lambda v: {"floor": ref.cap_at_level(v["log_image"], v["table"], v["scale"], v["floor"])},
+                variant=f"scale={scale:g}", tol=Tol(1e-5, 1e-7))
+
+
 def _offset_log(offset):
     def make(rng, T, H, W):
         img = np.log(uniform(rng, (T, H, W, 3), 1e-6, 1.0)).astype(F32)      # down to the darkest pixels
@@ -267,6 +315,10 @@ CASES = (
     _offset_log(0.5),
     _typical_steps(),
     _temporal_steps(),
+    _step_histogram(),
+    _level_medians(),
+    _cap_at_level(3.0),
+    _cap_at_level(0.5),
     _counts(0.1, 0.05),
     _counts(0.3, 0.0),
     _counts(0.1, 0.05, k=3.5),

@@ -25,7 +25,12 @@ local typical step: in a region of sensor noise every pair steps by about it,
 while an edge's pairs are a minority of the window and leave it near 0), or,
 over frames joined by a flow, of :func:`temporal_steps`: the same steps of what
 changes from one frame to the next along the flow, where the noise is new in
-every frame and print and edges, which move with the flow, cancel.
+every frame and print and edges, which move with the flow, cancel.  The
+local floor is then capped at a multiple of the window's noise level function
+(:func:`step_histogram`, :func:`level_medians`, :func:`cap_at_level`): the
+median step of each brightness bin, read at the pixel's brightness, as a
+camera's noise depends on the brightness while a flow that misses over a
+region (the texture's change read as noise) is a minority of every bin.
 
 A pixel's evidence is the largest over its 8 neighbours inside the image.
 Weiss's cue, the ``weight`` of the evidence, is ``maps.shading_gate`` of the
@@ -85,6 +90,20 @@ AXIS_NEIGHBOURS = ((0, 1), (1, 0))
 #: background or a deep shadow's edge, which the cue cannot vouch for.
 MAX_STABLE_STEP = 1.0
 
+#: The noise level function (:func:`step_histogram`, :func:`level_medians`, :func:`cap_at_level`):
+#: bins of the offset log luminance ``L`` over ``[log DARK_OFFSET, log(1 + DARK_OFFSET)]`` (the
+#: range of a frame in [0, 1]; values outside go to the end bins), and log-spaced bins of a
+#: step from ``NOISE_STEP_MIN`` (smaller steps, zeros included, go to the first) to
+#: ``NOISE_STEP_MAX`` (larger ones to the last).
+NOISE_LEVEL_BINS = 16
+NOISE_STEP_BINS = 128
+NOISE_STEP_MIN = 1e-4
+NOISE_STEP_MAX = 1.0
+
+#: Fewest pixels a brightness bin needs for its median to count; bins with fewer
+#: take the function's value interpolated from their neighbours.
+NOISE_LEVEL_MIN_COUNT = 64
+
 
 def _finite_gain(sizes, args):
     if not math.isfinite(args["gain"]):
@@ -109,6 +128,28 @@ FAMILY.declare("temporal_steps(log_image, flow, steps)",
                log_image="T H W 3", flow=Array("T-1 H W 2", layout="(T-1, H, W, 2)"), steps=Out("T H W 2"),
                separate=(("steps", "log_image", "the steps are written while log_image is read"),
                          ("steps", "flow", "the steps are written while flow is read")))
+_COUNTS = f"2 {NOISE_LEVEL_BINS} {NOISE_STEP_BINS}"
+_TABLE = f"2 {NOISE_LEVEL_BINS}"
+FAMILY.declare("step_histogram(log_image, steps, counts)",
+               "Per brightness bin of the pixels' log luminance (``NOISE_LEVEL_BINS`` fixed bins) and channel of "
+               "``steps``, the histogram of the steps over ``NOISE_STEP_BINS`` log-spaced bins: ``counts[c, b, j]``.",
+               log_image="T H W 3", steps="T H W 2",
+               counts=Out(_COUNTS, "int32", layout=f"(2, {NOISE_LEVEL_BINS}, {NOISE_STEP_BINS})"))
+FAMILY.declare("level_medians(counts, table)",
+               "The noise level function: per channel, the median step of each brightness bin of ``counts`` "
+               "(linear in the log of the step inside its bin); bins under ``NOISE_LEVEL_MIN_COUNT`` pixels "
+               "interpolated between the nearest counted ones, 0 with none counted.",
+               counts=Array(_COUNTS, "int32", layout=f"(2, {NOISE_LEVEL_BINS}, {NOISE_STEP_BINS})"),
+               table=Out(_TABLE, layout=f"(2, {NOISE_LEVEL_BINS})"),
+               separate=(("table", "counts", "the table is written while counts is read"),))
+FAMILY.declare("cap_at_level(log_image, table, scale, floor)",
+               "``floor[..., c] = min(floor[..., c], scale * f_c(L))``: the floor capped at ``scale`` times the "
+               "noise level function ``table`` (its values at the brightness bins' centres) read at the pixel's "
+               "log luminance ``L``, linearly between the centres and flat beyond them.",
+               log_image="T H W 3", table=Array(_TABLE, layout=f"(2, {NOISE_LEVEL_BINS})"), scale=NonNegative,
+               floor=Out("T H W 2"),
+               separate=(("floor", "log_image", "the floor is written while log_image is read"),
+                         ("floor", "table", "the floor is written while table is read")))
 FAMILY.declare("step_counts(log_image, counts, tau, tau_chroma=0.0, floor=None, k=0.0)",
                "Per row, the sharp and the chromatic steps of the horizontal and vertical pairs it starts.",
                log_image="T H W 3", counts=Out("T*H 2", "int32", layout="(T*H, 2)"), tau=FinitePositive,
@@ -231,6 +272,97 @@ def temporal_steps(log_image, flow) -> np.ndarray:
     out[: T - 1] = typical_steps(change) / math.sqrt(2.0)
     out[T - 1] = out[T - 2]
     return out
+
+
+def level_edges() -> np.ndarray:
+    """(NOISE_LEVEL_BINS + 1,) float32: the edges of the brightness bins, evenly spaced in ``L``."""
+    return np.linspace(math.log(DARK_OFFSET), math.log(1.0 + DARK_OFFSET), NOISE_LEVEL_BINS + 1).astype(np.float32)
+
+
+def step_edges() -> np.ndarray:
+    """(NOISE_STEP_BINS + 1,) float32: the edges of the step bins, evenly spaced in the log of the step."""
+    return np.exp(np.linspace(math.log(NOISE_STEP_MIN), math.log(NOISE_STEP_MAX), NOISE_STEP_BINS + 1)).astype(
+        np.float32)
+
+
+def bin_index(values, edges) -> np.ndarray:
+    """The bin of each value: how many inner edges ``edges[1:-1]`` are ``<=`` it (below the
+    first edge: bin 0, above the last: the last bin; NaN: bin 0), as the kernels count."""
+    values = np.asarray(values, np.float32)
+    index = np.searchsorted(edges[1:-1], np.nan_to_num(values, nan=-np.inf), side="right")
+    return np.where(np.isnan(values), 0, index)
+
+
+def frame_luminance(log_image) -> np.ndarray:
+    """(T, H, W) float32: ``(I_0 + I_1 + I_2) / 3`` in float32, in the kernels' order."""
+    img = np.asarray(log_image, np.float32)
+    return (img[..., 0] + img[..., 1] + img[..., 2]) / np.float32(3.0)
+
+
+def step_histogram(log_image, steps) -> np.ndarray:
+    """(2, NOISE_LEVEL_BINS, NOISE_STEP_BINS) int64: ``counts[c, b, j]``, the pixels of brightness bin
+    ``b`` (:func:`level_edges` of :func:`frame_luminance`) whose step ``steps[..., c]`` falls in step
+    bin ``j`` (:func:`step_edges`).
+
+    log_image : (T, H, W, 3), ``I'``; steps : (T, H, W, 2), :func:`temporal_steps` or :func:`typical_steps`.
+    """
+    level = bin_index(frame_luminance(log_image), level_edges()).reshape(-1)
+    counts = np.zeros((2, NOISE_LEVEL_BINS, NOISE_STEP_BINS), np.int64)
+    for c in range(2):
+        step = bin_index(np.asarray(steps, np.float32)[..., c], step_edges()).reshape(-1)
+        np.add.at(counts[c], (level, step), 1)
+    return counts
+
+
+def level_medians(counts) -> np.ndarray:
+    """(2, NOISE_LEVEL_BINS) float64: the noise level function, per channel the median step of each
+    brightness bin, at the bin's centre.
+
+    The median is read from the histogram ``counts`` (:func:`step_histogram`), linearly in the log
+    of the step inside its bin.  A bin with fewer than :data:`NOISE_LEVEL_MIN_COUNT` pixels takes the
+    value interpolated between the nearest counted bins' (the nearest one's beyond the last); with
+    no bin counted, 0.
+    """
+    counts = np.asarray(counts, np.int64)
+    log_edges = np.log(step_edges().astype(np.float64))
+    out = np.zeros((2, NOISE_LEVEL_BINS))
+    centres = np.arange(NOISE_LEVEL_BINS, dtype=np.float64)
+    for c in range(2):
+        known, values = [], []
+        for b in range(NOISE_LEVEL_BINS):
+            row = counts[c, b]
+            n = int(row.sum())
+            if n < NOISE_LEVEL_MIN_COUNT:
+                continue
+            cumulative = np.cumsum(row)
+            j = int(np.searchsorted(cumulative, n / 2.0))          # the first bin reaching half the pixels
+            before = cumulative[j - 1] if j > 0 else 0
+            frac = (n / 2.0 - before) / row[j]
+            known.append(b)
+            values.append(math.exp(log_edges[j] + frac * (log_edges[j + 1] - log_edges[j])))
+        if known:
+            out[c] = np.interp(centres, np.array(known, np.float64), np.array(values))
+    return out
+
+
+def level_floor(log_image, table) -> np.ndarray:
+    """(T, H, W, 2) float64: the noise level function ``table`` (2, NOISE_LEVEL_BINS), its values at
+    the brightness bins' centres, read at each pixel's :func:`frame_luminance`, linearly between
+    centres and flat beyond the first and last."""
+    edges = level_edges().astype(np.float64)
+    width = (edges[-1] - edges[0]) / NOISE_LEVEL_BINS
+    u = (frame_luminance(log_image).astype(np.float64) - edges[0]) / width - 0.5
+    u = np.clip(np.nan_to_num(u, nan=0.0), 0.0, NOISE_LEVEL_BINS - 1.0)
+    i0 = np.minimum(np.floor(u).astype(np.int64), NOISE_LEVEL_BINS - 1)
+    i1 = np.minimum(i0 + 1, NOISE_LEVEL_BINS - 1)
+    f = u - i0
+    table = np.asarray(table, np.float64)
+    return np.stack([table[c][i0] * (1.0 - f) + table[c][i1] * f for c in range(2)], axis=-1)
+
+
+def cap_at_level(log_image, table, scale: float, floor) -> np.ndarray:
+    """(T, H, W, 2) float64: ``floor`` capped at ``scale`` times :func:`level_floor` of ``table``."""
+    return np.minimum(np.asarray(floor, np.float64), scale * level_floor(log_image, table))
 
 
 def net_steps(dL, dC, floor, k: float, a, b):

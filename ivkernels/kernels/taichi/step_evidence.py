@@ -2,7 +2,8 @@
 local term): same host functions and signatures, NumPy arrays passed as ``ti.types.ndarray()``.
 The outermost loop runs over rows in parallel.  The arrays live on the host, so the chromatic
 share is summed there from the kernel's per-row counts (in int64, exactly), and so is the whole
-video's share of :func:`share_weight` and the float64 offset log of :func:`pixel_counts`.
+video's share of :func:`share_weight`, the float64 offset log of :func:`pixel_counts` and the
+medians of the noise level function (:func:`level_medians`, from the kernel's histogram).
 """
 import numpy as np
 import taichi as ti
@@ -11,7 +12,8 @@ from ivkernels.kernels.contract import implements
 from ivkernels.kernels.ndarray_checks import FRONT
 from ivkernels.kernels.taichi.maps import log_change_at
 from ivkernels.kernels.reference import step_evidence as ref
-from ivkernels.kernels.reference.step_evidence import FAMILY, MAX_STABLE_STEP, least_stable_step, share
+from ivkernels.kernels.reference.step_evidence import (FAMILY, MAX_STABLE_STEP, NOISE_LEVEL_BINS, least_stable_step,
+                                                       level_edges, share, step_edges)
 
 host = implements(FAMILY, FRONT)
 
@@ -20,6 +22,9 @@ nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
 nd4_i32 = ti.types.ndarray(dtype=ti.i32, ndim=4)
 nd4_f64 = ti.types.ndarray(dtype=ti.f64, ndim=4)
+nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
+nd2 = ti.types.ndarray(dtype=ti.f32, ndim=2)
+nd3_i32 = ti.types.ndarray(dtype=ti.i32, ndim=3)
 
 #: Below this argument ``exp(-a)`` and ``1 - exp(-a)`` are read from their series (see the Warp module).
 SERIES_BELOW = 1.0e-3
@@ -176,6 +181,57 @@ def typical_steps_rows(img: nd4, steps: nd4):
                 sc = ti.max(sc, dc)
             steps[t, y, x, 0] = sl
             steps[t, y, x, 1] = sc
+
+
+@ti.func
+def bin_of(value, edges: ti.template()):
+    """How many inner edges ``edges[1:-1]`` are ``<= value`` (see the Warp module)."""
+    lo = 0
+    hi = edges.shape[0] - 2
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        if edges[mid] <= value:
+            lo = mid
+        else:
+            hi = mid - 1
+    return lo
+
+
+@ti.func
+def frame_luminance(img: ti.template(), t, y, x):
+    return (img[t, y, x, 0] + img[t, y, x, 1] + img[t, y, x, 2]) / 3.0
+
+
+@ti.kernel
+def step_histogram_rows(img: nd4, steps: nd4, levels: nd1, bins: nd1, counts: nd3_i32):
+    height = img.shape[1]
+    for r in range(img.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for x in range(img.shape[2]):
+            b = bin_of(frame_luminance(img, t, y, x), levels)
+            for c in ti.static(range(2)):
+                ti.atomic_add(counts[c, b, bin_of(steps[t, y, x, c], bins)], 1)
+
+
+@ti.kernel
+def cap_at_level_rows(img: nd4, table: nd2, lo: ti.f32, width: ti.f32, scale: ti.f32, floor: nd4):
+    height = img.shape[1]
+    last = table.shape[1] - 1
+    for r in range(img.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for x in range(img.shape[2]):
+            u = (frame_luminance(img, t, y, x) - lo) / width - 0.5
+            if not (u > 0.0):
+                u = 0.0
+            u = ti.min(u, ti.cast(last, ti.f32))
+            i0 = ti.min(ti.cast(ti.floor(u), ti.i32), last)
+            i1 = ti.min(i0 + 1, last)
+            f = u - ti.cast(i0, ti.f32)
+            for c in ti.static(range(2)):
+                level = table[c, i0] * (1.0 - f) + table[c, i1] * f
+                floor[t, y, x, c] = ti.min(floor[t, y, x, c], scale * level)
 
 
 @ti.kernel
@@ -558,6 +614,36 @@ def temporal_steps(log_image, flow, steps) -> None:
     :func:`ivkernels.kernels.warp.step_evidence.temporal_steps`."""
     if steps.size:
         temporal_steps_rows(log_image, flow, steps)
+
+
+_LEVEL_EDGES = level_edges()
+_STEP_EDGES = step_edges()
+
+
+@host("step_histogram")
+def step_histogram(log_image, steps, counts) -> None:
+    """The histogram of the steps per brightness bin; see
+    :func:`ivkernels.kernels.warp.step_evidence.step_histogram`."""
+    counts[...] = 0
+    if log_image.size:
+        step_histogram_rows(log_image, steps, _LEVEL_EDGES, _STEP_EDGES, counts)
+
+
+@host("level_medians")
+def level_medians(counts, table) -> None:
+    """The noise level function from the histogram, on the host (the reference's float64 medians);
+    see :func:`ivkernels.kernels.warp.step_evidence.level_medians`."""
+    table[...] = ref.level_medians(counts).astype(np.float32)
+
+
+@host("cap_at_level")
+def cap_at_level(log_image, table, scale: float, floor) -> None:
+    """The floor capped at ``scale`` times the noise level function; see
+    :func:`ivkernels.kernels.warp.step_evidence.cap_at_level`."""
+    edges = _LEVEL_EDGES.astype(np.float64)
+    if floor.size:
+        cap_at_level_rows(log_image, table, float(edges[0]), float((edges[-1] - edges[0]) / NOISE_LEVEL_BINS),
+                          float(scale), floor)
 
 
 @host("step_counts")

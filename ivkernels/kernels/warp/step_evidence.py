@@ -4,6 +4,9 @@
 * :func:`typical_steps` and :func:`temporal_steps`: per pixel, the larger step
   of its right and lower pairs, of the frame itself or of what changes from
   one frame to the next along the flow (their 5x5 median is the noise floor),
+* :func:`step_histogram`, :func:`level_medians` and :func:`cap_at_level`: the
+  window's noise level function (the median step per brightness bin, on the
+  device) and the floor capped at a multiple of it,
 * :func:`step_counts`: per row, the sharp and the chromatic steps of the
   horizontal and vertical pairs it starts (the chromatic share's counts),
 * :func:`pixel_counts`: per pixel, the same counts read in float64 (the
@@ -27,12 +30,15 @@ for the vertical window sums).
 """
 from __future__ import annotations
 
+import numpy as np
 import warp as wp
 
 from ivkernels.kernels.cache import cached
 from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import launch_rows, row_tiles
-from ivkernels.kernels.reference.step_evidence import FAMILY, MAX_STABLE_STEP, least_stable_step
+from ivkernels.kernels.reference.step_evidence import (FAMILY, MAX_STABLE_STEP, NOISE_LEVEL_BINS,
+                                                       NOISE_LEVEL_MIN_COUNT, least_stable_step, level_edges,
+                                                       step_edges)
 from ivkernels.kernels.warp._checks import FRONT
 from ivkernels.kernels.warp.maps import log_change_at
 from ivkernels.kernels.warp.row_tiles import row_span
@@ -212,6 +218,107 @@ def temporal_steps_rows(row_begin: int, img: wp.array4d(dtype=float), flow: wp.a
                 sc = wp.max(sc, dc)
         steps[t, y, x, 0] = sl / wp.sqrt(2.0)
         steps[t, y, x, 1] = sc / wp.sqrt(2.0)
+
+
+@wp.func
+def bin_of(value: float, edges: wp.array(dtype=float)):
+    """How many inner edges ``edges[1:-1]`` are ``<= value`` (a binary search; NaN: 0)."""
+    lo = int(0)
+    hi = edges.shape[0] - 2                 # the answer lies in [lo, hi]
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        if edges[mid] <= value:
+            lo = mid
+        else:
+            hi = mid - 1
+    return lo
+
+
+@wp.func
+def frame_luminance(img: wp.array4d(dtype=float), t: int, y: int, x: int):
+    """``(I_0 + I_1 + I_2) / 3`` of a pixel."""
+    return (img[t, y, x, 0] + img[t, y, x, 1] + img[t, y, x, 2]) / 3.0
+
+
+@wp.kernel
+def step_histogram_rows(row_begin: int, img: wp.array4d(dtype=float), steps: wp.array4d(dtype=float),
+                        levels: wp.array(dtype=float), bins: wp.array(dtype=float),
+                        counts: wp.array3d(dtype=wp.int32)):
+    r = row_begin + wp.tid()
+    height = img.shape[1]
+    t = r // height
+    y = r - t * height
+    for x in range(img.shape[2]):
+        b = bin_of(frame_luminance(img, t, y, x), levels)
+        for c in range(2):
+            wp.atomic_add(counts, c, b, bin_of(steps[t, y, x, c], bins), 1)
+
+
+@wp.kernel
+def level_medians_channels(counts: wp.array3d(dtype=wp.int32), log_edges: wp.array(dtype=float),
+                           min_count: int, table: wp.array2d(dtype=float)):
+    """Thread ``c``: the median step of each brightness bin (the bins under ``min_count`` pixels
+    marked -1), then the marked bins interpolated between their nearest counted neighbours."""
+    c = wp.tid()
+    n_levels = counts.shape[1]
+    n_steps = counts.shape[2]
+    for b in range(n_levels):
+        n = int(0)
+        for j in range(n_steps):
+            n += counts[c, b, j]
+        value = float(-1.0)
+        if n >= min_count:
+            half = float(n) / 2.0
+            cumulative = int(0)
+            j = int(0)
+            while float(cumulative + counts[c, b, j]) < half:
+                cumulative += counts[c, b, j]
+                j += 1
+            frac = (half - float(cumulative)) / float(counts[c, b, j])
+            value = wp.exp(log_edges[j] + frac * (log_edges[j + 1] - log_edges[j]))
+        table[c, b] = value
+    for b in range(n_levels):
+        if table[c, b] < 0.0:
+            below = int(b - 1)
+            while below >= 0 and table[c, below] < 0.0:
+                below -= 1
+            above = int(b + 1)
+            while above < n_levels and table[c, above] < 0.0:
+                above += 1
+            value = float(0.0)
+            if below >= 0 and above < n_levels:
+                f = float(b - below) / float(above - below)
+                value = table[c, below] * (1.0 - f) + table[c, above] * f
+            elif below >= 0:
+                value = table[c, below]
+            elif above < n_levels:
+                value = table[c, above]
+            # a filled bin is not a counted one: the bins after it look past it
+            table[c, b] = -2.0 - value
+    for b in range(n_levels):
+        if table[c, b] <= -2.0:
+            table[c, b] = -2.0 - table[c, b]
+
+
+@wp.kernel
+def cap_at_level_rows(row_begin: int, img: wp.array4d(dtype=float), table: wp.array2d(dtype=float),
+                      lo: float, width: float, scale: float, floor: wp.array4d(dtype=float)):
+    r = row_begin + wp.tid()
+    height = img.shape[1]
+    t = r // height
+    y = r - t * height
+    last = table.shape[1] - 1
+    for x in range(img.shape[2]):
+        u = (frame_luminance(img, t, y, x) - lo) / width - 0.5
+        if not (u > 0.0):                   # below the first centre, or NaN
+            u = 0.0
+        u = wp.min(u, float(last))
+        i0 = wp.min(int(wp.floor(u)), last)
+        i1 = wp.min(i0 + 1, last)
+        f = u - float(i0)
+        for c in range(2):
+            level = table[c, i0] * (1.0 - f) + table[c, i1] * f
+            floor[t, y, x, c] = wp.min(floor[t, y, x, c], scale * level)
 
 
 @wp.kernel
@@ -701,6 +808,70 @@ def temporal_steps(log_image, flow, steps) -> None:
     """
     t, h, _, _ = log_image.shape
     launch_rows(temporal_steps_rows, t * h, [log_image, flow, steps], device=log_image.device)
+
+
+def _noise_edges(device):
+    """The brightness bins' edges, the step bins' edges and the log of the latter
+    (:func:`~ivkernels.kernels.reference.step_evidence.level_edges`, ``step_edges``) on ``device``,
+    made once."""
+    return cached((__name__, "noise_edges", str(device)),
+                  lambda: (wp.array(level_edges(), dtype=float, device=device),
+                           wp.array(step_edges(), dtype=float, device=device),
+                           wp.array(np.log(step_edges().astype(np.float64)).astype(np.float32), dtype=float,
+                                    device=device)))
+
+
+@host("step_histogram")
+def step_histogram(log_image, steps, counts) -> None:
+    """The histogram of the steps per brightness bin: ``counts[c, b, j]`` is the number of pixels
+    whose log luminance ``(I_0 + I_1 + I_2) / 3`` falls in brightness bin ``b`` and whose step
+    ``steps[..., c]`` falls in step bin ``j`` (fixed bins, ``reference.step_evidence.level_edges``
+    and ``step_edges``; values beyond the end edges go to the end bins).  On a GPU the rows add
+    with atomics; on the CPU, whose Warp atomics are plain adds, the rows run on one thread.
+
+    log_image : wp.array float32 (T, H, W, 3), the offset log image (:func:`offset_log`).
+    steps : wp.array float32 (T, H, W, 2), :func:`temporal_steps` or :func:`typical_steps`.
+    counts : wp.array int32 (2, NOISE_LEVEL_BINS, NOISE_STEP_BINS), written.
+    """
+    t, h, _, _ = log_image.shape
+    dev = log_image.device
+    counts.zero_()
+    levels, bins, _ = _noise_edges(dev)
+    wp.launch(step_histogram_rows, dim=t * h, inputs=[0, log_image, steps, levels, bins, counts], device=dev)
+
+
+@host("level_medians")
+def level_medians(counts, table) -> None:
+    """The noise level function from the histogram of :func:`step_histogram`: ``table[c, b]`` is
+    the median step of brightness bin ``b`` (linear in the log of the step inside its step bin);
+    a bin with fewer than ``NOISE_LEVEL_MIN_COUNT`` pixels takes the value interpolated between
+    the nearest counted bins (the nearest one's beyond the last), 0 with none counted.
+
+    counts : wp.array int32 (2, NOISE_LEVEL_BINS, NOISE_STEP_BINS).
+    table : wp.array float32 (2, NOISE_LEVEL_BINS), written.
+    """
+    _, _, log_edges = _noise_edges(counts.device)
+    wp.launch(level_medians_channels, dim=2, inputs=[counts, log_edges, NOISE_LEVEL_MIN_COUNT, table],
+              device=counts.device)
+
+
+@host("cap_at_level")
+def cap_at_level(log_image, table, scale: float, floor) -> None:
+    """``floor[..., c] = min(floor[..., c], scale * f_c(L))``: the floor capped at ``scale`` times
+    the noise level function ``table`` (its values at the centres of the brightness bins) read at
+    the pixel's log luminance ``L = (I_0 + I_1 + I_2) / 3``, linearly between the centres and flat
+    beyond the first and last.
+
+    log_image : wp.array float32 (T, H, W, 3), the offset log image (:func:`offset_log`).
+    table : wp.array float32 (2, NOISE_LEVEL_BINS), :func:`level_medians`.
+    scale : >= 0.
+    floor : wp.array float32 (T, H, W, 2), capped in place.
+    """
+    t, h, _, _ = log_image.shape
+    edges = level_edges().astype(np.float64)
+    width = (edges[-1] - edges[0]) / NOISE_LEVEL_BINS
+    launch_rows(cap_at_level_rows, t * h, [log_image, table, float(edges[0]), float(width), float(scale), floor],
+                device=log_image.device)
 
 
 @host("step_counts")
