@@ -53,13 +53,14 @@ from ivkernels.params import Params
 from ivkernels.validation import check_memory, decompose_nbytes
 from ivkernels.viz import albedo_to_srgb8, contact_sheet, flow_to_color, gray_to_rgb8, shading_to_srgb8
 
-#: Seconds per pixel and frame of a default run (the flow estimated, two
-#: passes, every window), per backend, with both cores of a 2-core machine,
-#: and the seconds of a run's start (imports, cached kernels); measured as
-#: written in perf/RESULTS.md, "Command line: the time estimate".  The
-#: summary's estimate scales the first by 2 / threads.
-SECONDS_PER_PIXEL_FRAME = {"warp": 4.8e-4, "taichi": 1.3e-3, "numpy": 8.6e-3}
-START_SECONDS = 10.0
+#: Seconds per pixel and solved frame of a default run (the flow estimated,
+#: two passes), per backend, with both cores of a 2-core machine, and the
+#: seconds of a run's start (imports, cached kernels); measured as written in
+#: perf/RESULTS.md, "Command line: the time estimate, measured again".  A
+#: frame is counted once per window that solves it (the frames windows share
+#: are solved twice); the summary's estimate scales the cost by 2 / threads.
+SECONDS_PER_PIXEL_FRAME = {"warp": 1.6e-5, "taichi": 5.5e-5, "numpy": 6.9e-4}
+START_SECONDS = 3.0
 
 #: ``--npz`` choices: the dtype of ``intrinsics.npz``, or no file.
 NPZ_CHOICES = ("float16", "float32", "none")
@@ -187,11 +188,12 @@ def _check_arguments(args):
     return params, flow_folder
 
 
-def _estimate_seconds(backend: str, n_frames: int, height: int, width: int, threads: int) -> float | None:
+def _estimate_seconds(backend: str, solved_frames: int, height: int, width: int, threads: int) -> float | None:
+    """The time a run should take: ``solved_frames`` is the sum of the windows' lengths."""
     per = SECONDS_PER_PIXEL_FRAME.get(backend)
     if per is None:
         return None
-    return START_SECONDS + per * n_frames * height * width * 2.0 / max(1, threads)
+    return START_SECONDS + per * solved_frames * height * width * 2.0 / max(1, threads)
 
 
 def _duration(seconds: float) -> str:
@@ -206,7 +208,7 @@ def _summary(args, src: Path, T: int, H: int, W: int, params: Params, flow_label
              threads: int) -> str:
     """The job, in a few lines, before any work."""
     ranges = window_ranges(T, int(params.window), int(params.overlap))
-    estimate = _estimate_seconds(args.backend, T, H, W, threads)
+    estimate = _estimate_seconds(args.backend, sum(stop - start for start, stop, _ in ranges), H, W, threads)
     lines = [
         f"ivkernels: {T} frame{'s' if T != 1 else ''} of {W}x{H} from {src} (frames {args.start} to "
         f"{args.start + (T - 1) * args.step}{f', every {args.step}' if args.step > 1 else ''})",
