@@ -35,7 +35,8 @@ import warp as wp
 
 from ivkernels.kernels.cache import cached
 from ivkernels.kernels.contract import implements
-from ivkernels.kernels.launch import launch_rows, row_tiles
+from ivkernels.kernels.launch import gpu_layout, launch_rows, row_tiles
+from ivkernels.kernels.thread_count import get_threads
 from ivkernels.kernels.reference.step_evidence import (FAMILY, MAX_STABLE_STEP, NOISE_LEVEL_BINS,
                                                        NOISE_LEVEL_MIN_COUNT, least_stable_step, level_edges,
                                                        step_edges)
@@ -255,10 +256,42 @@ def step_histogram_rows(row_begin: int, img: wp.array4d(dtype=float), steps: wp.
 
 
 @wp.kernel
+def step_histogram_bands(band_begin: int, band_rows: int, img: wp.array4d(dtype=float),
+                         steps: wp.array4d(dtype=float), levels: wp.array(dtype=float),
+                         bins: wp.array(dtype=float), partial: wp.array4d(dtype=wp.int32)):
+    """Thread ``band``: the histogram of rows ``[band * band_rows, (band + 1) * band_rows)`` into
+    ``partial[band]``, which no other thread touches (plain adds, no atomics)."""
+    band = band_begin + wp.tid()
+    height = img.shape[1]
+    r_end = wp.min((band + 1) * band_rows, img.shape[0] * height)
+    for r in range(band * band_rows, r_end):
+        t = r // height
+        y = r - t * height
+        for x in range(img.shape[2]):
+            b = bin_of(frame_luminance(img, t, y, x), levels)
+            for c in range(2):
+                j = bin_of(steps[t, y, x, c], bins)
+                partial[band, c, b, j] = partial[band, c, b, j] + 1
+
+
+@wp.kernel
+def sum_bands(partial: wp.array4d(dtype=wp.int32), counts: wp.array3d(dtype=wp.int32)):
+    """Thread ``(c, b, j)``: ``counts[c, b, j]``, the sum of the bands' histograms."""
+    c, b, j = wp.tid()
+    total = int(0)
+    for band in range(partial.shape[0]):
+        total += partial[band, c, b, j]
+    counts[c, b, j] = total
+
+
+@wp.kernel
 def level_medians_channels(counts: wp.array3d(dtype=wp.int32), log_edges: wp.array(dtype=float),
                            min_count: int, table: wp.array2d(dtype=float)):
     """Thread ``c``: the median step of each brightness bin (the bins under ``min_count`` pixels
-    marked -1), then the marked bins interpolated between their nearest counted neighbours."""
+    marked -1), then the marked bins interpolated between their nearest counted neighbours.
+    Medians are positive, so the sign tells a counted bin: a filled bin holds ``-2 - value``
+    until every bin is filled (the bins after it look past it, as ``np.interp`` over the
+    counted bins does), then its value."""
     c = wp.tid()
     n_levels = counts.shape[1]
     n_steps = counts.shape[2]
@@ -827,7 +860,8 @@ def step_histogram(log_image, steps, counts) -> None:
     whose log luminance ``(I_0 + I_1 + I_2) / 3`` falls in brightness bin ``b`` and whose step
     ``steps[..., c]`` falls in step bin ``j`` (fixed bins, ``reference.step_evidence.level_edges``
     and ``step_edges``; values beyond the end edges go to the end bins).  On a GPU the rows add
-    with atomics; on the CPU, whose Warp atomics are plain adds, the rows run on one thread.
+    with atomics; on the CPU, whose Warp atomics are plain adds, each thread counts a band of
+    rows into its own histogram and the bands are summed (integers: the same counts either way).
 
     log_image : wp.array float32 (T, H, W, 3), the offset log image (:func:`offset_log`).
     steps : wp.array float32 (T, H, W, 2), :func:`temporal_steps` or :func:`typical_steps`.
@@ -835,9 +869,16 @@ def step_histogram(log_image, steps, counts) -> None:
     """
     t, h, _, _ = log_image.shape
     dev = log_image.device
-    counts.zero_()
     levels, bins, _ = _noise_edges(dev)
-    wp.launch(step_histogram_rows, dim=t * h, inputs=[0, log_image, steps, levels, bins, counts], device=dev)
+    if gpu_layout(dev):
+        counts.zero_()
+        wp.launch(step_histogram_rows, dim=t * h, inputs=[0, log_image, steps, levels, bins, counts], device=dev)
+        return
+    n_bands = max(1, min(get_threads(), t * h))
+    band_rows = -(-(t * h) // n_bands)
+    partial = wp.zeros((n_bands, *counts.shape), dtype=wp.int32, device=dev)
+    launch_rows(step_histogram_bands, n_bands, [band_rows, log_image, steps, levels, bins, partial], device=dev)
+    wp.launch(sum_bands, dim=counts.shape, inputs=[partial, counts], device=dev)
 
 
 @host("level_medians")
