@@ -267,3 +267,25 @@ def test_flow_with_the_gpu_layouts_matches_the_cpu_layout(monkeypatch):
 
     cpu, gpu = both_layouts(monkeypatch, run)
     assert metrics.endpoint_error(gpu[0], cpu[0]) < 0.02
+
+
+@pytest.mark.parametrize("shape", [(3, 7, 9), (2, 1, 5), (1, 6, 1)])
+def test_the_capped_noise_floor_in_the_gpu_layout_matches_the_cpu_layout(be, monkeypatch, shape):
+    """The histogram of the noise level function adds with atomics in the GPU's layout and per band
+    of rows on the CPU: the same counts, so the same capped floor."""
+    from ivkernels.solver.step_evidence import noise_floor
+
+    rng = np.random.default_rng(sum(shape))
+    t, h, w = shape
+    offset = np.log(rng.uniform(0.02, 1.0, (t, h, w, 3))).astype(np.float32)
+    flow = rng.uniform(-2, 2, (max(t - 1, 0), h, w, 2)).astype(np.float32)
+    counts = be.empty((2, 16, 128), np.int32)
+
+    def call():
+        floor = be.numpy(noise_floor(be, be.asarray(offset), be.asarray(flow), 0.7))
+        be.step_evidence.step_histogram(be.asarray(offset), be.asarray(np.abs(offset[..., :2])), counts)
+        return [floor, be.numpy(counts).copy()]
+
+    cpu, gpu = both_layouts(monkeypatch, call)
+    np.testing.assert_array_equal(gpu[1], cpu[1])
+    np.testing.assert_array_equal(gpu[0], cpu[0])
