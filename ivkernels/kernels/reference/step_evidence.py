@@ -345,13 +345,20 @@ def level_medians(counts) -> np.ndarray:
     return out
 
 
+def level_axis() -> tuple[float, float]:
+    """``(lo, width)``: the first brightness edge and the width of a brightness bin (float64), with
+    which a pixel's luminance ``L`` reads the noise level function at ``(L - lo) / width - 0.5``
+    bins from the first bin's centre."""
+    edges = level_edges().astype(np.float64)
+    return float(edges[0]), float((edges[-1] - edges[0]) / NOISE_LEVEL_BINS)
+
+
 def level_floor(log_image, table) -> np.ndarray:
     """(T, H, W, 2) float64: the noise level function ``table`` (2, NOISE_LEVEL_BINS), its values at
     the brightness bins' centres, read at each pixel's :func:`frame_luminance`, linearly between
     centres and flat beyond the first and last."""
-    edges = level_edges().astype(np.float64)
-    width = (edges[-1] - edges[0]) / NOISE_LEVEL_BINS
-    u = (frame_luminance(log_image).astype(np.float64) - edges[0]) / width - 0.5
+    lo, width = level_axis()
+    u = (frame_luminance(log_image).astype(np.float64) - lo) / width - 0.5
     u = np.clip(np.nan_to_num(u, nan=0.0), 0.0, NOISE_LEVEL_BINS - 1.0)
     i0 = np.minimum(np.floor(u).astype(np.int64), NOISE_LEVEL_BINS - 1)
     i1 = np.minimum(i0 + 1, NOISE_LEVEL_BINS - 1)

@@ -12,7 +12,7 @@ from ivkernels.kernels.contract import implements
 from ivkernels.kernels.ndarray_checks import FRONT
 from ivkernels.kernels.taichi.maps import log_change_at
 from ivkernels.kernels.reference import step_evidence as ref
-from ivkernels.kernels.reference.step_evidence import (FAMILY, MAX_STABLE_STEP, NOISE_LEVEL_BINS, least_stable_step,
+from ivkernels.kernels.reference.step_evidence import (FAMILY, MAX_STABLE_STEP, least_stable_step, level_axis,
                                                        level_edges, share, step_edges)
 
 host = implements(FAMILY, FRONT)
@@ -198,7 +198,8 @@ def bin_of(value, edges: ti.template()):
 
 
 @ti.func
-def frame_luminance(img: ti.template(), t, y, x):
+def mean_channel(img: ti.template(), t, y, x):
+    """The mean over the 3 channels of pixel ``(t, y, x)``: the log luminance ``L``."""
     return (img[t, y, x, 0] + img[t, y, x, 1] + img[t, y, x, 2]) / 3.0
 
 
@@ -209,7 +210,7 @@ def step_histogram_rows(img: nd4, steps: nd4, levels: nd1, bins: nd1, counts: nd
         t = r // height
         y = r - t * height
         for x in range(img.shape[2]):
-            b = bin_of(frame_luminance(img, t, y, x), levels)
+            b = bin_of(mean_channel(img, t, y, x), levels)
             for c in ti.static(range(2)):
                 ti.atomic_add(counts[c, b, bin_of(steps[t, y, x, c], bins)], 1)
 
@@ -222,7 +223,7 @@ def cap_at_level_rows(img: nd4, table: nd2, lo: ti.f32, width: ti.f32, scale: ti
         t = r // height
         y = r - t * height
         for x in range(img.shape[2]):
-            u = (frame_luminance(img, t, y, x) - lo) / width - 0.5
+            u = (mean_channel(img, t, y, x) - lo) / width - 0.5
             if not (u > 0.0):
                 u = 0.0
             u = ti.min(u, ti.cast(last, ti.f32))
@@ -465,12 +466,6 @@ def still_stability_rows(flow: nd4, change: nd4, weight: nd3, tau: ti.f32, stati
                 weight[t, y, x] = ti.exp(-q * q)
 
 
-@ti.func
-def mean_channel(img: ti.template(), t, y, x):
-    """The mean over the 3 channels of pixel ``(t, y, x)``: the log luminance ``L``."""
-    return (img[t, y, x, 0] + img[t, y, x, 1] + img[t, y, x, 2]) / 3.0
-
-
 @ti.kernel
 def luminance_steps_rows(img: nd4, steps: nd4):
     """``steps[t, y, x, k] = L(t, x + d_k) - L(t, x)`` (right, lower), 0 outside (see the Warp module)."""
@@ -640,10 +635,9 @@ def level_medians(counts, table) -> None:
 def cap_at_level(log_image, table, scale: float, floor) -> None:
     """The floor capped at ``scale`` times the noise level function; see
     :func:`ivkernels.kernels.warp.step_evidence.cap_at_level`."""
-    edges = _LEVEL_EDGES.astype(np.float64)
+    lo, width = level_axis()
     if floor.size:
-        cap_at_level_rows(log_image, table, float(edges[0]), float((edges[-1] - edges[0]) / NOISE_LEVEL_BINS),
-                          float(scale), floor)
+        cap_at_level_rows(log_image, table, lo, width, float(scale), floor)
 
 
 @host("step_counts")

@@ -37,9 +37,8 @@ from ivkernels.kernels.cache import cached
 from ivkernels.kernels.contract import implements
 from ivkernels.kernels.launch import gpu_layout, launch_rows, row_tiles
 from ivkernels.kernels.thread_count import get_threads
-from ivkernels.kernels.reference.step_evidence import (FAMILY, MAX_STABLE_STEP, NOISE_LEVEL_BINS,
-                                                       NOISE_LEVEL_MIN_COUNT, least_stable_step, level_edges,
-                                                       step_edges)
+from ivkernels.kernels.reference.step_evidence import (FAMILY, MAX_STABLE_STEP, NOISE_LEVEL_MIN_COUNT,
+                                                       least_stable_step, level_axis, level_edges, step_edges)
 from ivkernels.kernels.warp._checks import FRONT
 from ivkernels.kernels.warp.maps import log_change_at
 from ivkernels.kernels.warp.row_tiles import row_span
@@ -236,42 +235,30 @@ def bin_of(value: float, edges: wp.array(dtype=float)):
 
 
 @wp.func
-def frame_luminance(img: wp.array4d(dtype=float), t: int, y: int, x: int):
-    """``(I_0 + I_1 + I_2) / 3`` of a pixel."""
+def mean_channel(img: wp.array4d(dtype=float), t: int, y: int, x: int):
+    """The mean over the 3 channels of pixel ``(t, y, x)``: the log luminance ``L``."""
     return (img[t, y, x, 0] + img[t, y, x, 1] + img[t, y, x, 2]) / 3.0
 
 
 @wp.kernel
-def step_histogram_rows(row_begin: int, img: wp.array4d(dtype=float), steps: wp.array4d(dtype=float),
-                        levels: wp.array(dtype=float), bins: wp.array(dtype=float),
-                        counts: wp.array3d(dtype=wp.int32)):
-    r = row_begin + wp.tid()
-    height = img.shape[1]
-    t = r // height
-    y = r - t * height
-    for x in range(img.shape[2]):
-        b = bin_of(frame_luminance(img, t, y, x), levels)
-        for c in range(2):
-            wp.atomic_add(counts, c, b, bin_of(steps[t, y, x, c], bins), 1)
-
-
-@wp.kernel
-def step_histogram_bands(band_begin: int, band_rows: int, img: wp.array4d(dtype=float),
-                         steps: wp.array4d(dtype=float), levels: wp.array(dtype=float),
-                         bins: wp.array(dtype=float), partial: wp.array4d(dtype=wp.int32)):
-    """Thread ``band``: the histogram of rows ``[band * band_rows, (band + 1) * band_rows)`` into
-    ``partial[band]``, which no other thread touches (plain adds, no atomics)."""
-    band = band_begin + wp.tid()
+def step_histogram_rows(row_begin: int, band_rows: int, per_band: int, img: wp.array4d(dtype=float),
+                        steps: wp.array4d(dtype=float), levels: wp.array(dtype=float),
+                        bins: wp.array(dtype=float), partial: wp.array4d(dtype=wp.int32)):
+    """Thread ``band``: rows ``[band * band_rows, (band + 1) * band_rows)`` counted into the histogram
+    ``partial[band * per_band]``.  On a GPU one row a thread, every thread into ``partial[0]``
+    (``per_band = 0``) with atomics; on the CPU, where Warp's atomics are plain adds, a band a
+    thread, each into its own histogram (``per_band = 1``)."""
+    band = row_begin + wp.tid()
+    slot = band * per_band
     height = img.shape[1]
     r_end = wp.min((band + 1) * band_rows, img.shape[0] * height)
     for r in range(band * band_rows, r_end):
         t = r // height
         y = r - t * height
         for x in range(img.shape[2]):
-            b = bin_of(frame_luminance(img, t, y, x), levels)
+            b = bin_of(mean_channel(img, t, y, x), levels)
             for c in range(2):
-                j = bin_of(steps[t, y, x, c], bins)
-                partial[band, c, b, j] = partial[band, c, b, j] + 1
+                wp.atomic_add(partial, slot, c, b, bin_of(steps[t, y, x, c], bins), 1)
 
 
 @wp.kernel
@@ -342,7 +329,7 @@ def cap_at_level_rows(row_begin: int, img: wp.array4d(dtype=float), table: wp.ar
     y = r - t * height
     last = table.shape[1] - 1
     for x in range(img.shape[2]):
-        u = (frame_luminance(img, t, y, x) - lo) / width - 0.5
+        u = (mean_channel(img, t, y, x) - lo) / width - 0.5
         if not (u > 0.0):                   # below the first centre, or NaN
             u = 0.0
         u = wp.min(u, float(last))
@@ -655,12 +642,6 @@ def still_stability_rows(row_begin: int, flow: wp.array4d(dtype=float), change: 
             weight[t, y, x] = wp.exp(-q * q)
 
 
-@wp.func
-def mean_channel(img: wp.array4d(dtype=float), t: int, y: int, x: int):
-    """The mean over the 3 channels of pixel ``(t, y, x)``: the log luminance ``L``."""
-    return (img[t, y, x, 0] + img[t, y, x, 1] + img[t, y, x, 2]) / 3.0
-
-
 @wp.kernel
 def luminance_steps_rows(row_begin: int, tiles: int, img: wp.array4d(dtype=float),
                          steps: wp.array4d(dtype=float)):
@@ -872,12 +853,13 @@ def step_histogram(log_image, steps, counts) -> None:
     levels, bins, _ = _noise_edges(dev)
     if gpu_layout(dev):
         counts.zero_()
-        wp.launch(step_histogram_rows, dim=t * h, inputs=[0, log_image, steps, levels, bins, counts], device=dev)
+        wp.launch(step_histogram_rows, dim=t * h,
+                  inputs=[0, 1, 0, log_image, steps, levels, bins, counts.reshape((1, *counts.shape))], device=dev)
         return
     n_bands = max(1, min(get_threads(), t * h))
-    band_rows = -(-(t * h) // n_bands)
     partial = wp.zeros((n_bands, *counts.shape), dtype=wp.int32, device=dev)
-    launch_rows(step_histogram_bands, n_bands, [band_rows, log_image, steps, levels, bins, partial], device=dev)
+    launch_rows(step_histogram_rows, n_bands, [-(-(t * h) // n_bands), 1, log_image, steps, levels, bins, partial],
+                device=dev)
     wp.launch(sum_bands, dim=counts.shape, inputs=[partial, counts], device=dev)
 
 
@@ -909,10 +891,8 @@ def cap_at_level(log_image, table, scale: float, floor) -> None:
     floor : wp.array float32 (T, H, W, 2), capped in place.
     """
     t, h, _, _ = log_image.shape
-    edges = level_edges().astype(np.float64)
-    width = (edges[-1] - edges[0]) / NOISE_LEVEL_BINS
-    launch_rows(cap_at_level_rows, t * h, [log_image, table, float(edges[0]), float(width), float(scale), floor],
-                device=log_image.device)
+    lo, width = level_axis()
+    launch_rows(cap_at_level_rows, t * h, [log_image, table, lo, width, float(scale), floor], device=log_image.device)
 
 
 @host("step_counts")
