@@ -211,6 +211,35 @@ class Params:
         0.95, 0.60 -> 0.71).  Chosen at the default solver budget; run to
         convergence, the ground kind it helps loses instead (one sequence
         checked).
+    shading_stable_changing_light
+        The stable-step pairs (``shading_stable_gain``) only in windows whose
+        light changes (``n > 1``), as ``shading_step_stability_changing_light``
+        does for the step gate's cue: under a still light every still step
+        holds, so holding says nothing about it.  On: measured against off
+        on training data (perf/RESULTS.md, "Weiss's cues where the light
+        holds still"): off ties the worst kind (0.924 against 0.942 on
+        seeds 1-2, 0.900 against 0.903 on seeds 3-4, within the spread of
+        that kind's seeds) and costs the objects turning under a still lamp
+        10-30% (mixed_turning_hard 0.41 -> 0.50x, colour_turning_warm_light
+        0.24 -> 0.32x on seeds 1-2).
+    shading_light_edge_changing_light
+        The light-edge factor (``shading_light_edge_tau``) only in windows
+        whose light changes (``n > 1``).  Off (the default): in every window
+        of three frames or more, so that a shadow swept over a still surface
+        by a moving object under a still lamp is free to be a step of the
+        shading where its outline passes, which the count of independent
+        shadings does not see as a change of light.  Off chosen on training
+        data by the worst kind against its best baseline (``perf/hold_out.py
+        --seeds 1 2 --grid shading_light_edge_changing_light=True,False
+        shading_step_stability_changing_light=True,False``; perf/RESULTS.md,
+        "Weiss's cues where the light holds still"): worst kind 0.942
+        against 0.987 (grey_turning_noisy), mean over 20 kinds 0.548 against
+        0.575; grey_rotating_hard 0.97 -> 0.83x, the grey scene under a soft
+        moving light 0.58 -> 0.45x; seeds 3-4: 0.903 / 0.578 against 0.980 /
+        0.612; 8 frames at 240x320: 0.889 / 0.537 against 0.925 / 0.559 on
+        the eight kinds it moves most.  Reading the step gate's cue
+        (``shading_step_stability_changing_light`` off) as well stays worse
+        (grey_turning_noisy 2.6x).
     shading_stable_gain, shading_stable_spread, shading_stable_floor
         Weiss's cue on the pairs across a step (:mod:`ivkernels.solver.
         step_evidence`, :func:`~ivkernels.solver.step_evidence.stable_pair_weights`):
@@ -240,7 +269,8 @@ class Params:
     shading_light_edge_tau
         Weiss's cue for the light's own edges
         (:func:`~ivkernels.solver.step_evidence.light_edge_factor`): in a
-        window of three frames or more whose light changes (``n > 1``), a
+        window of three frames or more (whose light changes, ``n > 1``, with
+        ``shading_light_edge_changing_light``), a
         horizontal or vertical pair that holds still and whose log-luminance
         step in frame ``t`` departs from its median over the frames by ``d``
         multiplies Eq. 9's local weight of both its pixels in that frame by
@@ -257,7 +287,8 @@ class Params:
         -> 0.587 (0.594 at 0.25), MIT colour 0.766 -> 0.608 and grey 0.820 ->
         0.747 (at 0.25 grey goes to 0.950: squirrel's fine relief), the noisy
         colour lamp 0.766 -> 0.723, the hard-shadow lamps 0.526 -> 0.515 and
-        0.541 -> 0.503 (seeds 1-6); only windows with ``n > 1`` change.
+        0.541 -> 0.503 (seeds 1-6); only windows with ``n > 1`` changed
+        (it was chosen with the factor read only there).
     shading_gate_chroma
         With the gate on and this > 0, a contrast change where the input's
         log chromaticity changes by about this much is not taken for a
@@ -377,6 +408,8 @@ class Params:
     shading_step_noise_cap: float = 5.0
     shading_step_static_flow: float = 1.0
     shading_step_stability_changing_light: bool = True
+    shading_stable_changing_light: bool = True
+    shading_light_edge_changing_light: bool = False
     shading_stable_gain: float = 8.0
     shading_stable_spread: float = 0.1
     shading_stable_floor: float = 0.3

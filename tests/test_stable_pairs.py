@@ -16,12 +16,12 @@ from ivkernels.solver.step_evidence import stable_pair_weights
 FAST = dict(pyramid_min_size=18, lbfgs_iterations=20, lbfgs_iterations_coarse=40)
 
 
-def checkerboard_scene(T=6, H=36, W=44, light_change=0.6, noise=0.0, seed=0):
+def checkerboard_scene(T=6, H=36, W=44, light_change=0.6, noise=0.0, seed=0, shadow_depth=0.7):
     """A grey checkerboard of 6-pixel squares (albedo 0.25 / 0.55, a step under
     ``MAX_STABLE_STEP``) under a smooth light whose
     direction swings by ``light_change`` log units across the frame each frame, plus a
-    shadow over the right half whose edge (a column) moves with the light, camera and scene
-    still.  Returns ``(frames, flow, albedo, shadow_columns)``."""
+    shadow over the right half (``shadow_depth`` log units deep) whose edge (a column) moves
+    with the light, camera and scene still.  Returns ``(frames, flow, albedo, shadow_columns)``."""
     rng = np.random.default_rng(seed)
     yy, xx = np.mgrid[0:H, 0:W]
     albedo = np.where(((yy // 6) + (xx // 6)) % 2 == 0, 0.55, 0.25)
@@ -31,7 +31,7 @@ def checkerboard_scene(T=6, H=36, W=44, light_change=0.6, noise=0.0, seed=0):
         angle = 2.0 * t
         log_shading = -0.3 + light_change * (np.cos(angle) * xx / W + np.sin(angle) * yy / H)
         column = W // 2 + 3 * t + 1                 # over the right half, never on a square's edge
-        log_shading = log_shading - 0.7 * (xx >= column)
+        log_shading = log_shading - shadow_depth * (xx >= column)
         shadow_columns.append(column)
         frames[t] = np.clip(albedo * np.exp(log_shading) * (1 + noise * rng.standard_normal((H, W))),
                             0.0, 1.0)[..., None]

@@ -157,11 +157,14 @@ def window_params(params, n: float):
     ``Params.shading_step_stability_changing_light``, a window with no new
     shading (``n = 1``) does not read Weiss's cue (``shading_step_stability``
     0): with no light change to read, the cue would take a step whose
-    contrast the flow's errors or a moving shadow change for light.  For the
-    same reason such a window has no stable-step pairs
-    (``shading_stable_gain`` 0) and no light-edge factor
-    (``shading_light_edge_tau`` 0).  Unchanged at ``n = 1`` with the switch off
-    and neither on.
+    contrast the flow's errors or a moving shadow change for light.  With
+    ``Params.shading_stable_changing_light``, such a window
+    has no stable-step pairs (``shading_stable_gain`` 0): under a still light
+    every still step holds.  With ``Params.shading_light_edge_changing_light``
+    (off by default) it has no light-edge factor either
+    (``shading_light_edge_tau`` 0); off, a shadow swept by a moving object
+    under a still lamp is read as the light's edge.  Unchanged at ``n = 1``
+    with every switch off.
     """
     changes = {}
     if n != 1.0:
@@ -169,8 +172,8 @@ def window_params(params, n: float):
                        lam_albedo_sparsity=params.lam_albedo_sparsity / n)
     if params.shading_step_stability_changing_light and n <= 1.0:
         changes.update(shading_step_stability=0.0)
-    if n <= 1.0 and params.shading_stable_gain > 0:
+    if params.shading_stable_changing_light and n <= 1.0 and params.shading_stable_gain > 0:
         changes.update(shading_stable_gain=0.0)
-    if n <= 1.0 and params.shading_light_edge_tau > 0:
+    if params.shading_light_edge_changing_light and n <= 1.0 and params.shading_light_edge_tau > 0:
         changes.update(shading_light_edge_tau=0.0)
     return params.replace(**changes) if changes else params
