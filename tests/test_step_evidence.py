@@ -147,10 +147,10 @@ def test_a_dark_grey_disc_in_greyscale_noise_stays_in_the_albedo():
     assert abs(_disc_ratio(frames, flow, inside, outside, iv.Params()) - 0.08 / 0.5) < 0.1
 
 
-def _reference_floor(offset, flow=None, cap=0.0):
+def reference_floor(offset, flow=None, cap=0.0):
     """The noise floor by the references: the twice-taken 5x5 median of the temporal steps
     (with a flow) or of the frame's own steps, capped at ``cap`` times the noise level
-    function of the same steps (0: not capped)."""
+    function of the same steps (0: not capped).  Also the oracle of test_step_evidence_kernels."""
     from ivkernels.kernels.reference import median as ref_median
     from ivkernels.kernels.reference import step_evidence as ref
     from ivkernels.solver.step_evidence import NOISE_FLOOR_PASSES
@@ -175,14 +175,14 @@ def test_the_noise_floor_is_the_twice_taken_5x5_median_of_the_steps(backend_name
     offset = np.log(rng.uniform(0.02, 1.0, (3, 31, 33, 3))).astype(np.float32)
     flow = (rng.integers(-2, 3, (2, 31, 33, 2)) + rng.uniform(-0.4, 0.4, (2, 31, 33, 2))).astype(np.float32)
     got = be.numpy(noise_floor(be, be.asarray(offset), be.asarray(flow), cap))
-    want = _reference_floor(offset, flow, cap)
+    want = reference_floor(offset, flow, cap)
     np.testing.assert_allclose(got, want, rtol=1e-4, atol=1e-6)
     if cap == 0.8:
-        assert np.mean(got < _reference_floor(offset, flow) - 1e-6) > 0.2          # the cap binds
+        assert np.mean(got < reference_floor(offset, flow) - 1e-6) > 0.2          # the cap binds
     single = be.numpy(noise_floor(be, be.asarray(offset[:1]), be.asarray(flow[:0]), cap))
-    np.testing.assert_allclose(single, _reference_floor(offset[:1], None, cap), rtol=1e-4, atol=1e-6)
+    np.testing.assert_allclose(single, reference_floor(offset[:1], None, cap), rtol=1e-4, atol=1e-6)
     without = be.numpy(noise_floor(be, be.asarray(offset), None, cap))
-    np.testing.assert_allclose(without, _reference_floor(offset, None, cap), rtol=1e-4, atol=1e-6)
+    np.testing.assert_allclose(without, reference_floor(offset, None, cap), rtol=1e-4, atol=1e-6)
 
 
 def test_the_noise_floor_over_a_flow_sees_the_noise_and_not_the_print():

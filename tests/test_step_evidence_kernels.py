@@ -14,6 +14,7 @@ from ivkernels.solver.energy import WindowEnergy
 from ivkernels.solver.motion_maps import shading_cut_gate
 from ivkernels.solver.step_evidence import (DARK_OFFSET, SHARE_PRIOR_STEPS, STATIC_FLOW, chromatic_share,
                                             local_chromatic_share, multiply_step_gate, share_radius_pixels)
+from test_step_evidence import reference_floor
 
 SIZES = {"odd": (3, 9, 13), "two-frames": (2, 7, 11), "one-frame": (1, 5, 7), "one-column": (2, 6, 1),
          "one-row": (2, 1, 9)}
@@ -44,19 +45,10 @@ def host_step_weight(log_image, flow, gain, tau, tau_chroma, stability):
 
 
 def host_floor(log_image, flow, cap=Params().shading_step_noise_cap):
-    """The noise floor (T, h, w, 2) by the references: the 5x5 median, twice, of the steps of what
-    changes between frames along ``flow`` (of the frame's own steps without one), capped at
-    ``cap`` times the noise level function of the same steps (0: not capped)."""
-    from ivkernels.kernels.reference import median as ref_median
-    from ivkernels.kernels.reference import step_evidence as ref
-    from ivkernels.solver.step_evidence import NOISE_FLOOR_PASSES
-
+    """The noise floor (T, h, w, 2) by the references (:func:`test_step_evidence.reference_floor`)
+    of the offset log image ``log(i + DARK_OFFSET)``."""
     I = np.log(np.exp(np.asarray(log_image, np.float64)) + DARK_OFFSET).astype(np.float32)
-    steps = ref.temporal_steps(I, flow) if flow is not None and I.shape[0] > 1 else ref.typical_steps(I)
-    table = ref.level_medians(ref.step_histogram(I, steps.astype(np.float32))).astype(np.float32)
-    for _ in range(NOISE_FLOOR_PASSES):
-        steps = ref_median.median5x5(steps)
-    return ref.cap_at_level(I, table, cap, steps) if cap > 0 else steps
+    return reference_floor(I, flow, cap)
 
 
 def host_parts(log_image, flow, tau, tau_chroma, stability, floor=None, k=0.0):
