@@ -289,6 +289,17 @@ class Params:
         colour lamp 0.766 -> 0.723, the hard-shadow lamps 0.526 -> 0.515 and
         0.541 -> 0.503 (seeds 1-6); only windows with ``n > 1`` changed
         (it was chosen with the factor read only there).
+    shading_light_edge_spread
+        The light-edge factor's width grows with each pair's own spread over
+        the frames: ``w = sqrt(tau^2 + (spread MAD)^2)``, ``MAD`` the median
+        absolute departure of the pair's step from its median.  An outline
+        that crosses a pair in a few frames leaves its MAD near 0 and is
+        freed as before; a fine relief whose steps change under every light
+        of the window keeps Eq. 9's smoothing.  0: the width is ``tau``.
+    shading_light_edge_spread_changing_light
+        The width's spread (``shading_light_edge_spread``) only in windows
+        whose light changes (``n > 1``): under a still light only an
+        outline changes a still step.
     shading_gate_chroma
         With the gate on and this > 0, a contrast change where the input's
         log chromaticity changes by about this much is not taken for a
@@ -414,6 +425,8 @@ class Params:
     shading_stable_spread: float = 0.1
     shading_stable_floor: float = 0.3
     shading_light_edge_tau: float = 0.5
+    shading_light_edge_spread: float = 0.0
+    shading_light_edge_spread_changing_light: bool = True
     shading_gate_chroma: float = 0.0
     lam_shading_nonlocal: float = 10000.0
     lam_coupling: float = 10.0
@@ -527,4 +540,6 @@ _RULES = {
     "shading_stable_floor": Range(float, 0.0, 1.0, why="an evidence in [0, 1)"),
     "shading_light_edge_tau": Range(float, 0.0, why="a deviation of a log step from its median; 0 switches "
                                                     "the light-edge factor off"),
+    "shading_light_edge_spread": Range(float, 0.0, why="a multiple of a log step's median absolute departure; "
+                                                       "0: the light-edge factor's width is its tau"),
 }

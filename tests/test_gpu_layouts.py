@@ -201,7 +201,7 @@ def test_light_edge_factor_in_tiles_is_the_cpu_layout_bitwise(be, monkeypatch, s
 
     def factor():
         out = be.empty((t, h, w))
-        be.step_evidence.moving_steps(be.asarray(img), be.asarray(flow), out, 0.25, 1.0)
+        be.step_evidence.moving_steps(be.asarray(img), be.asarray(flow), out, 0.25, 2.0, 1.0)
         return [be.numpy(out).copy()]
 
     cpu, gpu = both_layouts(monkeypatch, factor)

@@ -60,6 +60,48 @@ def test_the_switch_keeps_the_factor_to_windows_whose_light_changes():
     assert window_params(iv.Params(), 2.0).shading_light_edge_tau == iv.Params().shading_light_edge_tau
 
 
+def relief_and_outline(T=7, H=36, W=44, seed=3):
+    """``checkerboard_scene``'s passing shadow outline, and a fine relief (a random height field)
+    over its left 12 columns, lit from a direction that turns by 2 radians each frame, so its
+    steps change in every frame.  Returns ``(frames, flow, shadow_columns)``."""
+    frames, flow, _, shadows = checkerboard_scene(T=T, H=H, W=W)
+    rng = np.random.default_rng(seed)
+    height = rng.normal(0.0, 0.6, (H, 12))
+    gy, gx = np.gradient(height)
+    for t in range(T):
+        shade = np.exp(0.8 * (np.cos(2.0 * t) * gx + np.sin(2.0 * t) * gy))
+        frames[t, :, :12] = np.clip(frames[t, :, :12] * shade[..., None], 0.0, 1.0)
+    return frames, flow, shadows
+
+
+def test_the_spread_keeps_a_relief_smooth_and_still_frees_the_passing_outline(any_backend):
+    frames, flow, shadows = relief_and_outline()
+    log_image = any_backend.asarray(np.log(np.maximum(frames, 1e-4)))
+    flow = any_backend.asarray(flow)
+    plain = any_backend.numpy(light_edge_factor(any_backend, log_image, flow, TAU))
+    spread = any_backend.numpy(light_edge_factor(any_backend, log_image, flow, TAU, spread=2.0))
+    # the relief's steps change in every frame: without the spread its smoothing is cut almost
+    # everywhere; with it only where a step departs from its usual spread (the factor is the
+    # smallest over four pairs, so a typical departure still lowers it to about a half)
+    relief_plain, relief_spread = np.median(plain[:, :, 1:11]), np.median(spread[:, :, 1:11])
+    assert relief_plain < 0.05 and relief_spread > 0.35, (relief_plain, relief_spread)
+    assert (spread[:, :, 1:11] > 0.5).mean() > 0.35 and (plain[:, :, 1:11] > 0.5).mean() < 0.15
+    # an outline crosses each of its pairs in one frame only (the MAD stays near 0): freed as before
+    for t, c in enumerate(shadows):
+        assert spread[t, :, c - 1].max() < 0.05 and spread[t, :, c].max() < 0.05
+    # spread 0 is the plain factor, bit for bit
+    zero = any_backend.numpy(light_edge_factor(any_backend, log_image, flow, TAU, spread=0.0))
+    np.testing.assert_array_equal(zero, plain)
+
+
+def test_the_spread_is_read_only_where_the_light_changes():
+    p = iv.Params(shading_light_edge_spread=2.0)
+    assert window_params(p, 1.0).shading_light_edge_spread == 0.0
+    assert window_params(p, 1.5).shading_light_edge_spread == 2.0
+    everywhere = iv.Params(shading_light_edge_spread=2.0, shading_light_edge_spread_changing_light=False)
+    assert window_params(everywhere, 1.0).shading_light_edge_spread == 2.0
+
+
 @pytest.mark.slow
 def test_a_shadow_swept_under_a_still_light_leaves_the_albedo():
     # the light holds still and only a hard shadow's outline moves (3 log units: a bulb with little

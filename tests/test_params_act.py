@@ -59,9 +59,12 @@ MOVES = {
     "shading_stable_spread": (0.5, {}, "truth:relit"),
     "shading_stable_floor": (0.0, {}, "truth:relit"),
     "shading_light_edge_tau": (0.0, {}, "truth:relit"),
+    "shading_light_edge_spread": (0.5, {}, "truth:relit"),
     # ... and the switches that read them under a still light too (objects turning over a still floor)
     "shading_stable_changing_light": (False, {}, "truth:rotating_shadows"),
     "shading_light_edge_changing_light": (True, {}, "truth:rotating_shadows"),
+    "shading_light_edge_spread_changing_light": (False, {"shading_light_edge_spread": 2.0},
+                                                 "truth:rotating_shadows"),
     "lam_shading_nonlocal": (10.0, {}, "truth"),
     "lam_coupling": (1000.0, {}, "truth"),
     "sigma_s": (1.0, {}, "truth"),

@@ -152,7 +152,7 @@ class WindowEnergy:
                                noise_cap=params.shading_step_noise_cap)
         if self.temporal and params.shading_light_edge_tau > 0 and T >= 3:
             factor = light_edge_factor(be, self.I, flow, params.shading_light_edge_tau,
-                                       params.shading_step_static_flow)
+                                       params.shading_light_edge_spread, params.shading_step_static_flow)
             if gate is None:
                 gate = factor
             else:

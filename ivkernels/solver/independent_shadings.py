@@ -163,7 +163,10 @@ def window_params(params, n: float):
     every still step holds.  With ``Params.shading_light_edge_changing_light``
     (off by default) it has no light-edge factor either
     (``shading_light_edge_tau`` 0); off, a shadow swept by a moving object
-    under a still lamp is read as the light's edge.  Unchanged at ``n = 1``
+    under a still lamp is read as the light's edge.  With
+    ``Params.shading_light_edge_spread_changing_light``, the factor's width
+    keeps to ``tau`` there (``shading_light_edge_spread`` 0): under a still
+    light only an outline changes a still step.  Unchanged at ``n = 1``
     with every switch off.
     """
     changes = {}
@@ -176,4 +179,6 @@ def window_params(params, n: float):
         changes.update(shading_stable_gain=0.0)
     if params.shading_light_edge_changing_light and n <= 1.0 and params.shading_light_edge_tau > 0:
         changes.update(shading_light_edge_tau=0.0)
+    if params.shading_light_edge_spread_changing_light and n <= 1.0 and params.shading_light_edge_spread > 0:
+        changes.update(shading_light_edge_spread=0.0)
     return params.replace(**changes) if changes else params

@@ -294,21 +294,26 @@ def stable_pair_weights(be, log_image, flow, tau: float, stability: float, floor
     return pairs
 
 
-def light_edge_factor(be, log_image, flow, tau: float, static_flow: float = STATIC_FLOW):
+def light_edge_factor(be, log_image, flow, tau: float, spread: float = 0.0, static_flow: float = STATIC_FLOW):
     """Weiss's cue for the light's own edges, per pixel and frame, on the backend's arrays.
 
     The other side of :func:`stable_pair_weights`: where the scene holds
     still, the log-luminance step of a horizontal or vertical pair that
     departs from its median over the window's frames by ``d`` in frame ``t``
     is the light's (a shadow's outline crossing the pair), so Eq. 9 should
-    not smooth the shading across it there: ``exp(-(d / tau)^2)``, the
+    not smooth the shading across it there: ``exp(-(d / w)^2)``, the
     smallest over a pixel's still pairs, 1 without one (kernel
     ``step_evidence.moving_steps``, read on ``log(i + DARK_OFFSET)``).
+    The width ``w = sqrt(tau^2 + (spread MAD)^2)`` grows with the pair's
+    own spread over the frames (``MAD``, the median of ``|d|``): a relief
+    whose steps change under every light keeps its smoothing, an outline
+    that crosses the pair in a few frames does not.
 
     be : backend.
     log_image : (T, h, w, 3) backend array, ``I = log i``.
     flow : (T-1, h, w, 2) backend array.
-    tau : log units, > 0; static_flow : pixels, > 0.
+    tau : log units, > 0; spread : a multiple of the MAD, >= 0 (0: ``w = tau``);
+    static_flow : pixels, > 0.
 
     Returns the (T, h, w) backend array of factors in (0, 1].
     """
@@ -316,5 +321,5 @@ def light_edge_factor(be, log_image, flow, tau: float, static_flow: float = STAT
     offset = be.empty((T, h, w, 3))
     be.step_evidence.offset_log(log_image, offset, DARK_OFFSET)
     factor = be.empty((T, h, w))
-    be.step_evidence.moving_steps(offset, flow, factor, tau, static_flow)
+    be.step_evidence.moving_steps(offset, flow, factor, tau, spread, static_flow)
     return factor

@@ -279,20 +279,22 @@ def _stable(T_steps, floor):
                 variant=f"noise={T_steps:g},floor={floor:g}", tol=Tol(1e-4, 1e-4), ignore=tied)
 
 
-def _moving(tau):
+def _moving(tau, spread):
     """Still pairs with a steady step, pairs an edge of the light crosses in some frames, flat
-    pairs, a moving patch and speeds around the threshold."""
+    pairs, a relief whose steps change in every frame (the right third), a moving patch and
+    speeds around the threshold."""
     def make(rng, T, H, W):
         yy, xx = np.mgrid[0:H, 0:W]
         base = np.where(((yy // 3) + (xx // 4)) % 2 == 0, -0.4, -0.75)           # steady steps of 0.35
         img = np.repeat(base[None, :, :, None], 3, axis=-1).repeat(T, axis=0)
         for t in range(T):                                                        # a shadow's edge moving right
             img[t, :, : (t * W) // max(T, 1)] -= 1.2
+        img[:, :, 2 * W // 3:] += normal(rng, (T, H, W - 2 * W // 3, 1), 0.0, 0.3)  # a relief under moving light
         img = img + normal(rng, (T, H, W, 3), 0.0, 0.02)
         f = normal(rng, (pairs(T), H, W, 2), 0.0, 0.3)
         f[:, : H // 3, : W // 3] += 3.0                                            # a moving patch
         return {"log_image": img.astype(F32), "flow": f, "factor": nans((T, H, W)), "tau": tau,
-                "static_flow": 1.0}
+                "spread": spread, "static_flow": 1.0}
 
     def tied(v):
         speed = np.sqrt((np.asarray(v["flow"], np.float64) ** 2).sum(axis=-1))
@@ -304,10 +306,11 @@ def _moving(tau):
         grown[:, :-1] |= near[:, 1:]
         return {"factor": np.broadcast_to(grown, np.shape(v["factor"]))}
 
-    return Case("step_evidence", "moving_steps", make, ("log_image", "flow", "factor", "tau", "static_flow"),
-                ("factor",), lambda v: {"factor": ref.moving_steps(v["log_image"], v["flow"], v["tau"],
-                                                                   v["static_flow"])},
-                variant=f"tau={tau:g}", tol=Tol(1e-4, 1e-4), ignore=tied)
+    return Case("step_evidence", "moving_steps", make,
+                ("log_image", "flow", "factor", "tau", "spread", "static_flow"), ("factor",),
+                lambda v: {"factor": ref.moving_steps(v["log_image"], v["flow"], v["tau"], v["spread"],
+                                                      v["static_flow"])},
+                variant=f"tau={tau:g},spread={spread:g}", tol=Tol(1e-4, 1e-4), ignore=tied)
 
 
 CASES = (
@@ -337,6 +340,8 @@ CASES = (
     _still(0.1, 1.0),
     _stable(0.01, 0.3),
     _stable(0.03, 0.0),
-    _moving(0.25),
-    _moving(1.0),
+    _moving(0.25, 0.0),
+    _moving(1.0, 0.0),
+    _moving(0.25, 2.0),
+    _moving(0.5, 4.0),
 )

@@ -110,6 +110,11 @@ def _finite_gain(sizes, args):
         raise ValueError(f"gain must be a finite number >= 0, got {args['gain']!r}")
 
 
+def _finite_spread(sizes, args):
+    if not math.isfinite(args["spread"]):
+        raise ValueError(f"spread must be a finite number >= 0 (0: the width is tau), got {args['spread']!r}")
+
+
 FAMILY.declare("offset_log(log_image, out, offset)",
                "``out = log(exp(log_image) + offset)``: the log image read with a linear offset; ``offset > 0``.",
                log_image="T H W 3", out=Out("T H W 3"), offset=FinitePositive)
@@ -178,12 +183,14 @@ FAMILY.declare("still_stability(log_image, flow, weight, tau, static_flow)",
                tau=Positive, static_flow=Positive,
                separate=(("weight", "log_image", "the weight is written while log_image is read"),
                          ("weight", "flow", "the weight is written while flow is read")))
-FAMILY.declare("moving_steps(log_image, flow, factor, tau, static_flow)",
+FAMILY.declare("moving_steps(log_image, flow, factor, tau, spread, static_flow)",
                "Weiss's cue for the light's own edges: per pixel and frame, the smallest over its still "
-               "horizontal and vertical pairs of ``exp(-((s_t - m) / tau)^2)``, ``s_t`` the pair's "
-               "log-luminance step in frame ``t`` and ``m`` its median over the frames; 1 without a still pair.",
+               "horizontal and vertical pairs of ``exp(-((s_t - m) / w)^2)``, ``s_t`` the pair's "
+               "log-luminance step in frame ``t``, ``m`` its median over the frames and "
+               "``w = sqrt(tau^2 + (spread MAD)^2)``, ``MAD`` the median of ``|s_t - m|``; 1 without a still pair.",
                log_image="T H W 3", flow=Array("T-1 H W 2", layout="(T-1, H, W, 2)"), factor=Out("T H W"),
-               tau=FinitePositive, static_flow=Positive,
+               tau=FinitePositive, spread=NonNegative, static_flow=Positive,
+               rules=(Rule(_finite_spread),),
                separate=(("factor", "log_image", "the factor is written while log_image is read"),
                          ("factor", "flow", "the factor is written while flow is read")))
 FAMILY.declare("stable_pairs(log_image, flow, pairs, tau, stability, floor, static_flow)",
@@ -525,15 +532,18 @@ def stable_pairs(log_image, flow, tau: float, stability: float, floor: float, st
     return out
 
 
-def moving_steps(log_image, flow, tau: float, static_flow: float) -> np.ndarray:
+def moving_steps(log_image, flow, tau: float, spread: float, static_flow: float) -> np.ndarray:
     """(T, H, W) float64: Weiss's cue for the light's own edges, a factor on Eq. 9's local weight.
 
     For each horizontal or vertical pair that holds still (neither pixel's flow in any frame pair
     is ``static_flow`` px or longer), the step of the log luminance ``s_t = L(t, x + d) - L(t, x)``
     against its median ``m`` over the ``T`` frames (the mean of the middle two for even ``T``):
-    ``exp(-((s_t - m) / tau)^2)``, small in the frames where an edge of the light (a shadow's
-    outline) crosses the pair.  A pixel's factor in frame ``t`` is the smallest over its (up to
-    four) still pairs, 1 where it has none.
+    ``exp(-((s_t - m) / w)^2)``, small in the frames where an edge of the light (a shadow's
+    outline) crosses the pair.  The width ``w = sqrt(tau^2 + (spread * MAD)^2)`` grows with the
+    pair's own spread, ``MAD`` the median over the frames of ``|s_t - m|`` (an outline crossing
+    the pair in a few frames leaves it near 0; a relief lit from every side does not); ``spread``
+    0 gives ``w = tau``.  A pixel's factor in frame ``t`` is the smallest over its (up to four)
+    still pairs, 1 where it has none.
 
     log_image : (T, H, W, 3), ``I'`` (:func:`offset_log`); ``L = mean_c I'``.
     flow : (T-1, H, W, 2).
@@ -544,7 +554,9 @@ def moving_steps(log_image, flow, tau: float, static_flow: float) -> np.ndarray:
     for dy, dx in AXIS_NEIGHBOURS:
         a, b = pair_slices(L.shape, dy, dx)
         steps = L[b] - L[a]                                                      # (T, h', w')
-        factor = np.exp(-((steps - np.median(steps, axis=0)) / tau) ** 2)
+        departure = steps - np.median(steps, axis=0)
+        width = np.sqrt(tau ** 2 + (spread * np.median(np.abs(departure), axis=0)) ** 2)
+        factor = np.exp(-(departure / width) ** 2)
         factor[:, moves[a[1:]] | moves[b[1:]]] = 1.0
         out[a] = np.minimum(out[a], factor)
         out[b] = np.minimum(out[b], factor)

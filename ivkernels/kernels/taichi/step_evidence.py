@@ -499,16 +499,21 @@ def moves(flow: nd4, y, x, static_flow):
 
 
 @ti.func
-def median_of(values: nd4, y, x, k):
-    """The median over ``t`` of ``values[t, y, x, k]``, by ranks (see the Warp module)."""
+def median_of(values: nd4, y, x, k, centre, absolute):
+    """The median over ``t`` of ``values[t, y, x, k] - centre`` (of its magnitude where
+    ``absolute`` is 1), by ranks (see the Warp module)."""
     n = values.shape[0]
     lo = 0.0
     hi = 0.0
     for i in range(n):
-        v = values[i, y, x, k]
+        v = values[i, y, x, k] - centre
+        if absolute == 1:
+            v = ti.abs(v)
         rank = 0
         for j in range(n):
-            u = values[j, y, x, k]
+            u = values[j, y, x, k] - centre
+            if absolute == 1:
+                u = ti.abs(u)
             if u < v or (u == v and j < i):
                 rank += 1
         if rank == (n - 1) // 2:
@@ -544,7 +549,7 @@ def stable_pairs_rows(steps: nd4, flow: nd4, pairs: nd3, tau: ti.f32, stability:
                 if yy < height and xx < width:
                     if here == 0 and largest_step(steps, y, x, k, 0.0) >= least_step \
                             and moves(flow, yy, xx, static_flow) == 0:
-                        m = median_of(steps, y, x, k)
+                        m = median_of(steps, y, x, k, 0.0, 0)
                         if ti.abs(m) < MAX_STABLE_STEP:
                             q = m / tau
                             qs = largest_step(steps, y, x, k, m) / stability
@@ -555,28 +560,32 @@ def stable_pairs_rows(steps: nd4, flow: nd4, pairs: nd3, tau: ti.f32, stability:
 
 
 @ti.func
-def light_edge_factor(steps: nd4, flow: nd4, factor: nd3, y, x, py, px, k, ny, nx, tau, static_flow):
+def light_edge_factor(steps: nd4, flow: nd4, factor: nd3, y, x, py, px, k, ny, nx, tau, spread, static_flow):
     """Lower ``factor[:, y, x]`` by the pair of ``steps[:, py, px, k]`` (see the Warp module)."""
     if ny >= 0 and nx >= 0 and ny < factor.shape[1] and nx < factor.shape[2]:
         if moves(flow, ny, nx, static_flow) == 0:
-            m = median_of(steps, py, px, k)
+            m = median_of(steps, py, px, k, 0.0, 0)
+            width = tau
+            if spread > 0.0:
+                widen = spread * median_of(steps, py, px, k, m, 1)
+                width = ti.sqrt(tau * tau + widen * widen)
             for t in range(factor.shape[0]):
-                q = (steps[t, py, px, k] - m) / tau
+                q = (steps[t, py, px, k] - m) / width
                 factor[t, y, x] = ti.min(factor[t, y, x], ti.exp(-q * q))
 
 
 @ti.kernel
-def moving_steps_rows(steps: nd4, flow: nd4, factor: nd3, tau: ti.f32, static_flow: ti.f32):
+def moving_steps_rows(steps: nd4, flow: nd4, factor: nd3, tau: ti.f32, spread: ti.f32, static_flow: ti.f32):
     """The light-edge factor of each pixel over its still axis pairs (see the Warp module)."""
     for y in range(factor.shape[1]):
         for x in range(factor.shape[2]):
             for t in range(factor.shape[0]):
                 factor[t, y, x] = 1.0
             if moves(flow, y, x, static_flow) == 0:
-                light_edge_factor(steps, flow, factor, y, x, y, x, 0, y, x + 1, tau, static_flow)
-                light_edge_factor(steps, flow, factor, y, x, y, x, 1, y + 1, x, tau, static_flow)
-                light_edge_factor(steps, flow, factor, y, x, y, x - 1, 0, y, x - 1, tau, static_flow)
-                light_edge_factor(steps, flow, factor, y, x, y - 1, x, 1, y - 1, x, tau, static_flow)
+                light_edge_factor(steps, flow, factor, y, x, y, x, 0, y, x + 1, tau, spread, static_flow)
+                light_edge_factor(steps, flow, factor, y, x, y, x, 1, y + 1, x, tau, spread, static_flow)
+                light_edge_factor(steps, flow, factor, y, x, y, x - 1, 0, y, x - 1, tau, spread, static_flow)
+                light_edge_factor(steps, flow, factor, y, x, y - 1, x, 1, y - 1, x, tau, spread, static_flow)
 
 
 @host("offset_log")
@@ -717,9 +726,9 @@ def stable_pairs(log_image, flow, pairs, tau: float, stability: float, floor: fl
 
 
 @host("moving_steps")
-def moving_steps(log_image, flow, factor, tau: float, static_flow: float) -> None:
+def moving_steps(log_image, flow, factor, tau: float, spread: float, static_flow: float) -> None:
     """Weiss's cue for the light's own edges; see
     :func:`ivkernels.kernels.warp.step_evidence.moving_steps`."""
     if factor.size == 0:
         return
-    moving_steps_rows(_luminance_steps(log_image), flow, factor, tau, static_flow)
+    moving_steps_rows(_luminance_steps(log_image), flow, factor, tau, spread, static_flow)

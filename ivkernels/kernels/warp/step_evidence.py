@@ -677,18 +677,22 @@ def moves(flow: wp.array4d(dtype=float), y: int, x: int, static_flow: float):
 
 
 @wp.func
-def median_of(values: wp.array4d(dtype=float), y: int, x: int, k: int):
-    """The median over ``t`` of ``values[t, y, x, k]``: the mean of the order statistics
-    ``(T - 1) // 2`` and ``T // 2``, found by each value's rank (ties broken by ``t``), with no
-    buffer per thread."""
+def median_of(values: wp.array4d(dtype=float), y: int, x: int, k: int, centre: float, absolute: int):
+    """The median over ``t`` of ``values[t, y, x, k] - centre`` (of its magnitude where
+    ``absolute`` is 1): the mean of the order statistics ``(T - 1) // 2`` and ``T // 2``, found by
+    each value's rank (ties broken by ``t``), with no buffer per thread."""
     n = values.shape[0]
     lo = float(0.0)
     hi = float(0.0)
     for i in range(n):
-        v = values[i, y, x, k]
+        v = values[i, y, x, k] - centre
+        if absolute == 1:
+            v = wp.abs(v)
         rank = int(0)
         for j in range(n):
-            u = values[j, y, x, k]
+            u = values[j, y, x, k] - centre
+            if absolute == 1:
+                u = wp.abs(u)
             if u < v or (u == v and j < i):
                 rank += 1
         if rank == (n - 1) // 2:
@@ -727,7 +731,7 @@ def stable_pairs_pixels(row_begin: int, tiles: int, steps: wp.array4d(dtype=floa
             if yy < height and xx < width:
                 if here == 0 and largest_step(steps, y, x, k, 0.0) >= least_step \
                         and moves(flow, yy, xx, static_flow) == 0:
-                    m = median_of(steps, y, x, k)
+                    m = median_of(steps, y, x, k, 0.0, 0)
                     if wp.abs(m) < STABLE_STEP_MAX:
                         q = m / tau
                         qs = largest_step(steps, y, x, k, m) / stability
@@ -739,33 +743,39 @@ def stable_pairs_pixels(row_begin: int, tiles: int, steps: wp.array4d(dtype=floa
 
 @wp.func
 def light_edge_factor(steps: wp.array4d(dtype=float), flow: wp.array4d(dtype=float), factor: wp.array3d(dtype=float),
-                      y: int, x: int, py: int, px: int, k: int, ny: int, nx: int, tau: float, static_flow: float):
-    """Lower ``factor[:, y, x]`` to ``exp(-((s_t - m) / tau)^2)`` of the pair whose steps are
-    ``steps[:, py, px, k]`` and whose other pixel is ``(ny, nx)``, when that pixel lies in the
-    image and holds still (the caller checks ``(y, x)``)."""
+                      y: int, x: int, py: int, px: int, k: int, ny: int, nx: int, tau: float, spread: float,
+                      static_flow: float):
+    """Lower ``factor[:, y, x]`` to ``exp(-((s_t - m) / w)^2)``, ``w = sqrt(tau^2 + (spread MAD)^2)``,
+    of the pair whose steps are ``steps[:, py, px, k]`` and whose other pixel is ``(ny, nx)``,
+    when that pixel lies in the image and holds still (the caller checks ``(y, x)``)."""
     if ny >= 0 and nx >= 0 and ny < factor.shape[1] and nx < factor.shape[2]:
         if moves(flow, ny, nx, static_flow) == 0:
-            m = median_of(steps, py, px, k)
+            m = median_of(steps, py, px, k, 0.0, 0)
+            width = tau
+            if spread > 0.0:
+                widen = spread * median_of(steps, py, px, k, m, 1)
+                width = wp.sqrt(tau * tau + widen * widen)
             for t in range(factor.shape[0]):
-                q = (steps[t, py, px, k] - m) / tau
+                q = (steps[t, py, px, k] - m) / width
                 factor[t, y, x] = wp.min(factor[t, y, x], wp.exp(-q * q))
 
 
 @wp.kernel
 def moving_steps_pixels(row_begin: int, tiles: int, steps: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
-                        factor: wp.array3d(dtype=float), tau: float, static_flow: float):
+                        factor: wp.array3d(dtype=float), tau: float, spread: float, static_flow: float):
     """``factor[:, y, x]``: the smallest over the pixel's still right, lower, left and upper pairs
-    of ``exp(-((s_t - m) / tau)^2)`` (:func:`luminance_steps_rows` gives ``s``); one row ``y``
-    per thread (``tiles`` per row on a GPU).  Each pair's median is found by both its pixels."""
+    of ``exp(-((s_t - m) / w)^2)`` (:func:`luminance_steps_rows` gives ``s``; ``w`` as in
+    :func:`light_edge_factor`); one row ``y`` per thread (``tiles`` per row on a GPU).  Each
+    pair's median is found by both its pixels."""
     y, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, factor.shape[2])
     for x in range(x_begin, x_end):
         for t in range(factor.shape[0]):
             factor[t, y, x] = 1.0
         if moves(flow, y, x, static_flow) == 0:
-            light_edge_factor(steps, flow, factor, y, x, y, x, 0, y, x + 1, tau, static_flow)
-            light_edge_factor(steps, flow, factor, y, x, y, x, 1, y + 1, x, tau, static_flow)
-            light_edge_factor(steps, flow, factor, y, x, y, x - 1, 0, y, x - 1, tau, static_flow)
-            light_edge_factor(steps, flow, factor, y, x, y - 1, x, 1, y - 1, x, tau, static_flow)
+            light_edge_factor(steps, flow, factor, y, x, y, x, 0, y, x + 1, tau, spread, static_flow)
+            light_edge_factor(steps, flow, factor, y, x, y, x, 1, y + 1, x, tau, spread, static_flow)
+            light_edge_factor(steps, flow, factor, y, x, y, x - 1, 0, y, x - 1, tau, spread, static_flow)
+            light_edge_factor(steps, flow, factor, y, x, y - 1, x, 1, y - 1, x, tau, spread, static_flow)
 
 
 # ----------------------------------------------------------------------------
@@ -1078,16 +1088,18 @@ def stable_pairs(log_image, flow, pairs, tau: float, stability: float, floor: fl
 
 
 @host("moving_steps")
-def moving_steps(log_image, flow, factor, tau: float, static_flow: float) -> None:
+def moving_steps(log_image, flow, factor, tau: float, spread: float, static_flow: float) -> None:
     """Weiss's cue for the light's own edges, a factor on Eq. 9's local weight.
 
     For each horizontal or vertical pair that holds still (neither pixel's
     flow in any frame pair is ``static_flow`` px or longer), the step of the
     log luminance (the mean over channels) ``s_t = L(t, x + d) - L(t, x)``
     against its median ``m`` over the ``T`` frames (the mean of the middle two
-    for even ``T``): ``exp(-((s_t - m) / tau)^2)``, small in the frames where
-    an edge of the light crosses the pair.  ``factor[t, y, x]`` is the smallest
-    over the pixel's still pairs, 1 where it has none
+    for even ``T``): ``exp(-((s_t - m) / w)^2)``, small in the frames where
+    an edge of the light crosses the pair.  The width
+    ``w = sqrt(tau^2 + (spread MAD)^2)`` grows with the pair's own spread,
+    ``MAD`` the median of ``|s_t - m|`` over the frames.  ``factor[t, y, x]``
+    is the smallest over the pixel's still pairs, 1 where it has none
     (:func:`ivkernels.kernels.reference.step_evidence.moving_steps`).  The
     steps go into a (T, H, W, 2) buffer of this call; each median is found by
     ranks, ``O(T^2)`` per pair.
@@ -1095,10 +1107,11 @@ def moving_steps(log_image, flow, factor, tau: float, static_flow: float) -> Non
     log_image : wp.array float32 (T, H, W, 3), the offset log image (:func:`offset_log`).
     flow : wp.array float32 (T-1, H, W, 2), forward flow in pixels.
     factor : wp.array float32 (T, H, W), written; in (0, 1].
-    tau : log units, > 0; static_flow : pixels, > 0.
+    tau : log units, > 0; spread : a multiple of the MAD, >= 0 (0: ``w = tau``);
+    static_flow : pixels, > 0.
     """
     if factor.size == 0:
         return
     steps, tiles = _luminance_steps(log_image)
-    launch_rows(moving_steps_pixels, log_image.shape[1] * tiles, [tiles, steps, flow, factor, tau, static_flow],
-                device=log_image.device)
+    launch_rows(moving_steps_pixels, log_image.shape[1] * tiles,
+                [tiles, steps, flow, factor, tau, spread, static_flow], device=log_image.device)
