@@ -70,6 +70,7 @@ def test_window_params_divide_the_priors_and_drop_the_cue_only_at_one_shading():
     two = window_params(p, 2.0)
     assert two.shading_step_stability == p.shading_step_stability
     assert two.lam_albedo_smooth == p.lam_albedo_smooth / 2 and two.lam_albedo_sparsity == p.lam_albedo_sparsity / 2
-    off = iv.Params(shading_step_stability_changing_light=False, shading_stable_gain=0.0, shading_light_edge_tau=0.0)
+    off = iv.Params(shading_step_stability_changing_light=False, shading_stable_gain=0.0, shading_light_edge_tau=0.0,
+                    shading_light_edge_spread=0.0)
     assert window_params(off, 1.0) is off
     assert window_params(off, 4.0).shading_step_stability == off.shading_step_stability

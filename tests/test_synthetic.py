@@ -561,7 +561,28 @@ def test_catalogue_entries_render_and_suites_partition():
     (dict(noise=("gaussian", -0.1)), "std"),
     (dict(compression=("png", 5)), "compression must be"),
     (dict(compression=("jpeg", 101)), "jpeg quality"),
+    (dict(relief=-0.1), "relief must be a number"),
+    (dict(relief=1.5), "relief must be a number"),
+    (dict(relief="rough"), "relief must be a number"),
 ])
 def test_bad_options_raise(kwargs, match):
     with pytest.raises(ValueError, match=match):
         render_sequence("static_moving_light", n_frames=2, size=(16, 16), **kwargs)
+
+
+def test_relief_bumps_the_shading_finely_and_keeps_the_rest():
+    smooth = render_sequence("fast_light", n_frames=3, size=(60, 80), seed=2, palette="grey")
+    bumpy = render_sequence("fast_light", n_frames=3, size=(60, 80), seed=2, palette="grey", relief=0.35)
+    assert bumpy.options["relief"] == 0.35 and smooth.options["relief"] == 0.0
+    # the geometry, the motion and the materials are the smooth scene's
+    for name in ("albedo", "flow", "visibility", "depth", "object_id"):
+        np.testing.assert_array_equal(getattr(bumpy, name), getattr(smooth, name), err_msg=name)
+    np.testing.assert_allclose(bumpy.frames, bumpy.albedo * bumpy.shading[..., None], rtol=1e-6, atol=1e-7)
+    # the shading gains fine detail (its log's pixel-to-pixel steps grow) ...
+    def fine(shading):
+        return float(np.median(np.abs(np.diff(np.log(np.maximum(shading, 1e-4)), axis=-1))))
+    assert fine(bumpy.shading) > 3.0 * fine(smooth.shading)
+    # ... whose steps change as the key lamp moves (the fill lamp holds still, so only in part)
+    detail = np.log(np.maximum(bumpy.shading, 1e-4)) - np.log(np.maximum(smooth.shading, 1e-4))
+    steps = np.diff(detail, axis=-1)
+    assert np.median(np.abs(steps[2] - steps[0])) > 0.2 * np.median(np.abs(steps[0]))

@@ -144,6 +144,10 @@ NEAR_GREY_TINT = 0.04   # largest relative channel deviation of a near-achromati
 ALBEDO_MIN = 0.03
 AMBIENT = 0.03
 FOCAL_PER_WIDTH = 0.9
+#: The relief option's bump field (:class:`_Relief`): how many plane waves, and the range of
+#: their wavelengths in scene units (3-8 px at 320 px wide for an object 3 units away).
+RELIEF_WAVES = 24
+RELIEF_WAVELENGTH = (0.03, 0.08)
 KEY_SAMPLES = 32        # shadow rays per pixel towards the key lamp
 FILL_SAMPLES = 16       # ... and towards the fill
 KEY_SHARE = 0.72        # largest contribution of the key lamp to visible shading
@@ -639,12 +643,44 @@ class _AreaLight:
 
 
 @dataclass
+class _Relief:
+    """A fine relief on every surface: a bump field ``h(q) = sum_k sin(w_k . q + phi_k) / |w_k|``
+    in each object's own coordinates, so that it moves with the object, drawn as the normal it
+    tilts (the geometry, the flow and the shadows' outlines are those of the smooth surface).
+
+    ``waves`` (K, 3) are the wave vectors (wavelengths ``RELIEF_WAVELENGTH`` in scene units,
+    a few pixels at the objects' distance), ``phases`` (K,), ``slope`` the RMS slope.
+    """
+
+    waves: np.ndarray
+    phases: np.ndarray
+    slope: float
+
+    @classmethod
+    def draw(cls, slope: float, rng) -> "_Relief":
+        k = RELIEF_WAVES
+        lengths = rng.uniform(*RELIEF_WAVELENGTH, k)
+        return cls(_unit(rng.normal(size=(k, 3))) * (2.0 * np.pi / lengths)[:, None],
+                   rng.uniform(0.0, 2.0 * np.pi, k), float(slope))
+
+    def tilt(self, n: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """Unit normals (N, 3) of the bumped surface at points ``q`` (N, 3) whose smooth unit
+        normals are ``n``, both in object coordinates: ``n`` tilted against the tangential part
+        of ``grad h`` (RMS ``slope``)."""
+        unit_waves = self.waves / np.linalg.norm(self.waves, axis=1, keepdims=True)
+        g = np.cos(q @ self.waves.T + self.phases) @ unit_waves * (self.slope * np.sqrt(2.0 / len(self.phases)))
+        g = g - (g * n).sum(axis=1, keepdims=True) * n
+        return _unit(n - g)
+
+
+@dataclass
 class _Scene:
     objects: list
     lights: list
     cam_rot: np.ndarray     # (T, 3, 3) world -> camera
     cam_pos: np.ndarray     # (T, 3)
     ambient: float = AMBIENT
+    relief: _Relief | None = None
 
 
 # --------------------------------------------------------------------------- #
@@ -671,11 +707,12 @@ def _aim(centres, target) -> np.ndarray:
 
 
 def _build_scene(kind: str, n_frames: int, rng, aspect: float = 0.75, style: dict | None = None,
-                 style_rng=None) -> _Scene:
+                 style_rng=None, relief: _Relief | None = None) -> _Scene:
     """The room, objects, camera path and lights of one sequence (see the
     module docstring), drawn from ``rng``; ``aspect`` (``H / W``) sets the
     field of view used for the exposure.  ``style`` (palette, light) is
-    applied by :func:`_restyle` with draws from ``style_rng``."""
+    applied by :func:`_restyle` with draws from ``style_rng``; ``relief``
+    bumps every surface (the exposure sees it)."""
     T = n_frames
     tt = np.arange(T, dtype=np.float64)
     z_wall = rng.uniform(5.5, 6.5)
@@ -879,7 +916,7 @@ def _build_scene(kind: str, n_frames: int, rng, aspect: float = 0.75, style: dic
         key.share, fill.share = 0.45, 0.12
         lights.append(_AreaLight(pos2, _aim(pos2, target), rng.uniform(0.2, 0.35),
                                  _disc_pattern(KEY_SAMPLES, rng), share=0.3))
-    scene = _Scene(objects, lights, cam_rot, cam_pos)
+    scene = _Scene(objects, lights, cam_rot, cam_pos, relief=relief)
     if style is not None:
         _restyle(scene, style, style_rng)
     _set_exposure(scene, aspect)
@@ -1065,11 +1102,20 @@ def _set_exposure(scene, aspect: float) -> None:
             m = which == k
             if m.any():
                 q = obj.to_local(t, p[m])
-                n[m] = _mul(_normal(obj.shape, obj.size, q), obj.rotations[t].T)
+                n[m] = _world_normal(scene, obj, t, q)
         for i, light in enumerate(scene.lights):
             peaks[i] = max(peaks[i], float(_irradiance(scene, light, t, p, n, which, shadows=False).max()))
     for light, peak in zip(scene.lights, peaks):
         light.power = light.share / peak if peak > 0.0 else 0.0
+
+
+def _world_normal(scene, obj, t, q) -> np.ndarray:
+    """World unit normals (N, 3) of ``obj`` in frame ``t`` at its surface points ``q`` (N, 3)
+    in object coordinates, tilted by the scene's relief where it has one."""
+    n = _normal(obj.shape, obj.size, q)
+    if scene.relief is not None:
+        n = scene.relief.tilt(n, q)
+    return _mul(n, obj.rotations[t].T)
 
 
 def _project(scene, t, p, focal, cx, cy):
@@ -1213,7 +1259,7 @@ def dark_disc(size: tuple[int, int] = (120, 160), n_frames: int = 8, radius: int
 
 def render_sequence(kind: str, n_frames: int = 8, size: tuple[int, int] = (240, 320),
                     seed: int = 0, *, palette: str = "colour", light: str = "soft", light_colour=None,
-                    noise=None, compression=None) -> SyntheticSequence:
+                    noise=None, compression=None, relief: float = 0.0) -> SyntheticSequence:
     """Render a Lambertian sequence with exact albedo, shading, flow and visibility.
 
     Parameters
@@ -1243,6 +1289,11 @@ def render_sequence(kind: str, n_frames: int = 8, size: tuple[int, int] = (240, 
         1), ``shading`` is unchanged, and ``frames = albedo * shading`` still.
     noise, compression : see :func:`degrade_frames`; applied to the frames
         only (seeded by ``seed``), the truth stays exact.
+    relief : float in [0, 1]
+        RMS slope of a fine relief on every surface (bumps 3-8 px across,
+        drawn as tilted normals and moving with each surface), whose shading
+        changes with every move of the light, as a sculpted or furred
+        object's does; it is in the truth's shading.  0 (default): smooth.
 
     The defaults reproduce the sequences of the four original kinds bit for
     bit: the options draw from a second stream (``default_rng([seed, 33, m])``,
@@ -1265,9 +1316,12 @@ def render_sequence(kind: str, n_frames: int = 8, size: tuple[int, int] = (240, 
     """
     T, H, W, seed = _check_args(kind, n_frames, size, seed)
     _check_options(palette, light, light_colour, noise, compression)
+    relief = _check_number("relief", relief, 0.0, 1.0)
     style_rng = np.random.default_rng([seed, 33, MOTION_KINDS.index(kind)])
     style = None if (palette, light) == ("colour", "soft") else {"palette": palette, "light": light}
-    scene = _build_scene(kind, T, np.random.default_rng(seed), aspect=H / W, style=style, style_rng=style_rng)
+    bumps = _Relief.draw(relief, np.random.default_rng([seed, 34, MOTION_KINDS.index(kind)])) if relief else None
+    scene = _build_scene(kind, T, np.random.default_rng(seed), aspect=H / W, style=style, style_rng=style_rng,
+                         relief=bumps)
     colour = _light_colour(light_colour, style_rng)
     focal = FOCAL_PER_WIDTH * W
     cx, cy = (W - 1) / 2.0, (H - 1) / 2.0
@@ -1294,7 +1348,7 @@ def render_sequence(kind: str, n_frames: int = 8, size: tuple[int, int] = (240, 
                 continue
             q = obj.to_local(t, p[m])
             local[t, m] = q
-            n[m] = _mul(_normal(obj.shape, obj.size, q), obj.rotations[t].T)
+            n[m] = _world_normal(scene, obj, t, q)
             a[m] = obj.texture(q)
         albedo[t] = a
         shading[t] = _shade(scene, t, p, n, which)
@@ -1335,7 +1389,7 @@ def render_sequence(kind: str, n_frames: int = 8, size: tuple[int, int] = (240, 
         frames = degrade_frames(frames, noise, compression, seed=seed)
     options = dict(palette=palette, light=light, light_colour=None if colour is None else tuple(colour),
                    noise=None if noise is None else tuple(noise),
-                   compression=None if compression is None else tuple(compression))
+                   compression=None if compression is None else tuple(compression), relief=relief)
     return SyntheticSequence(
         frames=frames,
         albedo=albedo_img,
@@ -1363,6 +1417,7 @@ class SceneKind:
     light_colour: object = None
     noise: tuple | None = None
     compression: tuple | None = None
+    relief: float = 0.0
 
     @property
     def static_scene(self) -> bool:
@@ -1380,7 +1435,9 @@ class SceneKind:
 #: lamp orbiting 70-100 degrees a frame) and ``two_lights_orbit`` (two static
 #: lamps, the camera orbiting the objects).  The ``ground`` kinds put a long
 #: straight step between two large flat grey materials on the floor (a pale
-#: path across a dark lawn), the case of street footage.
+#: path across a dark lawn), the case of street footage.  The ``relief`` kind
+#: bumps every surface finely (a hammered or sculpted finish), so that the
+#: steps of its shading change as the key lamp moves (the fill holds still).
 SCENE_KINDS = {
     "free_camera": SceneKind("free_camera"),
     "objects_camera": SceneKind("objects_camera"),
@@ -1403,6 +1460,7 @@ SCENE_KINDS = {
     "ground_turning_soft": SceneKind("turning_objects", "ground"),
     "ground_objects_soft": SceneKind("objects_camera", "ground"),
     "grey_turning_noisy": SceneKind("turning_objects", "grey", noise=("poisson", 400.0), compression=("jpeg", 85)),
+    "grey_relief_fast_light": SceneKind("fast_light", "grey", relief=0.35),
 }
 
 
@@ -1442,6 +1500,7 @@ def render_kind(name: str, n_frames: int = 8, size: tuple[int, int] = (240, 320)
         raise ValueError(f"unknown scene kind {name!r}; expected one of {', '.join(SCENE_KINDS)}")
     k = SCENE_KINDS[name]
     seq = render_sequence(k.motion, n_frames, size, seed, palette=k.palette, light=k.light,
-                          light_colour=k.light_colour, noise=k.noise, compression=k.compression)
+                          light_colour=k.light_colour, noise=k.noise, compression=k.compression,
+                          relief=k.relief)
     seq.options["name"] = name
     return seq
