@@ -298,7 +298,7 @@ class Params:
         of the window keeps Eq. 9's smoothing.  0: the width is ``tau``.
         2 chosen on training data (``perf/hold_out.py --seeds 1 2 --mit
         --grid shading_light_edge_spread=0,2``; perf/RESULTS.md, "The
-        light-edge factor's width widened by the pair's spread"): the worst
+        light-edge factor widened by the pair's spread"): the worst
         kind does not move (0.942, grey_turning_noisy, whose windows count
         one shading), the mean over 22 kinds goes 0.567 -> 0.560, MIT grey
         0.890 -> 0.721 (the squirrel's fine relief 2.6x -> 0.97x its best
