@@ -40,7 +40,8 @@ goes into the albedo (perf/RESULTS.md, "What teabag2 loses to Weiss").
 The other half of the cue, :func:`light_edge_factor`
 (``Params.shading_light_edge_tau``): what a still pair's step does beyond its
 median in one frame is the light's, and Eq. 9's weight of its pixels in that
-frame falls by ``exp(-((s_t - m) / tau)^2)``.
+frame falls by ``exp(-((s_t - m) / w)^2)``, the width ``w`` grown by the
+pair's own spread over the frames (``Params.shading_light_edge_spread``).
 
 With ``Params.shading_step_noise`` > 0 the steps of both the evidence and
 the share are read net of the local noise floor (:func:`noise_floor`): in a

@@ -57,7 +57,10 @@ under ``floor`` (the small, stable steps a camera's noise gives every pair)
 get 0.  The other half of the cue (:func:`moving_steps`): what a still
 pair's step does beyond its median in frame ``t`` is the light's, so Eq. 9's
 weight of its pixels in that frame is multiplied by
-``exp(-((s_t - m) / tau)^2)`` (a shadow's outline crossing the pair).
+``exp(-((s_t - m) / w)^2)`` (a shadow's outline crossing the pair), with
+``w = sqrt(tau^2 + (spread MAD)^2)`` wider for a pair whose step changes in
+most frames (a relief under a moving light; ``MAD`` the median of
+``|s_t - m|``).
 """
 from __future__ import annotations
 

@@ -21,7 +21,8 @@
   lower pair over the window's frames (the median of the pair's step and its
   largest deviation from it), where the pair holds still.
 * :func:`moving_steps`: the light's own edges, per pixel and frame: the
-  smallest over its still pairs of ``exp(-((s_t - m) / tau)^2)``.
+  smallest over its still pairs of ``exp(-((s_t - m) / w)^2)``, the width
+  ``w = sqrt(tau^2 + (spread MAD)^2)`` grown by the pair's own spread.
 
 The formula, its constants and the NumPy reference:
 :mod:`ivkernels.kernels.reference.step_evidence`; its use in the energy:
