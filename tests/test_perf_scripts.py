@@ -455,3 +455,15 @@ def test_stream_fps_prints_each_window_and_the_rate():
     assert "10 frames at 48x40 on cpu" in out
     assert "    0    0-7 " in out and "    1    2-9 " in out
     assert "after the first window: 2 frames in" in out and "frames/s" in out
+
+
+def test_side_by_side_times_a_named_kind():
+    proc = subprocess.run(
+        [sys.executable, str(PERF / "side_by_side.py"), "tiny", "--kind", "mixed_fast_light_hard",
+         "--size", "40", "56", "--frames", "3", "--threads", "1"],
+        capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.startswith("tiny: ") and "solve" in proc.stdout
+    bad = subprocess.run([sys.executable, str(PERF / "side_by_side.py"), "x", "--kind", "grey_flying_cars"],
+                         capture_output=True, text=True, timeout=600)
+    assert bad.returncode != 0 and "invalid choice" in bad.stderr
