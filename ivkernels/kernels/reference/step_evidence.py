@@ -108,14 +108,12 @@ NOISE_STEP_MAX = 1.0
 NOISE_LEVEL_MIN_COUNT = 64
 
 
-def _finite_gain(sizes, args):
-    if not math.isfinite(args["gain"]):
-        raise ValueError(f"gain must be a finite number >= 0, got {args['gain']!r}")
-
-
-def _finite_spread(sizes, args):
-    if not math.isfinite(args["spread"]):
-        raise ValueError(f"spread must be a finite number >= 0 (0: the width is tau), got {args['spread']!r}")
+def _finite(name: str, note: str = ""):
+    """A rule refusing an infinite ``name`` (declared ``NonNegative``, which lets ``inf`` pass)."""
+    def rule(sizes, args):
+        if not math.isfinite(args[name]):
+            raise ValueError(f"{name} must be a finite number >= 0{note}, got {args[name]!r}")
+    return rule
 
 
 FAMILY.declare("offset_log(log_image, out, offset)",
@@ -177,7 +175,7 @@ FAMILY.declare("step_gate(log_image, counts, weight, gate, gain, tau, tau_chroma
                log_image="T H W 3", counts=Array("T*H 2", "int32", layout="(T*H, 2)"), weight="T H W",
                gate=Out("T H W"), gain=NonNegative, tau=FinitePositive, tau_chroma=NonNegative, floor=_FLOOR,
                k=NonNegative,
-               rules=(Rule(_finite_gain),),
+               rules=(Rule(_finite("gain")),),
                separate=(("gate", "log_image", "the gate is written while log_image is read"),))
 FAMILY.declare("still_stability(log_image, flow, weight, tau, static_flow)",
                "Weiss's cue ``maps.shading_gate(log_image, flow, tau)`` where the scene holds still, 1 where "
@@ -193,7 +191,7 @@ FAMILY.declare("moving_steps(log_image, flow, factor, tau, spread, static_flow)"
                "``w = sqrt(tau^2 + (spread MAD)^2)``, ``MAD`` the median of ``|s_t - m|``; 1 without a still pair.",
                log_image="T H W 3", flow=Array("T-1 H W 2", layout="(T-1, H, W, 2)"), factor=Out("T H W"),
                tau=FinitePositive, spread=NonNegative, static_flow=Positive,
-               rules=(Rule(_finite_spread),),
+               rules=(Rule(_finite("spread", " (0: the width is tau)")),),
                separate=(("factor", "log_image", "the factor is written while log_image is read"),
                          ("factor", "flow", "the factor is written while flow is read")))
 FAMILY.declare("stable_pairs(log_image, flow, pairs, tau, stability, floor, static_flow)",
