@@ -559,33 +559,46 @@ def stable_pairs_rows(steps: nd4, flow: nd4, pairs: nd3, tau: ti.f32, stability:
                 pairs[y, x, k] = ev
 
 
-@ti.func
-def light_edge_factor(steps: nd4, flow: nd4, factor: nd3, y, x, py, px, k, ny, nx, tau, spread, static_flow):
-    """Lower ``factor[:, y, x]`` by the pair of ``steps[:, py, px, k]`` (see the Warp module)."""
-    if ny >= 0 and nx >= 0 and ny < factor.shape[1] and nx < factor.shape[2]:
-        if moves(flow, ny, nx, static_flow) == 0:
-            m = median_of(steps, py, px, k, 0.0, 0)
-            width = tau
-            if spread > 0.0:
-                widen = spread * median_of(steps, py, px, k, m, 1)
-                width = ti.sqrt(tau * tau + widen * widen)
-            for t in range(factor.shape[0]):
-                q = (steps[t, py, px, k] - m) / width
-                factor[t, y, x] = ti.min(factor[t, y, x], ti.exp(-q * q))
+@ti.kernel
+def light_edge_pairs(steps: nd4, flow: nd4, tau: ti.f32, spread: ti.f32, static_flow: ti.f32):
+    """Pass 1, each pair once: its steps replaced in place by its light-edge factor, 1 where the
+    pair leaves the image or a pixel moves (see the Warp module)."""
+    height = steps.shape[1]
+    width = steps.shape[2]
+    for y in range(height):
+        for x in range(width):
+            here = moves(flow, y, x, static_flow)
+            for k in ti.static(range(2)):
+                yy = y + k
+                xx = x + 1 - k
+                still = 0
+                if here == 0 and yy < height and xx < width:
+                    if moves(flow, yy, xx, static_flow) == 0:
+                        still = 1
+                if still == 1:
+                    m = median_of(steps, y, x, k, 0.0, 0)
+                    w = tau
+                    if spread > 0.0:
+                        widen = spread * median_of(steps, y, x, k, m, 1)
+                        w = ti.sqrt(tau * tau + widen * widen)
+                    for t in range(steps.shape[0]):
+                        q = (steps[t, y, x, k] - m) / w
+                        steps[t, y, x, k] = ti.exp(-q * q)
+                else:
+                    for t in range(steps.shape[0]):
+                        steps[t, y, x, k] = 1.0
 
 
 @ti.kernel
-def moving_steps_rows(steps: nd4, flow: nd4, factor: nd3, tau: ti.f32, spread: ti.f32, static_flow: ti.f32):
-    """The light-edge factor of each pixel over its still axis pairs (see the Warp module)."""
-    for y in range(factor.shape[1]):
-        for x in range(factor.shape[2]):
-            for t in range(factor.shape[0]):
-                factor[t, y, x] = 1.0
-            if moves(flow, y, x, static_flow) == 0:
-                light_edge_factor(steps, flow, factor, y, x, y, x, 0, y, x + 1, tau, spread, static_flow)
-                light_edge_factor(steps, flow, factor, y, x, y, x, 1, y + 1, x, tau, spread, static_flow)
-                light_edge_factor(steps, flow, factor, y, x, y, x - 1, 0, y, x - 1, tau, spread, static_flow)
-                light_edge_factor(steps, flow, factor, y, x, y - 1, x, 1, y - 1, x, tau, spread, static_flow)
+def light_edge_pixels(pairs: nd4, factor: nd3):
+    """Pass 2, each pixel: the smallest of 1 and its four pairs' factors (see the Warp module)."""
+    for t, y, x in factor:
+        f = ti.min(1.0, ti.min(pairs[t, y, x, 0], pairs[t, y, x, 1]))
+        if x >= 1:
+            f = ti.min(f, pairs[t, y, x - 1, 0])
+        if y >= 1:
+            f = ti.min(f, pairs[t, y - 1, x, 1])
+        factor[t, y, x] = f
 
 
 @host("offset_log")
@@ -731,4 +744,6 @@ def moving_steps(log_image, flow, factor, tau: float, spread: float, static_flow
     :func:`ivkernels.kernels.warp.step_evidence.moving_steps`."""
     if factor.size == 0:
         return
-    moving_steps_rows(_luminance_steps(log_image), flow, factor, tau, spread, static_flow)
+    pairs = _luminance_steps(log_image)                 # each pair once, then each pixel's smallest
+    light_edge_pairs(pairs, flow, tau, spread, static_flow)
+    light_edge_pixels(pairs, factor)

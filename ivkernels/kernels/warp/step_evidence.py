@@ -742,41 +742,56 @@ def stable_pairs_pixels(row_begin: int, tiles: int, steps: wp.array4d(dtype=floa
             pairs[y, x, k] = ev
 
 
-@wp.func
-def light_edge_factor(steps: wp.array4d(dtype=float), flow: wp.array4d(dtype=float), factor: wp.array3d(dtype=float),
-                      y: int, x: int, py: int, px: int, k: int, ny: int, nx: int, tau: float, spread: float,
-                      static_flow: float):
-    """Lower ``factor[:, y, x]`` to ``exp(-((s_t - m) / w)^2)``, ``w = sqrt(tau^2 + (spread MAD)^2)``,
-    of the pair whose steps are ``steps[:, py, px, k]`` and whose other pixel is ``(ny, nx)``,
-    when that pixel lies in the image and holds still (the caller checks ``(y, x)``)."""
-    if ny >= 0 and nx >= 0 and ny < factor.shape[1] and nx < factor.shape[2]:
-        if moves(flow, ny, nx, static_flow) == 0:
-            m = median_of(steps, py, px, k, 0.0, 0)
-            width = tau
-            if spread > 0.0:
-                widen = spread * median_of(steps, py, px, k, m, 1)
-                width = wp.sqrt(tau * tau + widen * widen)
-            for t in range(factor.shape[0]):
-                q = (steps[t, py, px, k] - m) / width
-                factor[t, y, x] = wp.min(factor[t, y, x], wp.exp(-q * q))
+@wp.kernel
+def light_edge_pairs(row_begin: int, tiles: int, steps: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
+                     tau: float, spread: float, static_flow: float):
+    """Pass 1, each pair once: ``steps[:, y, x, k]`` (the steps of the pair of ``(y, x)`` with its
+    right (k = 0) or lower (k = 1) neighbour, :func:`luminance_steps_rows`) replaced in place by
+    ``exp(-((s_t - m) / w)^2)``, ``w = sqrt(tau^2 + (spread MAD)^2)``, where both pixels lie in
+    the image and hold still, and by 1 elsewhere; one row ``y`` per thread (``tiles`` per row on
+    a GPU).  A thread reads and writes only its own pairs' steps."""
+    y, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, steps.shape[2])
+    height = steps.shape[1]
+    width = steps.shape[2]
+    for x in range(x_begin, x_end):
+        here = moves(flow, y, x, static_flow)
+        for k in range(2):
+            yy = y + k
+            xx = x + 1 - k
+            still = int(0)
+            if here == 0 and yy < height and xx < width:
+                if moves(flow, yy, xx, static_flow) == 0:
+                    still = 1
+            if still == 1:
+                m = median_of(steps, y, x, k, 0.0, 0)
+                w = tau
+                if spread > 0.0:
+                    widen = spread * median_of(steps, y, x, k, m, 1)
+                    w = wp.sqrt(tau * tau + widen * widen)
+                for t in range(steps.shape[0]):
+                    q = (steps[t, y, x, k] - m) / w
+                    steps[t, y, x, k] = wp.exp(-q * q)
+            else:
+                for t in range(steps.shape[0]):
+                    steps[t, y, x, k] = 1.0
 
 
 @wp.kernel
-def moving_steps_pixels(row_begin: int, tiles: int, steps: wp.array4d(dtype=float), flow: wp.array4d(dtype=float),
-                        factor: wp.array3d(dtype=float), tau: float, spread: float, static_flow: float):
-    """``factor[:, y, x]``: the smallest over the pixel's still right, lower, left and upper pairs
-    of ``exp(-((s_t - m) / w)^2)`` (:func:`luminance_steps_rows` gives ``s``; ``w`` as in
-    :func:`light_edge_factor`); one row ``y`` per thread (``tiles`` per row on a GPU).  Each
-    pair's median is found by both its pixels."""
-    y, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, factor.shape[2])
+def light_edge_pixels(row_begin: int, tiles: int, pairs: wp.array4d(dtype=float), factor: wp.array3d(dtype=float)):
+    """Pass 2, each pixel: ``factor[t, y, x]``, the smallest of 1 and its right, lower, left and
+    upper pairs' factors of :func:`light_edge_pairs` (a pair with a moving pixel holds 1); one
+    row ``t * H + y`` per thread (``tiles`` per row on a GPU)."""
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, factor.shape[2])
+    height = factor.shape[1]
+    t = r // height
+    y = r - t * height
     for x in range(x_begin, x_end):
-        for t in range(factor.shape[0]):
-            factor[t, y, x] = 1.0
-        if moves(flow, y, x, static_flow) == 0:
-            light_edge_factor(steps, flow, factor, y, x, y, x, 0, y, x + 1, tau, spread, static_flow)
-            light_edge_factor(steps, flow, factor, y, x, y, x, 1, y + 1, x, tau, spread, static_flow)
-            light_edge_factor(steps, flow, factor, y, x, y, x - 1, 0, y, x - 1, tau, spread, static_flow)
-            light_edge_factor(steps, flow, factor, y, x, y - 1, x, 1, y - 1, x, tau, spread, static_flow)
+        f = wp.min(float(1.0), wp.min(pairs[t, y, x, 0], pairs[t, y, x, 1]))
+        if x >= 1:
+            f = wp.min(f, pairs[t, y, x - 1, 0])
+        if y >= 1:
+            f = wp.min(f, pairs[t, y - 1, x, 1])
+        factor[t, y, x] = f
 
 
 # ----------------------------------------------------------------------------
@@ -1101,9 +1116,10 @@ def moving_steps(log_image, flow, factor, tau: float, spread: float, static_flow
     ``w = sqrt(tau^2 + (spread MAD)^2)`` grows with the pair's own spread,
     ``MAD`` the median of ``|s_t - m|`` over the frames.  ``factor[t, y, x]``
     is the smallest over the pixel's still pairs, 1 where it has none
-    (:func:`ivkernels.kernels.reference.step_evidence.moving_steps`).  The
-    steps go into a (T, H, W, 2) buffer of this call; each median is found by
-    ranks, ``O(T^2)`` per pair.
+    (:func:`ivkernels.kernels.reference.step_evidence.moving_steps`).  Two
+    passes: each pair once (its median and MAD by ranks, ``O(T^2)``) into a
+    (T, H, W, 2) buffer of this call that first holds the steps, then each
+    pixel's smallest of its four pairs.
 
     log_image : wp.array float32 (T, H, W, 3), the offset log image (:func:`offset_log`).
     flow : wp.array float32 (T-1, H, W, 2), forward flow in pixels.
@@ -1114,5 +1130,6 @@ def moving_steps(log_image, flow, factor, tau: float, spread: float, static_flow
     if factor.size == 0:
         return
     steps, tiles = _luminance_steps(log_image)
-    launch_rows(moving_steps_pixels, log_image.shape[1] * tiles,
-                [tiles, steps, flow, factor, tau, spread, static_flow], device=log_image.device)
+    t, h, _, _ = log_image.shape
+    launch_rows(light_edge_pairs, h * tiles, [tiles, steps, flow, tau, spread, static_flow], device=log_image.device)
+    launch_rows(light_edge_pixels, t * h * tiles, [tiles, steps, factor], device=log_image.device)
