@@ -360,11 +360,12 @@ class Params:
         ``min(lbfgs_iterations_coarse, round(lbfgs_iterations *
         lbfgs_level_growth ** l))``.
     coarse_basis_spacing, coarse_basis_sigma, coarse_basis_levels
-        L-BFGS minimises over ``S = s + sum_k 3^-k P_k z_k``: the shading plus
-        coarse fields on nodes every ``spacing * 3^k`` pixels, interpolated
-        with weights ``exp(-|A(x) - A(node)|^2 / sigma^2)`` that stop at
-        albedo edges (:mod:`ivkernels.solver.coarse_basis`), so whole albedo
-        regions move in a few steps.  Spacing 0: off.
+        L-BFGS minimises over ``S = s + P_0 (z_0 + Q_1 (z_1 / 3 + ...))``: the
+        shading plus coarse fields on nodes every ``spacing * 3^k`` pixels,
+        level 0 interpolated onto the pixels and each coarser level onto the
+        nodes of the one below, with weights ``exp(-|A(x) - A(node)|^2 /
+        sigma^2)`` that stop at albedo edges (:mod:`ivkernels.solver.coarse_basis`),
+        so whole albedo regions move in a few steps.  Spacing 0: off.
     init_blur
         Coarsest-level start: S = log luminance blurred with a Gaussian whose
         sigma is ``init_blur`` times the shorter side; A = I - S.

@@ -336,7 +336,7 @@ def test_level_iterations_grow_coarser_up_to_the_cap():
         Params(lbfgs_level_growth=0.5)
 
 
-# ------------------ the edge-aware coarse basis, S = s + sum_k c_k P_k z_k (coarse_basis.py)
+# ------------------ the edge-aware coarse basis, S = s + P_0 (c_0 z_0 + Q_1 (c_1 z_1 + ...)) (coarse_basis.py)
 def _coarse_problem(backend, rng, spacings=(3,)):
     from ivkernels.solver.coarse_basis import CoarseBasisProblem
     from ivkernels.solver.energy import ConstrainedEnergy
@@ -365,8 +365,8 @@ def test_coarse_basis_starts_at_the_current_shading(backend, rng, spacings):
 
 @pytest.mark.parametrize("spacings", SPACINGS)
 def test_coarse_basis_gradient_matches_directional_difference(backend, rng, spacings):
-    """dE/d[s, z_k] (z_k through c_k P_k^T) against central differences of
-    E(s + sum_k c_k P_k z_k), along all of X and along each level's z_k alone."""
+    """dE/d[s, z_k] (z_k through c_k Q_k^T ... P_0^T) against central differences of
+    E(s + P_0 (c_0 z_0 + Q_1 (c_1 z_1 + ...))), along all of X and along each level's z_k alone."""
     energy, problem, coarse = _coarse_problem(backend, rng, spacings)
     be = backend
     x0 = be.numpy(coarse.X).astype(np.float64).copy()
@@ -391,9 +391,11 @@ def test_coarse_basis_gradient_matches_directional_difference(backend, rng, spac
 
 
 @pytest.mark.parametrize("spacings", SPACINGS)
-def test_coarse_basis_finish_leaves_s_plus_the_scaled_fields_in_the_shading(backend, rng, spacings):
-    """S = s + sum_k 3^-k P_k z_k, each P_k the NumPy reference's prolongation with
-    weights from the albedo I - s."""
+def test_coarse_basis_finish_leaves_s_plus_the_nested_fields_in_the_shading(backend, rng, spacings):
+    """S = s + P_0 (z_0 + Q_1 (z_1 / 3 + Q_2 (z_2 / 9))), each P_0, Q_k the NumPy reference's
+    prolongation, with weights from the albedo I - s at the pixels (P_0, spacing
+    spacings[0]) and at the level below's nodes (Q_k, spacing 3), the nodes found here
+    from their definition (node j on row min(j * spacing, size - 1) of the level below)."""
     from ivkernels.kernels.reference import coarse_basis as ref
     from ivkernels.solver.coarse_basis import LEVEL_RATIO
 
@@ -401,18 +403,38 @@ def test_coarse_basis_finish_leaves_s_plus_the_scaled_fields_in_the_shading(back
     be = backend
     s = be.numpy(coarse.s).astype(np.float64).reshape(energy.shape)
     albedo = be.numpy(energy.I).astype(np.float64) - s[..., None]
-    want = s.copy()
+    guides, ratios = [albedo], [spacings[0]]
+    zs = []
     for k, field in enumerate(coarse.fields):
-        weights = ref.coarse_weights(albedo, field.spacing, 0.5)
+        if k > 0:
+            below = guides[-1]
+            rows = [min(j * ratios[-1], below.shape[1] - 1) for j in range((below.shape[1] - 1) // ratios[-1] + 2)]
+            cols = [min(i * ratios[-1], below.shape[2] - 1) for i in range((below.shape[2] - 1) // ratios[-1] + 2)]
+            guides.append(below[:, rows][:, :, cols])
+            ratios.append(LEVEL_RATIO)
+        weights = ref.coarse_weights(guides[k], ratios[k], 0.5)
         np.testing.assert_allclose(be.numpy(field.weights), weights, atol=1e-5)
         z = rng.normal(0, 0.3, field.z.shape).astype(np.float32)
         be.vecops.copy(be.asarray(z.reshape(-1)), field.z_flat)
-        assert field.scale == LEVEL_RATIO ** -k
-        want += field.scale * ref.prolong(z, weights, field.spacing)
+        assert field.scale == LEVEL_RATIO ** -k and field.spacing == spacings[k]
+        zs.append((field.scale * z, weights))
+    field_sum = zs[-1][0]
+    for k in range(len(zs) - 1, 0, -1):                       # down to level 0's nodes
+        field_sum = zs[k - 1][0] + ref.prolong(field_sum, zs[k][1], ratios[k])
+    want = s + ref.prolong(field_sum, zs[0][1], ratios[0])
     coarse.finish()
     np.testing.assert_allclose(be.numpy(energy.S), want, atol=1e-5)
     I = be.numpy(energy.I)
     np.testing.assert_allclose(be.numpy(energy.A), I - be.numpy(energy.S)[..., None], atol=1e-5)
+
+
+def test_coarse_basis_spacings_must_grow_by_the_level_ratio(backend, rng):
+    from ivkernels.solver.coarse_basis import CoarseBasisProblem
+    from ivkernels.solver.energy import ConstrainedEnergy
+
+    energy, _ = _small_problem(backend, rng, T=2, h=13, w=14)
+    with pytest.raises(ValueError, match="grow by 3"):
+        CoarseBasisProblem(ConstrainedEnergy(energy), [2, 4], 0.5)
 
 
 def test_coarse_basis_levels_that_fit():

@@ -1,4 +1,4 @@
-"""Eq. 2 over ``S = s + sum_k c_k P_k z_k``: the shading plus edge-aware coarse fields.
+"""Eq. 2 over ``S = s + P_0 (c_0 z_0 + Q_1 (c_1 z_1 + ...))``: the shading plus nested edge-aware coarse fields.
 
 L-BFGS on the per-pixel shading alone moves slowly along one kind of
 direction: smooth changes of ``S`` that stop at albedo edges.  Inside a flat
@@ -13,11 +13,23 @@ every ``spacing`` pixels, interpolated by weights that follow the albedo
 
 This is hierarchical-basis preconditioning (Szeliski, "Locally adapted
 hierarchical basis preconditioning", SIGGRAPH 2006) with the albedo as the
-guide of the interpolation, over one or more coarse levels: level ``k`` has
-nodes every ``spacing * LEVEL_RATIO^k`` pixels, interpolated onto the pixels
-by the same rule, and enters scaled by ``c_k = LEVEL_RATIO^-k``:
+guide of the interpolation, over one or more nested coarse levels: level 0
+has nodes every ``spacing`` pixels, interpolated onto the pixels by ``P_0``;
+level ``k >= 1`` has a node on every ``LEVEL_RATIO``-th node of level ``k - 1``
+(so every ``spacing * LEVEL_RATIO^k`` pixels), interpolated onto level
+``k - 1``'s nodes by ``Q_k``, the same rule with the albedo read at those
+nodes.  Level ``k`` enters scaled by ``c_k = LEVEL_RATIO^-k``:
 
-    S = s + sum_k c_k P_k z_k,    dE/ds = dE/dS,    dE/dz_k = c_k P_k^T dE/dS.
+    S = s + P_0 (c_0 z_0 + Q_1 (c_1 z_1 + Q_2 (c_2 z_2 + ...))),
+    dE/ds = dE/dS,    dE/dz_k = c_k Q_k^T ... Q_1^T P_0^T dE/dS.
+
+Only ``P_0`` holds weights per pixel (16 floats a pixel, four times the
+shading): an evaluation reads them once to prolong and once to restrict,
+however many levels there are.  Each level with its own per-pixel weights,
+as before, read them once more per level and evaluation (8 frames at
+640x480, two levels: 9.8 s of the 45 s of ``decompose()``, perf/RESULTS.md,
+"The coarse basis nested"); nested, the energy reached at the default
+budget is the same within 0.02%.
 
 The scale keeps the levels' curvatures alike for L-BFGS's one scalar
 scaling: a node's field covers ``LEVEL_RATIO^2`` times more pixels than a
@@ -55,30 +67,53 @@ def coarse_spacings(shape: tuple[int, int], spacing: int, levels: int) -> list[i
     return [s for s in spacings if uses_coarse_basis(shape, s)]
 
 
+def node_pixels(size: int, spacing: int, nodes: int) -> np.ndarray:
+    """The pixel each of ``nodes`` nodes every ``spacing`` pixels sits on along an axis of
+    ``size`` pixels, ``min(j * spacing, size - 1)`` (:func:`grid_shape`)."""
+    return np.minimum(np.arange(nodes) * spacing, size - 1)
+
+
 class CoarseField:
     """One coarse level: node ``spacing`` (pixels), ``scale`` ``c_k``, its unknowns ``z``
-    and gradient ``g_z`` (views of the problem's ``X`` and ``G``, (T, Hc, Wc)) and the
-    per-pixel interpolation ``weights`` (T, h, w, 16)."""
+    and gradient ``g_z`` (views of the problem's ``X`` and ``G``, (T, Hc, Wc)), its
+    interpolation ``weights`` onto the level below (T, Hb, Wb, 16): the pixels for
+    level 0, level ``k - 1``'s nodes for ``k >= 1``, and ``ratio``, its node spacing in
+    the units of the level below (``spacing`` for level 0, ``LEVEL_RATIO`` above), and a
+    buffer ``work`` (T, Hc, Wc) for the prolonged and the restricted sums."""
 
-    def __init__(self, be, shape: tuple[int, int, int], spacing: int, scale: float, X, G, offset: int):
-        T, h, w = shape
-        hc, wc = grid_shape(h, w, spacing)
-        m = T * hc * wc
-        self.spacing, self.scale, self.size = int(spacing), float(scale), m
+    def __init__(self, be, frames: int, below: tuple[int, int], ratio: int, spacing: int, scale: float, X, G,
+                 offset: int):
+        hc, wc = grid_shape(*below, ratio)
+        m = frames * hc * wc
+        self.spacing, self.ratio, self.scale, self.size = int(spacing), int(ratio), float(scale), m
+        self.grid = (hc, wc)
         self.z_flat, self.g_flat = X[offset: offset + m], G[offset: offset + m]
-        self.z, self.g_z = self.z_flat.reshape((T, hc, wc)), self.g_flat.reshape((T, hc, wc))
-        self.weights = be.empty((T, h, w, 16))
+        self.z, self.g_z = self.z_flat.reshape((frames, hc, wc)), self.g_flat.reshape((frames, hc, wc))
+        self.weights = be.empty((frames, *below, 16))
+        self.work = be.empty((frames, hc, wc))
 
 
 class CoarseBasisProblem:
     """The objective of :class:`ConstrainedEnergy` over ``X = [s, z_0, z_1, ...]`` (flat,
     ``n + sum_k T Hc_k Wc_k``).
 
+    The levels nest (Szeliski's hierarchical basis): level 0's nodes are
+    interpolated onto the pixels by ``P_0``, level ``k``'s onto level ``k - 1``'s
+    nodes by ``Q_k`` (node spacing ``LEVEL_RATIO`` in those nodes, weights from
+    the albedo at them), so ``P_k = P_0 Q_1 ... Q_k`` and
+
+        S = s + P_0 (c_0 z_0 + Q_1 (c_1 z_1 + Q_2 (...))),
+        dE/dz_k = c_k Q_k^T ... Q_1^T P_0^T dE/dS.
+
+    Only ``P_0`` holds weights per pixel (16 per pixel, the bulk of the basis's
+    memory and traffic): each evaluation reads them twice, once to prolong and
+    once to restrict, whatever the number of levels.
+
     Parameters
     ----------
     problem : the :class:`ConstrainedEnergy` of the level (its ``X`` is the shading ``S``).
     spacings : node spacing (pixels) of each coarse level, finest first
-        (:func:`coarse_spacings`); level ``k`` is scaled by ``LEVEL_RATIO^-k``.
+        (:func:`coarse_spacings`: ``spacing * LEVEL_RATIO^k``); level ``k`` is scaled by ``LEVEL_RATIO^-k``.
     sigma : albedo distance (log units) at which a node's weight falls to ``1/e``.
     """
 
@@ -87,57 +122,83 @@ class CoarseBasisProblem:
         be = energy.be
         if not spacings:
             raise ValueError("CoarseBasisProblem needs at least one coarse level")
+        spacings = [int(s) for s in spacings]
+        if any(b != a * LEVEL_RATIO for a, b in zip(spacings, spacings[1:])):
+            raise ValueError(f"coarse spacings must grow by {LEVEL_RATIO} from level to level, got {spacings}")
         self.problem, self.be, self.sigma = problem, be, float(sigma)
         n = energy.n
         T, h, w = energy.shape
-        sizes = [T * math.prod(grid_shape(h, w, int(spacing))) for spacing in spacings]
+        belows, ratios = [(h, w)], [spacings[0]]
+        for _ in spacings[1:]:
+            belows.append(grid_shape(*belows[-1], ratios[-1]))
+            ratios.append(LEVEL_RATIO)
+        sizes = [T * math.prod(grid_shape(*below, ratio)) for below, ratio in zip(belows, ratios)]
         self.X = be.zeros((n + sum(sizes),))
         self.G = be.zeros((n + sum(sizes),))
         self.s, self.g_s = self.X[:n], self.G[:n]
         offsets = n + np.cumsum([0] + sizes[:-1])
-        self.fields = [CoarseField(be, energy.shape, int(spacing), float(LEVEL_RATIO) ** -k, self.X, self.G,
-                                   int(offset))
-                       for k, (spacing, offset) in enumerate(zip(spacings, offsets))]
-        self._scaled = be.empty((max(f.size for f in self.fields),))     # c_k z_k, prolonged
+        self.fields = [CoarseField(be, T, below, ratio, spacing, float(LEVEL_RATIO) ** -k, self.X, self.G, int(offset))
+                       for k, (below, ratio, spacing, offset) in enumerate(zip(belows, ratios, spacings, offsets))]
 
     def start(self) -> None:
-        """``s`` = the current shading, every ``z_k = 0``, and the weights from the albedo ``I - S``."""
+        """``s`` = the current shading, every ``z_k = 0``, and the weights from the albedo
+        ``I - S``: ``P_0``'s at the pixels, each ``Q_k``'s at level ``k - 1``'s nodes."""
         p, be = self.problem, self.be
         p.sync_albedo()
-        for f in self.fields:
-            be.coarse_basis.coarse_weights(p.energy.A, f.weights, f.spacing, self.sigma)
+        guide, albedo = p.energy.A, None
+        rows, cols = np.arange(guide.shape[1]), np.arange(guide.shape[2])       # the guide's pixels
+        for below, f in zip([None] + self.fields[:-1], self.fields):
+            if below is not None:
+                # the albedo at the level below's nodes
+                hb, wb = f.weights.shape[1:3]
+                rows = rows[node_pixels(len(rows), below.ratio, hb)]
+                cols = cols[node_pixels(len(cols), below.ratio, wb)]
+                albedo = be.numpy(p.energy.A) if albedo is None else albedo
+                guide = be.asarray(np.ascontiguousarray(albedo[:, rows][:, :, cols]))
+            be.coarse_basis.coarse_weights(guide, f.weights, f.ratio, self.sigma)
             be.zero(f.z_flat)
         be.vecops.copy(p.X, self.s)
 
     def finish(self) -> None:
-        """Leave ``S = s + sum_k c_k P_k z_k`` of the current ``X`` in the energy's shading
-        (and ``A = I - S``)."""
+        """Leave ``S = s + P_0 (c_0 z_0 + Q_1 (c_1 z_1 + ...))`` of the current ``X`` in the
+        energy's shading (and ``A = I - S``)."""
         self._set_shading()
         self.problem.sync_albedo()
 
     def _set_shading(self) -> None:
         p, be = self.problem, self.be
         be.vecops.copy(self.s, p.X)
-        for f in self.fields:
-            z = f.z
-            if f.scale != 1.0:
-                scaled = self._scaled[: f.size]
-                be.vecops.lincomb(scaled, f.scale, f.z_flat, 0.0, f.z_flat)
-                z = scaled.reshape(f.z.shape)
-            be.coarse_basis.prolong_add(z, f.weights, p.energy.S, f.spacing)
+        finest = self.fields[0]
+        if len(self.fields) == 1 and finest.scale == 1.0:
+            be.coarse_basis.prolong_add(finest.z, finest.weights, p.energy.S, finest.spacing)
+            return
+        # from the coarsest level down: work_k = c_k z_k + Q_{k+1} work_{k+1}
+        above = None
+        for f in reversed(self.fields):
+            be.vecops.lincomb(f.work.reshape((f.size,)), f.scale, f.z_flat, 0.0, f.z_flat)
+            if above is not None:
+                be.coarse_basis.prolong_add(above.work, above.weights, f.work, above.ratio)
+            above = f
+        be.coarse_basis.prolong_add(finest.work, finest.weights, p.energy.S, finest.spacing)
 
     def __call__(self, X, G) -> float:
-        """Energy at ``S = s + sum_k c_k P_k z_k``; writes ``dE/ds`` and
-        ``dE/dz_k = c_k P_k^T dE/dS`` into ``G``."""
+        """Energy at ``S = s + P_0 (c_0 z_0 + Q_1 (c_1 z_1 + ...))``; writes ``dE/ds`` and
+        ``dE/dz_k = c_k Q_k^T ... Q_1^T P_0^T dE/dS`` into ``G``."""
         if X is not self.X or G is not self.G:
             raise ValueError("CoarseBasisProblem evaluates its own buffers X and G only")
         p, be = self.problem, self.be
         self._set_shading()
         value = p(p.X, p.G)
         be.vecops.copy(p.G, self.g_s)
+        values = p.energy.gS
         for f in self.fields:
+            # the unscaled sums: P_0^T dE/dS, then each Q_k^T of the level below's
             be.zero(f.g_flat)
-            be.coarse_basis.restrict_add(p.energy.gS, f.weights, f.g_z, f.spacing)
+            be.coarse_basis.restrict_add(values, f.weights, f.g_z, f.ratio)
+            if f is not self.fields[-1]:
+                be.vecops.copy(f.g_flat, f.work.reshape((f.size,)))
+                values = f.work
+        for f in self.fields:
             if f.scale != 1.0:
                 be.vecops.scale(f.scale, f.g_flat)
         return value

@@ -4,7 +4,7 @@ At each pyramid level, starting from the up-sampled coarser solution, the
 solver alternates (a) L-BFGS over all ``S_t`` of the window at once, with
 ``A_t = I_t - S_t`` (Eq. 3 as a constraint, :class:`ConstrainedEnergy`) and the
 coupling variable ``S~`` fixed (on levels large enough, over
-``S = s + sum_k c_k P_k z_k`` with edge-aware coarse fields ``z_k``,
+``S = s + P_0 (c_0 z_0 + Q_1 (c_1 z_1 + ...))`` with nested edge-aware coarse fields ``z_k``,
 :class:`CoarseBasisProblem`), and (b)
 the ``S~`` weighted-median update (Eq. 13).  The coarsest level starts from ``S`` = heavily blurred log
 luminance.
@@ -177,7 +177,7 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
             be.vecops.copy(be.asarray(S_now.reshape(-1)), energy.S.reshape((energy.n,)))
         t = time.perf_counter()
         problem = ConstrainedEnergy(energy)           # sets A = I - S at each evaluation
-        target = problem                  # what L-BFGS minimises: S, or S = s + sum_k c_k P_k z_k
+        target = problem                  # what L-BFGS minimises: S, or S over the coarse basis
         spacings = coarse_spacings(shape, params.coarse_basis_spacing, params.coarse_basis_levels)
         if spacings:
             target = CoarseBasisProblem(problem, spacings, params.coarse_basis_sigma)
@@ -197,7 +197,7 @@ def solve_window(be, frames_linear, flow, occlusion, boundary, params: Params, p
                 target.start()                        # s = S, z_k = 0, weights from the albedo
             lbfgs.minimize(target, target.X, target.G, iterations, on_iteration=record)
             if target is not problem:
-                target.finish()                       # S = s + sum_k c_k P_k z_k
+                target.finish()                       # S = s + P_0 (c_0 z_0 + Q_1 (...))
             reasons.append(lbfgs.stop_reason)
         problem.sync_albedo()
         log.levels.append({"window": window_index, "level": level, "shape": tuple(shape),
