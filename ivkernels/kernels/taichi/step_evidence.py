@@ -499,6 +499,19 @@ def moves(flow: nd4, y, x, static_flow):
 
 
 @ti.func
+def still_pair(flow: nd4, here, y, x, k, height, width, static_flow):
+    """1 when the pair of ``(y, x)`` and its right (k = 0) or lower (k = 1) neighbour lies in the
+    image and holds still (see the Warp module)."""
+    yy = y + k
+    xx = x + 1 - k
+    out = 0
+    if here == 0 and yy < height and xx < width:
+        if moves(flow, yy, xx, static_flow) == 0:
+            out = 1
+    return out
+
+
+@ti.func
 def median_of(values: nd4, y, x, k, centre, absolute):
     """The median over ``t`` of ``values[t, y, x, k] - centre`` (of its magnitude where
     ``absolute`` is 1), by ranks (see the Warp module)."""
@@ -543,12 +556,9 @@ def stable_pairs_rows(steps: nd4, flow: nd4, pairs: nd3, tau: ti.f32, stability:
         for x in range(width):
             here = moves(flow, y, x, static_flow)
             for k in ti.static(range(2)):
-                yy = y + k
-                xx = x + 1 - k
                 ev = 0.0
-                if yy < height and xx < width:
-                    if here == 0 and largest_step(steps, y, x, k, 0.0) >= least_step \
-                            and moves(flow, yy, xx, static_flow) == 0:
+                if still_pair(flow, here, y, x, k, height, width, static_flow) == 1:
+                    if largest_step(steps, y, x, k, 0.0) >= least_step:
                         m = median_of(steps, y, x, k, 0.0, 0)
                         if ti.abs(m) < MAX_STABLE_STEP:
                             q = m / tau
@@ -569,13 +579,7 @@ def light_edge_pairs(steps: nd4, flow: nd4, tau: ti.f32, spread: ti.f32, static_
         for x in range(width):
             here = moves(flow, y, x, static_flow)
             for k in ti.static(range(2)):
-                yy = y + k
-                xx = x + 1 - k
-                still = 0
-                if here == 0 and yy < height and xx < width:
-                    if moves(flow, yy, xx, static_flow) == 0:
-                        still = 1
-                if still == 1:
+                if still_pair(flow, here, y, x, k, height, width, static_flow) == 1:
                     m = median_of(steps, y, x, k, 0.0, 0)
                     w = tau
                     if spread > 0.0:

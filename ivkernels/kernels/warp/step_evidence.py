@@ -678,6 +678,20 @@ def moves(flow: wp.array4d(dtype=float), y: int, x: int, static_flow: float):
 
 
 @wp.func
+def still_pair(flow: wp.array4d(dtype=float), here: int, y: int, x: int, k: int, height: int, width: int,
+               static_flow: float):
+    """1 when the pair of ``(y, x)`` with its right (k = 0) or lower (k = 1) neighbour lies in the
+    image and holds still: ``here`` (:func:`moves` of ``(y, x)``) is 0 and so is the neighbour's."""
+    yy = y + k
+    xx = x + 1 - k
+    out = int(0)
+    if here == 0 and yy < height and xx < width:
+        if moves(flow, yy, xx, static_flow) == 0:
+            out = 1
+    return out
+
+
+@wp.func
 def median_of(values: wp.array4d(dtype=float), y: int, x: int, k: int, centre: float, absolute: int):
     """The median over ``t`` of ``values[t, y, x, k] - centre`` (of its magnitude where
     ``absolute`` is 1): the mean of the order statistics ``(T - 1) // 2`` and ``T // 2``, found by
@@ -726,12 +740,9 @@ def stable_pairs_pixels(row_begin: int, tiles: int, steps: wp.array4d(dtype=floa
     for x in range(x_begin, x_end):
         here = moves(flow, y, x, static_flow)
         for k in range(2):
-            yy = y + k
-            xx = x + 1 - k
             ev = float(0.0)
-            if yy < height and xx < width:
-                if here == 0 and largest_step(steps, y, x, k, 0.0) >= least_step \
-                        and moves(flow, yy, xx, static_flow) == 0:
+            if still_pair(flow, here, y, x, k, height, width, static_flow) == 1:
+                if largest_step(steps, y, x, k, 0.0) >= least_step:
                     m = median_of(steps, y, x, k, 0.0, 0)
                     if wp.abs(m) < STABLE_STEP_MAX:
                         q = m / tau
@@ -756,13 +767,7 @@ def light_edge_pairs(row_begin: int, tiles: int, steps: wp.array4d(dtype=float),
     for x in range(x_begin, x_end):
         here = moves(flow, y, x, static_flow)
         for k in range(2):
-            yy = y + k
-            xx = x + 1 - k
-            still = int(0)
-            if here == 0 and yy < height and xx < width:
-                if moves(flow, yy, xx, static_flow) == 0:
-                    still = 1
-            if still == 1:
+            if still_pair(flow, here, y, x, k, height, width, static_flow) == 1:
                 m = median_of(steps, y, x, k, 0.0, 0)
                 w = tau
                 if spread > 0.0:
