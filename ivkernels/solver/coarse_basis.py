@@ -23,8 +23,8 @@ nodes.  Level ``k`` enters scaled by ``c_k = LEVEL_RATIO^-k``:
     S = s + P_0 (c_0 z_0 + Q_1 (c_1 z_1 + Q_2 (c_2 z_2 + ...))),
     dE/ds = dE/dS,    dE/dz_k = c_k Q_k^T ... Q_1^T P_0^T dE/dS.
 
-Only ``P_0`` holds weights per pixel (16 floats a pixel, four times the
-shading): an evaluation reads them once to prolong and once to restrict,
+Only ``P_0`` holds weights per pixel (16 floats a pixel, sixteen times
+the shading): an evaluation reads them once to prolong and once to restrict,
 however many levels there are.  Each level with its own per-pixel weights,
 as before, read them once more per level and evaluation (8 frames at
 640x480, two levels: 9.8 s of the 45 s of ``decompose()``, perf/RESULTS.md,
@@ -86,7 +86,6 @@ class CoarseField:
         hc, wc = grid_shape(*below, ratio)
         m = frames * hc * wc
         self.spacing, self.ratio, self.scale, self.size = int(spacing), int(ratio), float(scale), m
-        self.grid = (hc, wc)
         self.z_flat, self.g_flat = X[offset: offset + m], G[offset: offset + m]
         self.z, self.g_z = self.z_flat.reshape((frames, hc, wc)), self.g_flat.reshape((frames, hc, wc))
         self.weights = be.empty((frames, *below, 16))
