@@ -79,7 +79,7 @@ class CoarseField:
     interpolation ``weights`` onto the level below (T, Hb, Wb, 16): the pixels for
     level 0, level ``k - 1``'s nodes for ``k >= 1``, and ``ratio``, its node spacing in
     the units of the level below (``spacing`` for level 0, ``LEVEL_RATIO`` above), and a
-    buffer ``work`` (T, Hc, Wc) for the prolonged and the restricted sums."""
+    buffer ``work`` (T, Hc, Wc) for the prolonged sums."""
 
     def __init__(self, be, frames: int, below: tuple[int, int], ratio: int, spacing: int, scale: float, X, G,
                  offset: int):
@@ -191,12 +191,10 @@ class CoarseBasisProblem:
         be.vecops.copy(p.G, self.g_s)
         values = p.energy.gS
         for f in self.fields:
-            # the unscaled sums: P_0^T dE/dS, then each Q_k^T of the level below's
+            # the unscaled sums: P_0^T dE/dS, then each Q_k^T of the level below's (scaled after)
             be.zero(f.g_flat)
             be.coarse_basis.restrict_add(values, f.weights, f.g_z, f.ratio)
-            if f is not self.fields[-1]:
-                be.vecops.copy(f.g_flat, f.work.reshape((f.size,)))
-                values = f.work
+            values = f.g_z
         for f in self.fields:
             if f.scale != 1.0:
                 be.vecops.scale(f.scale, f.g_flat)

@@ -42,7 +42,7 @@ from ivkernels.kernels.reference.step_evidence import (FAMILY, MAX_STABLE_STEP, 
                                                        least_stable_step, level_axis, level_edges, step_edges)
 from ivkernels.kernels.warp._checks import FRONT
 from ivkernels.kernels.warp.maps import log_change_at
-from ivkernels.kernels.warp.row_tiles import row_span
+from ivkernels.kernels.warp.row_tiles import frame_row, row_span
 
 host = implements(FAMILY, FRONT)
 
@@ -787,9 +787,7 @@ def light_edge_pixels(row_begin: int, tiles: int, pairs: wp.array4d(dtype=float)
     upper pairs' factors of :func:`light_edge_pairs` (a pair with a moving pixel holds 1); one
     row ``t * H + y`` per thread (``tiles`` per row on a GPU)."""
     r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, factor.shape[2])
-    height = factor.shape[1]
-    t = r // height
-    y = r - t * height
+    t, y = frame_row(r, factor.shape[1])
     for x in range(x_begin, x_end):
         f = wp.min(float(1.0), wp.min(pairs[t, y, x, 0], pairs[t, y, x, 1]))
         if x >= 1:
