@@ -241,13 +241,33 @@ class _Decomposer:
         solve, which works at the guide's size: it is estimated on the
         frames resized to that size, and its up-sampled vectors are returned.
         """
-        be, (H, W) = self.be, frames.shape[1:3]
+        H, W = frames.shape[1:3]
         shape = guide_shape(H, W, self.params) if self.joint and self.params.first_flow_at_guide_size \
             else (H, W)
-        if shape != (H, W):
+        return self._flow_at(frames, shape)
+
+    def _refine_shape(self, H: int, W: int) -> tuple[int, int]:
+        """The size the flow passes after the first run at for frames of (H, W): the
+        guide's when its shorter side is at least ``Params.flow_refine_guide_min_side``
+        (> 0), else (H, W)."""
+        least = int(self.params.flow_refine_guide_min_side)
+        shape = guide_shape(H, W, self.params)
+        return shape if least > 0 and min(shape) >= least else (H, W)
+
+    def _flow_at(self, frames: np.ndarray, shape: tuple[int, int], init: np.ndarray | None = None,
+                 **options) -> np.ndarray:
+        """Flow of ``frames`` (T, H, W, 3) estimated at ``shape`` (h, w): the frames (and
+        ``init``, (T-1, H, W, 2), when given) resized to it, the vectors up-sampled back
+        to (T-1, H, W, 2); ``options`` go to :func:`estimate_flow`."""
+        be, (H, W) = self.be, frames.shape[1:3]
+        if tuple(shape) != (H, W):
             frames = np.array(be.numpy(downsample(be, be.asarray(frames), shape)), copy=True)
-        flow = estimate_flow(frames, method=self.flow_method, backend=be.name, device=be.device)
-        if shape != (H, W):
+            if init is not None:
+                init = np.array(be.numpy(resize_flow(be, be.asarray(init), shape)), copy=True)
+        if init is not None:
+            options["init"] = init
+        flow = estimate_flow(frames, method=self.flow_method, backend=be.name, device=be.device, **options)
+        if tuple(shape) != (H, W):
             flow = np.array(be.numpy(resize_flow(be, be.asarray(flow), (H, W))), copy=True)
         return flow
 
@@ -263,7 +283,8 @@ class _Decomposer:
         solve (:func:`ivkernels.solver.guide.guide_solve`), which obeys
         brightness constancy where the input does not (paper Sec. 5.1, 6);
         Classic+NL starts from the previous pass's flow, with
-        ``Params.flow_refine_warps`` warping steps per level.  The first
+        ``Params.flow_refine_warps`` warping steps per level, at the guide's
+        size from ``Params.flow_refine_guide_min_side`` up (:meth:`_refine_shape`).  The first
         ``shared`` pairs are the previous window's last flow (the pairs of the
         frames both windows hold): kept, not re-estimated.  Returns the last
         flow and the last guide's log shading (at the guide's size).
@@ -275,8 +296,7 @@ class _Decomposer:
                                                 log=self.log)
             t0 = time.perf_counter()
             extra = {"init": flow_np[shared:], "warps": int(self.params.flow_refine_warps)} if classic else {}
-            new = estimate_flow(albedo[shared:], method=self.flow_method, backend=self.be.name,
-                                device=self.be.device, **extra)
+            new = self._flow_at(albedo[shared:], self._refine_shape(*albedo.shape[1:3]), **extra)
             flow_np = np.concatenate([flow_np[:shared], new]) if shared else new
             self.log.add_time("flow", time.perf_counter() - t0)
         return flow_np, guide_shading

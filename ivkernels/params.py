@@ -391,6 +391,15 @@ class Params:
     flow_refine_warps
         Warping steps per pyramid level of the Classic+NL passes after the
         first, which start from the previous pass's flow.
+    flow_refine_guide_min_side
+        The passes after the first estimate the flow at the guide's size
+        (``flow_guide_scale``; the albedo and the starting flow resized to
+        it, the vectors up-sampled) when the guide keeps at least this many
+        pixels on its shorter side, and at full size otherwise; 0: always at
+        full size.  At 240 a 640x480 video refines at 320x240, in about a
+        third of the time, while a 320x240 video, whose 160x120 guide is too
+        coarse for a fast orbit's flow, refines at full size
+        (perf/RESULTS.md, "The second flow pass at the guide's size").
 
     Long videos
     -----------
@@ -468,6 +477,7 @@ class Params:
     guide_lbfgs_iterations: int = 15
     start_from_guide: bool = True
     first_flow_at_guide_size: bool = True
+    flow_refine_guide_min_side: int = 240
     flow_refine_warps: int = 2
     # long videos
     window: int = 8
@@ -529,6 +539,8 @@ _RULES = {
     "flow_guide_scale": Range(float, 0.0, 1.0, low_open=True,
                               why="the size of the guide solve relative to the frames"),
     "flow_refine_warps": Range(int, 1, why="warping steps per pyramid level"),
+    "flow_refine_guide_min_side": Range(int, 0, why="the guide's shorter side from which the later flow passes "
+                                                   "run at its size; 0: always at full size"),
     "guide_lbfgs_iterations": Range(int, 1),
     "window": Range(int, 2, why="frames per solved window"),
     "overlap": Range(int, 0),

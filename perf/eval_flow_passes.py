@@ -43,7 +43,8 @@ def _with_refine(estimate_flow, refine: dict):
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--kinds", nargs="+", default=list(synthetic.KINDS))
+    ap.add_argument("--kinds", nargs="+", default=list(synthetic.KINDS), choices=list(synthetic.SCENE_KINDS),
+                    metavar="KIND", help="names of synthetic.SCENE_KINDS (default: the four classic kinds)")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--frames", type=int, default=8)
     ap.add_argument("--size", type=int, nargs=2, default=(240, 320), metavar=("H", "W"))
@@ -67,10 +68,10 @@ def main(argv=None) -> int:
     print(f"{args.frames} frames at {args.size[1]}x{args.size[0]}, seed {args.seed}, "
           f"guide scale {params.flow_guide_scale}, Params changes: {fields or 'none'}, "
           f"warm-started flow changes: {refine or 'none'}")
-    print(f"{'kind':20s} {'passes':>6s} {'EPE':>6s} {'EPE vis':>7s} {'occ IoU':>7s} {'LMSE A':>7s} "
+    print(f"{'kind':28s} {'passes':>6s} {'EPE':>6s} {'EPE vis':>7s} {'occ IoU':>7s} {'LMSE A':>7s} "
           f"{'LMSE S':>7s} {'LMSE':>7s} {'flow s':>6s} {'guide s':>7s} {'solve s':>7s} {'CPU s':>6s}")
     for kind in args.kinds:
-        seq = synthetic.render_sequence(kind, n_frames=args.frames, size=tuple(args.size), seed=args.seed)
+        seq = synthetic.render_kind(kind, n_frames=args.frames, size=tuple(args.size), seed=args.seed)
         for passes in args.passes:
             cpu = time.process_time()
             video = iv.decompose(seq.frames, params=params, flow_passes=passes)
@@ -78,7 +79,7 @@ def main(argv=None) -> int:
             s = video.diagnostics["seconds"]
             lmse = metrics.intrinsic_lmse(video.albedo, video.shading, seq.albedo, seq.shading)
             guide = f"{s['guide']:7.1f}" if "guide" in s else f"{'-':>7s}"      # "-": no guide solve ran
-            print(f"{kind:20s} {passes:6d} {metrics.endpoint_error(video.flow, seq.flow):6.3f} "
+            print(f"{kind:28s} {passes:6d} {metrics.endpoint_error(video.flow, seq.flow):6.3f} "
                   f"{metrics.endpoint_error(video.flow, seq.flow, mask=seq.visibility > 0.5):7.3f} "
                   f"{occlusion_iou(video.occlusion, seq.visibility):7.3f} {lmse['albedo']:7.4f} "
                   f"{lmse['shading']:7.4f} {lmse['mean']:7.4f} {s.get('flow', 0.0):6.1f} "

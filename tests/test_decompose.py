@@ -119,6 +119,12 @@ def test_flow_passes_reestimate_the_flow_on_the_guide_albedo(seq, monkeypatch):
     full = iv.decompose(seq.frames, flow="dis", params=dataclasses.replace(FAST, first_flow_at_guide_size=False),
                         flow_passes=2)
     assert [c[3] for c in calls] == [seq.frames.shape[1:3]] * 2 and full.flow.shape == seq.flow.shape
+    # the later passes at the guide's size once its shorter side (20) reaches flow_refine_guide_min_side
+    for least, later in ((20, (20, 28)), (21, seq.frames.shape[1:3]), (0, seq.frames.shape[1:3])):
+        calls.clear()
+        small = iv.decompose(seq.frames, flow="dis", params=dataclasses.replace(FAST, flow_refine_guide_min_side=least),
+                             flow_passes=3)
+        assert [c[3] for c in calls] == [(20, 28), later, later] and small.flow.shape == seq.flow.shape
     assert two.diagnostics["flow_method"] == "dis, 3 passes with the intrinsic video"
     assert "guide" in two.diagnostics["seconds"] and "guide" not in one.diagnostics["seconds"]
     assert two.flow.shape == seq.flow.shape and not np.array_equal(two.flow, one.flow)
@@ -146,8 +152,14 @@ def test_classic_flow_passes_refine_from_the_previous_flow_with_fewer_warps(seq,
     iv.decompose(seq.frames, params=params, flow_passes=2)
     assert len(calls) == 2 and calls[0] == {}                  # pass 1: the method's own schedule
     assert calls[1]["warps"] == 1 and calls[1]["init"].shape == seq.flow.shape
+    calls.clear()
+    video = iv.decompose(seq.frames, params=dataclasses.replace(params, flow_refine_guide_min_side=1), flow_passes=2)
+    # at the guide's size: the starting flow resized with the albedo, the result back at full size
+    assert calls[1]["init"].shape == (seq.flow.shape[0], 20, 28, 2) and video.flow.shape == seq.flow.shape
     with pytest.raises(ValueError, match="flow_refine_warps"):
         Params(flow_refine_warps=0)
+    with pytest.raises(ValueError, match="flow_refine_guide_min_side"):
+        Params(flow_refine_guide_min_side=-1)
 
 
 def test_iteration_budget_per_level():

@@ -93,6 +93,7 @@ MOVES = {
     "start_from_guide": (False, {}, "truth"),
     "first_flow_at_guide_size": (False, {}, "classic_nl_fast"),
     "flow_refine_warps": (1, {}, "classic_nl_fast"),
+    "flow_refine_guide_min_side": (1, {}, "classic_nl_fast"),
     "window": (4, {}, "truth"),
     "overlap": (1, {}, "truth"),
 }
