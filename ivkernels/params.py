@@ -396,8 +396,8 @@ class Params:
         (``flow_guide_scale``; the albedo and the starting flow resized to
         it, the vectors up-sampled) when the guide keeps at least this many
         pixels on its shorter side, and at full size otherwise; 0: always at
-        full size.  At 240 a 640x480 video refines at 320x240, in about a
-        third of the time, while a 320x240 video, whose 160x120 guide is too
+        full size.  At 240 a 640x480 video refines at 320x240, at about a
+        third of the cost, while a 320x240 video, whose 160x120 guide is too
         coarse for a fast orbit's flow, refines at full size
         (perf/RESULTS.md, "The second flow pass at the guide's size").
 
