@@ -211,8 +211,31 @@ def test_workspace_reused_across_shapes_gives_the_same_result(kernel_backend, rn
             np.testing.assert_array_equal(wmedian_flow(kernel_backend, *f, radius=3, workspace=ws), want_f)
     m = kernel_backend.median
     shapes = [m.shading_scratch_shape((2, 9, 11), 2), m.shading_scratch_shape((1, 7, 13), 2),
-              m.flow_scratch_shape((2, 9, 11, 2), 3), m.flow_scratch_shape((1, 7, 13, 2), 3)]
-    assert len(ws) == 4 and ws.nbytes == 4 * sum(int(np.prod(shape)) for shape in shapes)
+              m.flow_scratch_shape((2, 9, 11, 2), 3), m.flow_scratch_shape((1, 7, 13, 2), 3),
+              (1, 9, 11, 4), (1, 7, 13, 4)]          # the surface centres found without the caller's
+    assert len(ws) == 6 and ws.nbytes == 4 * sum(int(np.prod(shape)) for shape in shapes)
+
+
+def test_shading_median_given_its_centres_is_bit_for_bit_the_same(kernel_backend, rng):
+    """The solver finds the centres once per flow and passes them in: same bits as finding them inside."""
+    be = kernel_backend
+    kinds = set()
+    for t, h, w, radius, lam in [(3, 17, 23, 3, 0.001), (2, 12, 9, 7, 0.0), (1, 5, 6, 2, 2.0)]:
+        S, flow, w_bnd = shading_inputs(rng, t, h, w, max(t - 1, 1))
+        want = wmedian_shading(be, S, flow, w_bnd, radius=radius, lam=lam)
+        centres = be.empty((*flow.shape[:3], 4))
+        be.median.surface_centres(be.asarray(flow), be.asarray(w_bnd), centres, radius=radius)
+        c = be.numpy(centres)
+        assert (c[w_bnd < 0.5] == 0).all()                           # not a boundary pixel: no split
+        split = (c[..., :2] != c[..., 2:]).any(-1)
+        kinds |= {"split"} if split.any() else set()
+        kinds |= {"one surface"} if (~split & (w_bnd >= 0.5)).any() else set()
+        got = wmedian_shading(be, S, flow, w_bnd, radius=radius, lam=lam, centres=centres)
+        np.testing.assert_array_equal(got, want)
+        # wrong centres change the answer: they are read, not found again
+        got_wrong = wmedian_shading(be, S, flow, w_bnd, radius=radius, lam=lam, centres=be.zeros(c.shape))
+        assert not np.array_equal(got_wrong, want)
+    assert kinds == {"split", "one surface"}                        # both kinds of window occur
 
 
 def test_flow_only_centre_weight_keeps_flow(kernel_backend, rng):

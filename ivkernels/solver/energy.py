@@ -87,6 +87,7 @@ class WindowEnergy:
         self.A, self.S = self.X[: 3 * n].reshape((T, h, w, 3)), self.X[3 * n:].reshape((T, h, w))
         self.gA, self.gS = self.G[: 3 * n].reshape((T, h, w, 3)), self.G[3 * n:].reshape((T, h, w))
         self.S_tilde = be.empty((T, h, w))
+        self._surface_centres = None        # (T-1, h, w, 4): the S~ median's flow clusters, found once
         self.gate = self._local_shading_gate()
         self.stable_pairs = self._stable_pairs()
         if self.stable_pairs is not None and self.gate is None:
@@ -265,7 +266,11 @@ class WindowEnergy:
 
     # --------------------------------------------------------------- S~ step
     def update_coupling(self) -> None:
-        """S~ <- 15x15 weighted median of S near motion boundaries (Eq. 9-10, 13)."""
+        """S~ <- 15x15 weighted median of S near motion boundaries (Eq. 9-10, 13).
+
+        The median's split of each window into surfaces (``median.surface_centres``)
+        depends on the flow alone, so it is found at the first update and kept.
+        """
         be, p = self.be, self.params
         if not self.temporal:
             be.vecops.copy(self.S.reshape((self.n,)), self.S_tilde.reshape((self.n,)))
@@ -273,9 +278,14 @@ class WindowEnergy:
         radius = max(2, int(round(p.nonlocal_radius * self.level_scale)))
         sigma_s = max(1.0, p.sigma_s * self.level_scale)
         ratio = p.lam_coupling / p.lam_shading_nonlocal if p.lam_shading_nonlocal > 0 else 0.0
+        if self._surface_centres is None:
+            # surf of Eq. 10 depends on the flow alone: clustered once, read at every update
+            self._surface_centres = be.empty((*self.flow.shape[:3], 4))
+            be.median.surface_centres(self.flow, self.boundary, self._surface_centres, radius=radius,
+                                      workspace=self.workspace)
         be.median.weighted_median_shading(self.S, self.flow, self.boundary, self.S_tilde,
                                           radius=radius, sigma_s=sigma_s, lam=ratio,
-                                          workspace=self.workspace)
+                                          centres=self._surface_centres, workspace=self.workspace)
 
 
 class ConstrainedEnergy:

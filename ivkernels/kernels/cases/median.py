@@ -1,6 +1,8 @@
 """Cases of :mod:`ivkernels.kernels.warp.median` (5x5 median, weighted medians of S~ and of the flow)."""
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from ivkernels.kernels.cases import EXACT, Case, Tol
@@ -35,9 +37,35 @@ def _shading(radius, lam):
 
     return Case("median", "weighted_median_shading", make, ("S", "flow", "w_bnd", "out"), ("out",),
                 lambda v: {"out": ref.weighted_median_shading(v["S"], v["flow"], v["w_bnd"], radius=v["radius"],
-                                                              sigma_s=v["sigma_s"], lam=v["lam"])},
+                                                              sigma_s=v["sigma_s"], lam=v["lam"],
+                                                              centres=v.get("centres"))},
                 variant=f"radius={radius},lam={lam:g}", keywords=("radius", "sigma_s", "lam"), tol=Tol(0.0, 1e-5),
                 no_alias=(("S", "out"),))
+
+
+def _centres(radius):
+    def make(rng, T, H, W):
+        P = pairs(T)
+        return {"flow": two_region_flow(rng, P, H, W)[0], "w_bnd": mask(rng, (P, H, W), 0.4),
+                "centres": nans((P, H, W, 4)), "radius": radius}
+
+    return Case("median", "surface_centres", make, ("flow", "w_bnd", "centres"), ("centres",),
+                lambda v: {"centres": ref.surface_centres(v["flow"], v["w_bnd"], radius=v["radius"])},
+                variant=f"radius={radius}", keywords=("radius",), tol=Tol(0.0, 1e-5))
+
+
+def _shading_given_centres(radius, lam):
+    """The S~ update given the centres (as the solver passes them): the flow of
+    :func:`two_region_flow` and its centres by the reference."""
+    plain = _shading(radius, lam)
+
+    def make(rng, T, H, W):
+        v = plain.make(rng, T, H, W)
+        v["centres"] = ref.surface_centres(v["flow"], v["w_bnd"], radius=radius).astype(F32)
+        return v
+
+    return dataclasses.replace(plain, make=make, variant=f"{plain.variant},centres",
+                               keywords=(*plain.keywords, "centres"))
 
 
 def _flow(radius):
@@ -60,5 +88,6 @@ CASES = (
     Case("median", "median5x5", _median5x5, ("src", "out"), ("out",), lambda v: {"out": ref.median5x5(v["src"])},
          tol=EXACT, no_alias=(("src", "out"),)),
     _shading(3, 0.0), _shading(3, 0.001), _shading(7, 0.001), _shading(7, 2.0),
+    _shading_given_centres(3, 0.001), _centres(2), _centres(7),
     _flow(2), _flow(7),
 )

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.kernels.contract import Family, Int, NonNegative, Out, Positive, Rule, Workspace
+from ivkernels.kernels.contract import Array, Family, Int, NonNegative, Out, Positive, Rule, Workspace
 from ivkernels.kernels.host import KMEANS_ITERATIONS, MIN_SEPARATION
 
 FAMILY = Family("median", "The flow's 5x5 median and the weighted medians (Eq. 10, 13).")
@@ -25,10 +25,15 @@ FAMILY.declare("flow_scratch_shape(flow_shape, radius)",
 FAMILY.declare("median5x5(src, out)", "5x5 median of every channel, replicate border.",
                src="T H W C", out=Out("T H W C"),
                separate=(("out", "src", "the median reads a window of src around each pixel"),))
-FAMILY.declare("weighted_median_shading(S, flow, w_bnd, out, radius=7, sigma_s=7.0, lam=0.001, *, workspace=None)",
+FAMILY.declare("surface_centres(flow, w_bnd, centres, radius=7, *, workspace=None)",
+               "Eq. 10's surf: the 2-means centres of each boundary pixel's window of flow vectors.",
+               flow="T H W 2", w_bnd="T H W", centres=Out("T H W 4"), radius=Int(0), workspace=Workspace())
+FAMILY.declare("weighted_median_shading(S, flow, w_bnd, out, radius=7, sigma_s=7.0, lam=0.001, *, centres=None, "
+               "workspace=None)",
                "The S~ update of Eq. 13 (T' <= T flow frames).",
                S="T H W", flow="T' H W 2", w_bnd="T' H W", out=Out("T H W"), radius=Int(0), sigma_s=Positive,
-               lam=NonNegative, workspace=Workspace(), rules=(Rule(_fewer_flow_frames, after="flow"),),
+               lam=NonNegative, centres=Array("T' H W 4", optional=True), workspace=Workspace(),
+               rules=(Rule(_fewer_flow_frames, after="flow"),),
                separate=(("out", "S", "the median reads a window of S around each pixel"),))
 FAMILY.declare("weighted_median_flow(flow, lab, occ, mask, out, radius=7, sigma_x=7.0, sigma_i=7.0, *, "
                "workspace=None)", "Classic+NL's weighted flow median.",
@@ -69,30 +74,16 @@ def l1_quadratic_minimiser(values, weights, s: float, lam: float) -> float:
     return float(v[np.searchsorted(cum[1:], 0.5 * total, side="left")])
 
 
-def flow_two_means(flow_t, y: int, x: int, radius: int,
+def window_centres(flow_t, y: int, x: int, radius: int,
                    iterations: int = KMEANS_ITERATIONS, min_separation: float = MIN_SEPARATION):
-    """``surf(x, .)`` of Eq. 10 over the window of ``(y, x)`` in one flow field (H, W, 2).
-
-    2-means of the window's flow vectors (pixels inside the image): centres
-    start at ``flow(x)`` and at the window vector farthest from it (the first
-    one in row-major order on ties); Lloyd iterations (a vector goes to
-    centre 1 only if strictly nearer to it) until the centres stop moving or
-    ``iterations`` passes; an emptied cluster keeps its centre.  Returns a
-    (2r+1, 2r+1) float array: 1 where the window pixel is inside the image and
-    in the cluster of ``flow(x)`` (or everywhere inside if the final centres
-    are closer than ``min_separation`` pixels), 0 elsewhere.
-    """
+    """The 2-means of the flow vectors in the window of ``(y, x)`` (pixels inside the image) of one
+    flow field (H, W, 2): centres start at ``flow(x)`` and at the window vector farthest from it
+    (the first one in row-major order on ties); Lloyd iterations (a vector goes to centre 1 only
+    if strictly nearer to it) until the centres stop moving or ``iterations`` passes; an emptied
+    cluster keeps its centre.  Returns the final centres ``(c0, c1)`` (2-vectors), or ``None``
+    if they are closer than ``min_separation`` pixels (the window holds one surface)."""
     flow_t = np.asarray(flow_t, np.float64)
-    h, w, _ = flow_t.shape
-    n = 2 * radius + 1
-    inside = np.zeros((n, n), bool)
-    vec = np.zeros((n, n, 2))
-    for j in range(n):
-        for i in range(n):
-            yy, xx = y + j - radius, x + i - radius
-            if 0 <= yy < h and 0 <= xx < w:
-                inside[j, i] = True
-                vec[j, i] = flow_t[yy, xx]
+    vec, inside = _flow_window(flow_t, y, x, radius)
     c0 = flow_t[y, x].copy()
     d = ((vec - c0) ** 2).sum(-1)
     d[~inside] = -1.0
@@ -107,17 +98,70 @@ def flow_two_means(flow_t, y: int, x: int, radius: int,
         if not moved:
             break
     if ((c0 - c1) ** 2).sum() < min_separation**2:
+        return None
+    return c0, c1
+
+
+def _flow_window(flow_t, y: int, x: int, radius: int):
+    """The (2r+1, 2r+1, 2) window of flow vectors around (y, x) and where it lies inside the image."""
+    h, w, _ = flow_t.shape
+    n = 2 * radius + 1
+    inside = np.zeros((n, n), bool)
+    vec = np.zeros((n, n, 2))
+    for j in range(n):
+        for i in range(n):
+            yy, xx = y + j - radius, x + i - radius
+            if 0 <= yy < h and 0 <= xx < w:
+                inside[j, i] = True
+                vec[j, i] = flow_t[yy, xx]
+    return vec, inside
+
+
+def surf_from_centres(flow_t, y: int, x: int, radius: int, centres):
+    """``surf(x, .)`` of Eq. 10 over the window of ``(y, x)``: a (2r+1, 2r+1) float array, 1 where
+    the window pixel is inside the image and, if ``centres = (c0, c1)`` is not ``None``, in the
+    cluster of ``flow(x)`` (strictly nearer to ``c1`` or not); 0 elsewhere."""
+    flow_t = np.asarray(flow_t, np.float64)
+    vec, inside = _flow_window(flow_t, y, x, radius)
+    if centres is None:
         return inside.astype(np.float64)
+    c0, c1 = (np.asarray(c, np.float64) for c in centres)
     near1 = ((vec - c1) ** 2).sum(-1) < ((vec - c0) ** 2).sum(-1)
     own1 = ((flow_t[y, x] - c1) ** 2).sum() < ((flow_t[y, x] - c0) ** 2).sum()
     return (inside & (near1 == own1)).astype(np.float64)
 
 
-def shading_weights(flow_t, y: int, x: int, radius: int = 7, sigma_s: float = 7.0):
-    """Non-local weights ``w_nl(x, .)`` of Eq. 10 over the window of ``(y, x)``: (2r+1, 2r+1)."""
+def flow_two_means(flow_t, y: int, x: int, radius: int,
+                   iterations: int = KMEANS_ITERATIONS, min_separation: float = MIN_SEPARATION):
+    """``surf(x, .)`` of Eq. 10 over the window of ``(y, x)`` in one flow field (H, W, 2): the
+    cluster of ``flow(x)`` by :func:`window_centres` (:func:`surf_from_centres`), or every pixel
+    inside the image where the window holds one surface."""
+    return surf_from_centres(flow_t, y, x, radius, window_centres(flow_t, y, x, radius, iterations, min_separation))
+
+
+def surface_centres(flow, w_bnd, radius: int = 7):
+    """Per flow pixel with ``w_bnd >= 0.5`` whose window splits (:func:`window_centres`), its two
+    centres ``(c0x, c0y, c1x, c1y)`` (c0: the cluster started at ``flow(x)``); zeros elsewhere.
+    ``flow`` (T', H, W, 2), ``w_bnd`` (T', H, W); returns (T', H, W, 4)."""
+    flow = np.asarray(flow, np.float64)
+    out = np.zeros((*flow.shape[:3], 4))
+    for t in range(flow.shape[0]):
+        for y, x in zip(*np.nonzero(np.asarray(w_bnd[t]) >= 0.5)):
+            found = window_centres(flow[t], y, x, radius)
+            if found is not None:
+                out[t, y, x] = np.concatenate(found)
+    return out
+
+
+def shading_weights(flow_t, y: int, x: int, radius: int = 7, sigma_s: float = 7.0, centres="find"):
+    """Non-local weights ``w_nl(x, .)`` of Eq. 10 over the window of ``(y, x)``: (2r+1, 2r+1).
+    ``centres``: the window's 2-means centres ``(c0, c1)`` or ``None`` (one surface), or
+    ``"find"`` to run :func:`window_centres`."""
     j, i = np.mgrid[-radius:radius + 1, -radius:radius + 1]
     spatial = np.exp(-(i * i + j * j) / (2.0 * sigma_s**2))
-    return spatial * flow_two_means(flow_t, y, x, radius)
+    if isinstance(centres, str):
+        centres = window_centres(flow_t, y, x, radius)
+    return spatial * surf_from_centres(flow_t, y, x, radius, centres)
 
 
 def _window(img, y: int, x: int, radius: int):
@@ -130,16 +174,23 @@ def _window(img, y: int, x: int, radius: int):
     return out
 
 
-def weighted_median_shading(S, flow, w_bnd, radius: int = 7, sigma_s: float = 7.0, lam: float = 0.001):
+def weighted_median_shading(S, flow, w_bnd, radius: int = 7, sigma_s: float = 7.0, lam: float = 0.001,
+                            centres=None):
     """S~ update of Eq. 13: see :func:`ivkernels.kernels.warp.median.weighted_median_shading`.
 
-    ``S`` (T, H, W), ``flow`` (T', H, W, 2), ``w_bnd`` (T', H, W).  Returns (T, H, W).
+    ``S`` (T, H, W), ``flow`` (T', H, W, 2), ``w_bnd`` (T', H, W), ``centres``
+    (T', H, W, 4) as :func:`surface_centres` gives them, or ``None`` to find
+    them here.  Returns (T, H, W).
     """
     S = np.asarray(S, np.float64)
     out = S.copy()
     for t in range(flow.shape[0]):
         for y, x in zip(*np.nonzero(np.asarray(w_bnd[t]) >= 0.5)):
-            wts = shading_weights(flow[t], y, x, radius, sigma_s)
+            found = "find"
+            if centres is not None:
+                c = np.asarray(centres[t, y, x], np.float64)
+                found = None if np.array_equal(c[:2], c[2:]) else (c[:2], c[2:])
+            wts = shading_weights(flow[t], y, x, radius, sigma_s, found)
             vals = _window(S[t], y, x, radius)
             out[t, y, x] = l1_quadratic_minimiser(vals.ravel(), wts.ravel(), S[t, y, x], lam)
     return out

@@ -7,7 +7,8 @@ iteration per image row, the window's entries ((value, weight) pairs of the
 shading, (u, v, weight) triples of the flow) written into that row's slice of
 a scratch array seen as (rows, slots, entry), then a branch-free weighted
 quickselect started at the previous pixel's answer; the shading's 2-means on
-a copy of the window's flow vectors, skipped where they cannot split.  The
+a copy of the window's flow vectors, skipped where they cannot split, is a
+kernel of its own (``surface_centres``) whose centres the median reads.  The
 outermost loop runs over rows in parallel; each row only touches its own
 scratch row.
 """
@@ -165,26 +166,26 @@ def median5x5_rows(src: nd4, out: nd4):
 
 
 @ti.kernel
-def weighted_median_shading_rows(S: nd3, flow: nd4, w_bnd: nd3, out: nd3, scratch: nd3, spatial: nd1,
-                                 radius: ti.i32, lam: ti.f32, iterations: ti.i32, min_separation: ti.f32):
-    height = S.shape[1]
-    width = S.shape[2]
-    side = 2 * radius + 1
-    for r in range(S.shape[0] * height):
+def surface_centres_rows(flow: nd4, w_bnd: nd3, centres: nd4, scratch: nd3, radius: ti.i32, iterations: ti.i32,
+                         min_separation: ti.f32):
+    height = flow.shape[1]
+    width = flow.shape[2]
+    for r in range(flow.shape[0] * height):
         t = r // height
         y = r - t * height
-        last = 0.0        # the answer at the previous pixel when it had one (has_last = 1):
-        has_last = 0      # the first pivot tried, as neighbouring windows share most pixels
         for x in range(width):
-            s = S[t, y, x]
-            out[t, y, x] = s
-            if t < flow.shape[0] and w_bnd[t, y, x] >= 0.5:
+            c0x = 0.0
+            c0y = 0.0
+            c1x = 0.0
+            c1y = 0.0
+            split = 0
+            if w_bnd[t, y, x] >= 0.5:
                 y_lo = ti.max(y - radius, 0)
                 y_hi = ti.min(y + radius + 1, height)
                 x_lo = ti.max(x - radius, 0)
                 x_hi = ti.min(x + radius + 1, width)
-                # surf (Eq. 10): 2-means of the window's flow vectors, copied (row-major)
-                # into scratch[r, :m]; centre 1 starts at the vector farthest from flow(x)
+                # 2-means of the window's flow vectors, copied (row-major) into
+                # scratch[r, :m]; centre 1 starts at the vector farthest from flow(x)
                 c0x = flow[t, y, x, 0]
                 c0y = flow[t, y, x, 1]
                 c1x = c0x
@@ -216,7 +217,6 @@ def weighted_median_shading_rows(S: nd3, flow: nd4, w_bnd: nd3, out: nd3, scratc
                 # both centres are means of window vectors, inside their bounding box:
                 # a box whose diagonal is under sqrt(0.8) min_separation cannot end
                 # split and skips the Lloyd passes (see the Warp kernel)
-                split = 0
                 box2 = (hi_x - lo_x) * (hi_x - lo_x) + (hi_y - lo_y) * (hi_y - lo_y)
                 if box2 > 0.8 * min_separation * min_separation:
                     it = 0
@@ -257,21 +257,58 @@ def weighted_median_shading_rows(S: nd3, flow: nd4, w_bnd: nd3, out: nd3, scratc
                         it += 1
                     if (c0x - c1x) * (c0x - c1x) + (c0y - c1y) * (c0y - c1y) >= min_separation * min_separation:
                         split = 1
+            if split == 0:
+                # one surface: both centres 0 (a split's centres are at least min_separation apart)
+                c0x = 0.0
+                c0y = 0.0
+                c1x = 0.0
+                c1y = 0.0
+            centres[t, y, x, 0] = c0x
+            centres[t, y, x, 1] = c0y
+            centres[t, y, x, 2] = c1x
+            centres[t, y, x, 3] = c1y
+
+
+@ti.kernel
+def weighted_median_shading_rows(S: nd3, flow: nd4, w_bnd: nd3, centres: nd4, out: nd3, scratch: nd3,
+                                 spatial: nd1, radius: ti.i32, lam: ti.f32):
+    height = S.shape[1]
+    width = S.shape[2]
+    side = 2 * radius + 1
+    for r in range(S.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        last = 0.0        # the answer at the previous pixel when it had one (has_last = 1):
+        has_last = 0      # the first pivot tried, as neighbouring windows share most pixels
+        for x in range(width):
+            s = S[t, y, x]
+            out[t, y, x] = s
+            if t < flow.shape[0] and w_bnd[t, y, x] >= 0.5:
+                y_lo = ti.max(y - radius, 0)
+                y_hi = ti.min(y + radius + 1, height)
+                x_lo = ti.max(x - radius, 0)
+                x_hi = ti.min(x + radius + 1, width)
+                # surf (Eq. 10): x's cluster of the window's flow vectors (surface_centres_rows)
+                c0x = centres[t, y, x, 0]
+                c0y = centres[t, y, x, 1]
+                c1x = centres[t, y, x, 2]
+                c1y = centres[t, y, x, 3]
+                split = 0
+                if c0x != c1x or c0y != c1y:
+                    split = 1
                 own = nearer_second(flow[t, y, x, 0], flow[t, y, x, 1], c0x, c0y, c1x, c1y)
-                # window pairs (value, weight) of x's surface, Eq. 10, written over the vectors
+                # window pairs (value, weight) of x's surface, Eq. 10
                 n = 0
-                i = 0
                 for yy in range(y_lo, y_hi):
                     k = (yy - y + radius) * side + x_lo - x + radius
                     for xx in range(x_lo, x_hi):
                         keep = 1
                         if split == 1:
                             keep = ti.select(
-                                nearer_second(scratch[r, i, 0], scratch[r, i, 1], c0x, c0y, c1x, c1y) == own, 1, 0)
+                                nearer_second(flow[t, yy, xx, 0], flow[t, yy, xx, 1], c0x, c0y, c1x, c1y) == own, 1, 0)
                         scratch[r, n, 0] = S[t, yy, xx]
                         scratch[r, n, 1] = spatial[k]
                         n += keep
-                        i += 1
                         k += 1
                 last = l1_quadratic_select(scratch, r, n, 0, 1, 2, 0, s, lam, last, has_last)
                 has_last = 1
@@ -351,15 +388,30 @@ def median5x5(src, out) -> None:
         median5x5_rows(src, out)
 
 
+@host("surface_centres")
+def surface_centres(flow, w_bnd, centres, radius: int = 7, *, workspace=None) -> None:
+    """Eq. 10's ``surf``: the two flow centres of each motion-boundary pixel's window; see
+    :func:`ivkernels.kernels.warp.median.surface_centres` (NumPy arrays here)."""
+    buf = _scratch(workspace, "centres_window", shading_scratch_shape(flow.shape[:3], radius), 2)
+    if flow.size:
+        surface_centres_rows(flow, w_bnd, centres, buf, radius, KMEANS_ITERATIONS, MIN_SEPARATION)
+
+
 @host("weighted_median_shading")
 def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float = 7.0,
-                            lam: float = 0.001, *, workspace=None) -> None:
+                            lam: float = 0.001, *, centres=None, workspace=None) -> None:
     """S~ update of Eq. 13 (weighted median with surf of Eq. 10 and Li & Osher's
     quadratic pull); see :func:`ivkernels.kernels.warp.median.weighted_median_shading`."""
     buf = _scratch(workspace, "shading_window", shading_scratch_shape(S.shape, radius), 2)
+    if centres is None:
+        shape = (*flow.shape[:3], 4)
+        centres = scratch_buffer(workspace, f"{__name__}.surface_centres", shape, np.float32,
+                                 lambda: np.empty(shape, np.float32))
+        if flow.size:
+            surface_centres_rows(flow, w_bnd, centres, buf, radius, KMEANS_ITERATIONS, MIN_SEPARATION)
     if S.size:
-        weighted_median_shading_rows(S, flow, w_bnd, out, buf, _spatial_table(radius, sigma_s), radius, lam,
-                                     KMEANS_ITERATIONS, MIN_SEPARATION)
+        weighted_median_shading_rows(S, flow, w_bnd, centres, out, buf, _spatial_table(radius, sigma_s), radius,
+                                     lam)
 
 
 @host("weighted_median_flow")

@@ -11,9 +11,12 @@ data-dependent branches, starting from the previous pixel's answer).  The
 225 weights of a 15x15 window are never stored per pixel: the spatial factor
 is one shared (2r+1)^2 table (the shading's ``exp(-d^2 / 2 sigma^2)``, the
 flow's exponent ``d^2 / 2 sigma^2``, so that its weights come out bit for bit
-as if computed per pixel).  The shading median's 2-means runs on a copy of
-the window's flow vectors and is skipped where their bounding box is too small
-to split.  The 5x5 median runs a branch-free compare-exchange network
+as if computed per pixel).  The shading median's 2-means of the window's
+flow vectors is a kernel of its own (:func:`surface_centres`, run on a copy
+of the vectors and skipped where their bounding box is too small to split):
+it depends on the flow alone, so the solver finds the centres once per level
+and the median of every alternation reads them (in the default solve at
+640x480 the 2-means was more than half the median's time).  The 5x5 median runs a branch-free compare-exchange network
 (:func:`median_network`) written out as straight-line code on 25 scalars
 (:func:`median25`); on the CPU the same network runs as a native loop over
 a row's pixels, which the compiler vectorises (:func:`median5x5_row`: 8 frames
@@ -421,11 +424,91 @@ def median5x5_rows_cpu(row_begin: int, src: wp.array4d(dtype=float), out: wp.arr
 
 
 @wp.kernel
+def surface_centres_rows(row_begin: int, tiles: int, flow: wp.array4d(dtype=float), w_bnd: wp.array3d(dtype=float),
+                         centres: wp.array4d(dtype=float), scratch: wp.array2d(dtype=wp.vec2), radius: int,
+                         iterations: int, min_separation: float):
+    # thread ``slot`` covers one tile of row ``r`` (the whole row on the CPU), with scratch row ``slot``
+    slot = row_begin + wp.tid()
+    r, x_begin, x_end = row_span(slot, tiles, flow.shape[2])
+    height = flow.shape[1]
+    width = flow.shape[2]
+    t = r // height
+    y = r - t * height
+    for x in range(x_begin, x_end):
+        c0 = wp.vec2(0.0, 0.0)
+        c1 = c0
+        split = False
+        if w_bnd[t, y, x] >= 0.5:
+            y_lo = wp.max(y - radius, 0)
+            y_hi = wp.min(y + radius + 1, height)
+            x_lo = wp.max(x - radius, 0)
+            x_hi = wp.min(x + radius + 1, width)
+            # 2-means of the window's flow vectors, copied (row-major) into
+            # scratch[slot, :m]; centre 1 starts at the vector farthest from flow(x)
+            c0 = wp.vec2(flow[t, y, x, 0], flow[t, y, x, 1])
+            c1 = c0
+            far = float(-1.0)
+            lo = c0
+            hi = c0
+            m = int(0)
+            for yy in range(y_lo, y_hi):
+                for xx in range(x_lo, x_hi):
+                    f = wp.vec2(flow[t, yy, xx, 0], flow[t, yy, xx, 1])
+                    scratch[slot, m] = f
+                    m += 1
+                    dx = f[0] - c0[0]
+                    dy = f[1] - c0[1]
+                    d = dx * dx + dy * dy
+                    if d > far:
+                        far = d
+                        c1 = f
+                    lo = wp.min(lo, f)
+                    hi = wp.max(hi, f)
+            # Both centres are means of window vectors, inside their bounding box,
+            # so a box whose diagonal is under sqrt(0.8) min_separation cannot end
+            # split (the margin, 0.053 px, is beyond the float32 rounding of the
+            # means of flows under 1000 px): the Lloyd passes are skipped.
+            box = hi - lo
+            if box[0] * box[0] + box[1] * box[1] > 0.8 * min_separation * min_separation:
+                for it in range(iterations):
+                    s0 = wp.vec2(0.0, 0.0)
+                    s1 = wp.vec2(0.0, 0.0)
+                    n1 = int(0)
+                    for i in range(m):
+                        f = scratch[slot, i]
+                        near = nearer_second(f[0], f[1], c0[0], c0[1], c1[0], c1[1])
+                        s1 += wp.where(near, f, wp.vec2(0.0, 0.0))
+                        s0 += wp.where(near, wp.vec2(0.0, 0.0), f)
+                        n1 += wp.where(near, 1, 0)
+                    n0 = m - n1
+                    m0 = c0
+                    m1 = c1
+                    if n0 > 0:
+                        m0 = s0 / float(n0)
+                    if n1 > 0:
+                        m1 = s1 / float(n1)
+                    moved = m0[0] != c0[0] or m0[1] != c0[1] or m1[0] != c1[0] or m1[1] != c1[1]
+                    c0 = m0
+                    c1 = m1
+                    if not moved:
+                        break
+                split = wp.length_sq(c0 - c1) >= min_separation * min_separation
+        if not split:
+            # one surface: both centres 0 (a split's centres are at least min_separation apart)
+            c0 = wp.vec2(0.0, 0.0)
+            c1 = c0
+        centres[t, y, x, 0] = c0[0]
+        centres[t, y, x, 1] = c0[1]
+        centres[t, y, x, 2] = c1[0]
+        centres[t, y, x, 3] = c1[1]
+
+
+@wp.kernel
 def weighted_median_shading_rows(row_begin: int, tiles: int, S: wp.array3d(dtype=float),
                                  flow: wp.array4d(dtype=float), w_bnd: wp.array3d(dtype=float),
-                                 out: wp.array3d(dtype=float), scratch: wp.array2d(dtype=wp.vec2),
-                                 spatial: wp.array(dtype=float), radius: int, lam: float, iterations: int,
-                                 min_separation: float):
+                                 centres: wp.array4d(dtype=float), out: wp.array3d(dtype=float),
+                                 scratch: wp.array2d(dtype=wp.vec2), spatial: wp.array(dtype=float), radius: int,
+                                 lam: float):
     # thread ``slot`` covers one tile of row ``r`` (the whole row on the CPU), with scratch row ``slot``
     slot = row_begin + wp.tid()
     r, x_begin, x_end = row_span(slot, tiles, S.shape[2])
@@ -448,71 +531,23 @@ def weighted_median_shading_rows(row_begin: int, tiles: int, S: wp.array3d(dtype
         y_hi = wp.min(y + radius + 1, height)
         x_lo = wp.max(x - radius, 0)
         x_hi = wp.min(x + radius + 1, width)
-        # surf (Eq. 10): 2-means of the window's flow vectors, copied (row-major)
-        # into scratch[slot, :m]; centre 1 starts at the vector farthest from flow(x)
-        c0 = wp.vec2(flow[t, y, x, 0], flow[t, y, x, 1])
-        c1 = c0
-        far = float(-1.0)
-        lo = c0
-        hi = c0
-        m = int(0)
-        for yy in range(y_lo, y_hi):
-            for xx in range(x_lo, x_hi):
-                f = wp.vec2(flow[t, yy, xx, 0], flow[t, yy, xx, 1])
-                scratch[slot, m] = f
-                m += 1
-                dx = f[0] - c0[0]
-                dy = f[1] - c0[1]
-                d = dx * dx + dy * dy
-                if d > far:
-                    far = d
-                    c1 = f
-                lo = wp.min(lo, f)
-                hi = wp.max(hi, f)
-        # Both centres are means of window vectors, inside their bounding box,
-        # so a box whose diagonal is under sqrt(0.8) min_separation cannot end
-        # split (the margin, 0.053 px, is beyond the float32 rounding of the
-        # means of flows under 1000 px): the Lloyd passes are skipped.
-        box = hi - lo
-        split = False
-        if box[0] * box[0] + box[1] * box[1] > 0.8 * min_separation * min_separation:
-            for it in range(iterations):
-                s0 = wp.vec2(0.0, 0.0)
-                s1 = wp.vec2(0.0, 0.0)
-                n1 = int(0)
-                for i in range(m):
-                    f = scratch[slot, i]
-                    near = nearer_second(f[0], f[1], c0[0], c0[1], c1[0], c1[1])
-                    s1 += wp.where(near, f, wp.vec2(0.0, 0.0))
-                    s0 += wp.where(near, wp.vec2(0.0, 0.0), f)
-                    n1 += wp.where(near, 1, 0)
-                n0 = m - n1
-                m0 = c0
-                m1 = c1
-                if n0 > 0:
-                    m0 = s0 / float(n0)
-                if n1 > 0:
-                    m1 = s1 / float(n1)
-                moved = m0[0] != c0[0] or m0[1] != c0[1] or m1[0] != c1[0] or m1[1] != c1[1]
-                c0 = m0
-                c1 = m1
-                if not moved:
-                    break
-            split = wp.length_sq(c0 - c1) >= min_separation * min_separation
-        own = nearer_second(flow[t, y, x, 0], flow[t, y, x, 1], c0[0], c0[1], c1[0], c1[1])
-        # window pairs (value, weight) of x's surface, Eq. 10, written over the vectors
+        # surf (Eq. 10): x's cluster of the window's flow vectors (surface_centres_rows)
+        c0x = centres[t, y, x, 0]
+        c0y = centres[t, y, x, 1]
+        c1x = centres[t, y, x, 2]
+        c1y = centres[t, y, x, 3]
+        split = c0x != c1x or c0y != c1y
+        own = nearer_second(flow[t, y, x, 0], flow[t, y, x, 1], c0x, c0y, c1x, c1y)
+        # window pairs (value, weight) of x's surface, Eq. 10
         n = int(0)
-        i = int(0)
         for yy in range(y_lo, y_hi):
             k = (yy - y + radius) * side + x_lo - x + radius
             for xx in range(x_lo, x_hi):
                 keep = True
                 if split:
-                    f = scratch[slot, i]
-                    keep = nearer_second(f[0], f[1], c0[0], c0[1], c1[0], c1[1]) == own
+                    keep = nearer_second(flow[t, yy, xx, 0], flow[t, yy, xx, 1], c0x, c0y, c1x, c1y) == own
                 scratch[slot, n] = wp.vec2(S[t, yy, xx], spatial[k])
                 n += wp.where(keep, 1, 0)
-                i += 1
                 k += 1
         last = l1_quadratic_select(scratch, slot, n, 0, 1, 0, s, lam, last, has_last)
         has_last = 1
@@ -632,9 +667,49 @@ def median5x5(src, out) -> None:
     launch_rows(median5x5_rows, t * h * tiles, [tiles, src, out], device=src.device)
 
 
+def _launch_centres(flow, w_bnd, centres, buf, tiles: int, radius: int) -> None:
+    """:func:`surface_centres_rows` over the flow's rows, with the scratch ``buf`` (rows >= T' H tiles)."""
+    t, h, w, _ = flow.shape
+    launch_rows(surface_centres_rows, t * h * tiles,
+                [tiles, flow, w_bnd, centres, _as_vectors(buf, wp.vec2), radius, KMEANS_ITERATIONS, MIN_SEPARATION],
+                device=flow.device, balance=True)
+
+
+@host("surface_centres")
+def surface_centres(flow, w_bnd, centres, radius: int = 7, *, workspace=None) -> None:
+    """Eq. 10's ``surf``: the two flow centres of each motion-boundary pixel's window.
+
+    For pixels with ``w_bnd >= 0.5`` the window's flow vectors (pixels inside
+    the image) are split in two by 2-means, centres started at ``flow(x)``
+    and at the window's vector farthest from it, refined by at most
+    ``KMEANS_ITERATIONS`` Lloyd iterations.  Where the final centres are at
+    least ``MIN_SEPARATION`` (0.5 px) apart, ``centres(x) = (c0x, c0y, c1x,
+    c1y)``, ``c0`` being the centre started at ``flow(x)``; elsewhere (one
+    surface, or not a boundary pixel) ``centres(x) = 0``.  The clusters depend
+    on the flow only, so a solver that runs :func:`weighted_median_shading`
+    several times on one flow finds them once and passes them in.
+
+    Parameters
+    ----------
+    flow : wp.array float32 (T, H, W, 2), forward flow (pixels).
+    w_bnd : wp.array float32 (T, H, W), motion-boundary map (0 or 1).
+    centres : wp.array float32 (T, H, W, 4), written.
+    radius : window half-size (7 gives the paper's 15x15).
+    workspace : optional :class:`ivkernels.kernels.workspace.Workspace` that
+        keeps the float32 scratch of shape :func:`shading_scratch_shape` (times
+        :func:`row_tiles` on a GPU) between calls.
+    """
+    t, h, w, _ = flow.shape
+    tiles = row_tiles(w, flow.device, MEDIAN_PIXELS_PER_TILE)
+    rows, width = shading_scratch_shape((t, h, w), radius)
+    buf = _scratch(workspace, "centres_window", (rows * tiles, width), flow.device)
+    if flow.size:
+        _launch_centres(flow, w_bnd, centres, buf, tiles, radius)
+
+
 @host("weighted_median_shading")
 def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float = 7.0,
-                            lam: float = 0.001, *, workspace=None) -> None:
+                            lam: float = 0.001, *, centres=None, workspace=None) -> None:
     """Update of the coupling variable S~ (Eq. 13), the non-local term of Eq. 9-10.
 
     For frames ``t < T'`` and pixels with ``w_bnd >= 0.5`` (the paper's
@@ -652,14 +727,13 @@ def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float
     :func:`l1_quadratic_select` (the lower weighted median when ``lam = 0``).
 
     ``surf`` (not specified by the paper): the window's flow vectors are split
-    in two by 2-means, centres started at ``flow(x)`` and at the window's
-    vector farthest from it, refined by at most ``KMEANS_ITERATIONS`` Lloyd
-    iterations; ``surf = 1`` on the pixels of x's cluster, 0 on the other.  If
-    the final centres are closer than ``MIN_SEPARATION`` (0.5 px) the window
-    holds no motion boundary and ``surf = 1`` everywhere.  Clustering flow
-    vectors (rather than flood-filling inside the window) also separates
-    regions whose boundary is broken or touches the window's border, and
-    costs a few passes over the window.
+    in two by 2-means (:func:`surface_centres`); ``surf = 1`` on the pixels of
+    x's cluster (those as near to x's centre as ``flow(x)`` is, strictly
+    nearer the other centre or not), 0 on the others; where the window holds
+    one surface ``surf = 1`` everywhere.  Clustering flow vectors (rather than
+    flood-filling inside the window) also separates regions whose boundary is
+    broken or touches the window's border, and costs a few passes over the
+    window.
 
     Parameters
     ----------
@@ -670,20 +744,29 @@ def weighted_median_shading(S, flow, w_bnd, out, radius: int = 7, sigma_s: float
     radius : window half-size (7 gives the paper's 15x15).
     sigma_s : spatial scale of w_nl in pixels.
     lam : weight of the quadratic pull towards S(x), >= 0.
+    centres : optional wp.array float32 (T', H, W, 4), :func:`surface_centres`
+        of this ``flow``, ``w_bnd`` and ``radius``; without it they are found
+        here (the result is bit for bit the same).
     workspace : optional :class:`ivkernels.kernels.workspace.Workspace` that
         keeps the float32 scratch of shape :func:`shading_scratch_shape` (its
-        rows times :func:`row_tiles` on a GPU, one window per thread) between
-        calls; without one it is allocated for this call.
+        rows times :func:`row_tiles` on a GPU, one window per thread) and,
+        without ``centres``, the centres between calls; without one they are
+        allocated for this call.
     """
     t, h, w = S.shape
     tiles = row_tiles(w, S.device, MEDIAN_PIXELS_PER_TILE)
     rows, width = shading_scratch_shape(S.shape, radius)
     buf = _scratch(workspace, "shading_window", (rows * tiles, width), S.device)
-    pairs = _as_vectors(buf, wp.vec2)
+    if centres is None:
+        centres = scratch_buffer(workspace, f"{__name__}.surface_centres", (*flow.shape[:3], 4), wp.float32,
+                                 lambda: wp.empty((*flow.shape[:3], 4), dtype=wp.float32, device=S.device),
+                                 S.device)
+        if flow.size:
+            _launch_centres(flow, w_bnd, centres, buf, tiles, radius)
     spatial = _cached_table(("spatial", radius, sigma_s), lambda: spatial_weights(radius, sigma_s),
                             wp.float32, S.device)
     launch_rows(weighted_median_shading_rows, t * h * tiles,
-                [tiles, S, flow, w_bnd, out, pairs, spatial, radius, lam, KMEANS_ITERATIONS, MIN_SEPARATION],
+                [tiles, S, flow, w_bnd, centres, out, _as_vectors(buf, wp.vec2), spatial, radius, lam],
                 device=S.device, balance=True)
 
 
