@@ -428,6 +428,22 @@ def test_coarse_basis_finish_leaves_s_plus_the_nested_fields_in_the_shading(back
     np.testing.assert_allclose(be.numpy(energy.A), I - be.numpy(energy.S)[..., None], atol=1e-5)
 
 
+def test_coarse_basis_start_stays_on_the_device(backend, rng, monkeypatch):
+    """Each alternation's start gathers the nested levels' albedo with backend kernels: no
+    copy to the host (on a GPU that was the window's whole albedo, every alternation)."""
+    energy, problem, coarse = _coarse_problem(backend, rng, (1, 3, 9))
+    weights = [backend.numpy(f.weights).copy() for f in coarse.fields]
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("CoarseBasisProblem.start read an array back to the host")
+
+    monkeypatch.setattr(backend, "numpy", refuse)
+    coarse.start()
+    monkeypatch.undo()
+    for f, before in zip(coarse.fields, weights):
+        np.testing.assert_array_equal(backend.numpy(f.weights), before)     # the same albedo, the same weights
+
+
 def test_coarse_basis_spacings_must_grow_by_the_level_ratio(backend, rng):
     from ivkernels.solver.coarse_basis import CoarseBasisProblem
     from ivkernels.solver.energy import ConstrainedEnergy

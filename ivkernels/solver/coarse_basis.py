@@ -67,19 +67,16 @@ def coarse_spacings(shape: tuple[int, int], spacing: int, levels: int) -> list[i
     return [s for s in spacings if uses_coarse_basis(shape, s)]
 
 
-def node_pixels(size: int, spacing: int, nodes: int) -> np.ndarray:
-    """The pixel each of ``nodes`` nodes every ``spacing`` pixels sits on along an axis of
-    ``size`` pixels, ``min(j * spacing, size - 1)`` (:func:`grid_shape`)."""
-    return np.minimum(np.arange(nodes) * spacing, size - 1)
-
-
 class CoarseField:
     """One coarse level: node ``spacing`` (pixels), ``scale`` ``c_k``, its unknowns ``z``
     and gradient ``g_z`` (views of the problem's ``X`` and ``G``, (T, Hc, Wc)), its
     interpolation ``weights`` onto the level below (T, Hb, Wb, 16): the pixels for
     level 0, level ``k - 1``'s nodes for ``k >= 1``, and ``ratio``, its node spacing in
-    the units of the level below (``spacing`` for level 0, ``LEVEL_RATIO`` above), and a
-    buffer ``work`` (T, Hc, Wc) for the prolonged sums."""
+    the units of the level below (``spacing`` for level 0, ``LEVEL_RATIO`` above), a
+    buffer ``work`` (T, Hc, Wc) for the prolonged sums, the ``guide`` its weights are
+    made from (the albedo on the level below, set by :meth:`CoarseBasisProblem.start`),
+    and, where a coarser level nests on it, ``node_albedo`` (T, Hc, Wc, C): the guide
+    at its own nodes, the next level's guide."""
 
     def __init__(self, be, frames: int, below: tuple[int, int], ratio: int, spacing: int, scale: float, X, G,
                  offset: int):
@@ -90,6 +87,8 @@ class CoarseField:
         self.z, self.g_z = self.z_flat.reshape((frames, hc, wc)), self.g_flat.reshape((frames, hc, wc))
         self.weights = be.empty((frames, *below, 16))
         self.work = be.empty((frames, hc, wc))
+        self.guide = None
+        self.node_albedo = None
 
 
 class CoarseBasisProblem:
@@ -138,22 +137,22 @@ class CoarseBasisProblem:
         offsets = n + np.cumsum([0] + sizes[:-1])
         self.fields = [CoarseField(be, T, below, ratio, spacing, float(LEVEL_RATIO) ** -k, self.X, self.G, int(offset))
                        for k, (below, ratio, spacing, offset) in enumerate(zip(belows, ratios, spacings, offsets))]
+        channels = energy.A.shape[3]
+        for f in self.fields[:-1]:
+            f.node_albedo = be.empty((*f.z.shape, channels))
 
     def start(self) -> None:
         """``s`` = the current shading, every ``z_k = 0``, and the weights from the albedo
         ``I - S``: ``P_0``'s at the pixels, each ``Q_k``'s at level ``k - 1``'s nodes."""
         p, be = self.problem, self.be
         p.sync_albedo()
-        guide, albedo = p.energy.A, None
-        rows, cols = np.arange(guide.shape[1]), np.arange(guide.shape[2])       # the guide's pixels
+        guide = p.energy.A
         for below, f in zip([None] + self.fields[:-1], self.fields):
             if below is not None:
-                # the albedo at the level below's nodes
-                hb, wb = f.weights.shape[1:3]
-                rows = rows[node_pixels(len(rows), below.ratio, hb)]
-                cols = cols[node_pixels(len(cols), below.ratio, wb)]
-                albedo = be.numpy(p.energy.A) if albedo is None else albedo
-                guide = be.asarray(np.ascontiguousarray(albedo[:, rows][:, :, cols]))
+                # the albedo at the level below's nodes, gathered on the backend's device
+                guide = below.node_albedo
+                be.coarse_basis.node_samples(below.guide, guide, below.ratio)
+            f.guide = guide
             be.coarse_basis.coarse_weights(guide, f.weights, f.ratio, self.sigma)
             be.zero(f.z_flat)
         be.vecops.copy(p.X, self.s)

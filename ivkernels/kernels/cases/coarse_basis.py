@@ -54,6 +54,15 @@ def _restrict_case(spacing):
                 variant=f"s{spacing}", updates=("out",), tol=Tol(1e-5, 2e-5))
 
 
+def _nodes_case(spacing, channels):
+    def make(rng, T, H, W):
+        hc, wc = ref.grid_shape(H, W, spacing)
+        return {"src": log_image(rng, (T, H, W, channels)), "out": nans((T, hc, wc, channels)), "spacing": spacing}
+    return Case("coarse_basis", "node_samples", make, ("src", "out", "spacing"), ("out",),
+                lambda v: {"out": ref.node_samples(v["src"], v["spacing"])}, variant=f"s{spacing}-C{channels}",
+                tol=Tol(0.0, 0.0))
+
+
 CASES = (
     _weights_case(4, 0.5, 3),
     _weights_case(3, 0.05, 1),
@@ -64,4 +73,7 @@ CASES = (
     _restrict_case(4),
     _restrict_case(3),
     _restrict_case(1),
+    _nodes_case(4, 3),
+    _nodes_case(3, 3),
+    _nodes_case(1, 1),
 )

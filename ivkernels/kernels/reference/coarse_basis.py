@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.kernels.contract import Acc, Array, Family, Int, Out, Positive
+from ivkernels.kernels.contract import Acc, Array, Family, Int, Out, Positive, Rule
 from ivkernels.kernels.host import MAX_EXPONENT, grid_shape
 
 FAMILY = Family("coarse_basis", "The solver's edge-aware coarse basis (nodes every ``spacing`` pixels).")
@@ -26,6 +26,19 @@ FAMILY.declare("prolong_add(z, weights, out, spacing)", "``out += P z``.", order
 FAMILY.declare("restrict_add(values, weights, out, spacing)", "``out += P^T values``.", order=("weights",),
                values="T H W", weights="T H W 16", out=Acc(_GRID.dims, layout=_GRID.layout), spacing=Int(1),
                separate=(("out", "values", "each node sums values over 4 x 4 node spacings"),))
+
+_NODES = Array("T (H-1)//spacing+2 (W-1)//spacing+2 C",
+               layout="(T, Hc, Wc, C) = (T, (H-1)//spacing + 2, (W-1)//spacing + 2, C)")
+def _frame_has_pixels(sizes, args):
+    if sizes["H"] == 0 or sizes["W"] == 0:
+        raise ValueError(f"src has frames of {sizes['H']} x {sizes['W']} pixels; the nodes need at least one "
+                         "pixel to sit on (H, W >= 1)")
+
+
+FAMILY.declare("node_samples(src, out, spacing)", "``src`` at the pixels the nodes sit on.",
+               src="T H W C", out=Out(_NODES.dims, layout=_NODES.layout), spacing=Int(1),
+               rules=(Rule(_frame_has_pixels, after="src"),),
+               separate=(("out", "src", "out is gathered from src"),))
 
 #: Node offsets of the 4 x 4 taps along one axis, relative to ``floor(y / spacing)``.
 TAP_OFFSETS = (-1, 0, 1, 2)
@@ -104,3 +117,14 @@ def restrict(values: np.ndarray, weights: np.ndarray, spacing: int) -> np.ndarra
         for f in range(t):
             np.add.at(out[f], idx[k].ravel(), (weights[f, ..., k] * values[f]).ravel())
     return out.reshape(t, hc, wc)
+
+
+def node_samples(src: np.ndarray, spacing: int) -> np.ndarray:
+    """``src`` (T, H, W, C) at the pixels the grid's nodes sit on: (T, Hc, Wc, C), node
+    ``(j, i)`` on pixel ``(min(j spacing, H - 1), min(i spacing, W - 1))``."""
+    src = np.asarray(src)
+    t, h, w, _ = src.shape
+    hc, wc = grid_shape(h, w, spacing)
+    rows = np.minimum(np.arange(hc) * spacing, h - 1)
+    cols = np.minimum(np.arange(wc) * spacing, w - 1)
+    return src[:, rows][:, :, cols]

@@ -116,6 +116,22 @@ def restrict_add_rows(values: nd3, weights: nd4, out: nd3, spacing: ti.i32):
 # Host functions
 # ----------------------------------------------------------------------------
 
+@ti.kernel
+def node_samples_kernel(src: nd4, out: nd4, spacing: ti.i32):
+    for t, j, i in ti.ndrange(out.shape[0], out.shape[1], out.shape[2]):
+        y = ti.min(j * spacing, src.shape[1] - 1)
+        x = ti.min(i * spacing, src.shape[2] - 1)
+        for c in range(src.shape[3]):
+            out[t, j, i, c] = src[t, y, x, c]
+
+
+@host("node_samples")
+def node_samples(src, out, spacing: int) -> None:
+    """The guide at the nodes; see :func:`ivkernels.kernels.warp.coarse_basis.node_samples`."""
+    if out.size:
+        node_samples_kernel(src, out, spacing)
+
+
 @host("coarse_weights")
 def coarse_weights(A, weights, spacing: int, sigma: float) -> None:
     """Interpolation weights of the edge-aware coarse basis; see

@@ -235,6 +235,33 @@ def restrict_add_rows(row_begin: int, tiles: int, values: wp.array3d(dtype=float
 # Host functions
 # ----------------------------------------------------------------------------
 
+@wp.kernel
+def node_samples_kernel(src: wp.array4d(dtype=float), out: wp.array4d(dtype=float), spacing: int):
+    """``out[t, j, i] = src[t, min(j spacing, H - 1), min(i spacing, W - 1)]``, every channel."""
+    t, j, i = wp.tid()
+    y = wp.min(j * spacing, src.shape[1] - 1)
+    x = wp.min(i * spacing, src.shape[2] - 1)
+    for c in range(src.shape[3]):
+        out[t, j, i, c] = src[t, y, x, c]
+
+
+@host("node_samples")
+def node_samples(src, out, spacing: int) -> None:
+    """The guide at the nodes: what :func:`coarse_weights` of the next coarser level reads
+    (the solver's nested levels, :class:`ivkernels.solver.coarse_basis.CoarseBasisProblem`),
+    gathered on the device.
+
+    Parameters
+    ----------
+    src : wp.array float32 (T, H, W, C).
+    out : wp.array float32 (T, Hc, Wc, C), ``(Hc, Wc) = grid_shape(H, W, spacing)``, written:
+        node ``(j, i)`` gets the pixel ``(min(j spacing, H - 1), min(i spacing, W - 1))``.
+    spacing : pixels between nodes, >= 1.
+    """
+    if out.size:
+        wp.launch(node_samples_kernel, dim=out.shape[:3], inputs=[src, out, spacing], device=src.device)
+
+
 @host("coarse_weights")
 def coarse_weights(A, weights, spacing: int, sigma: float) -> None:
     """Interpolation weights of the edge-aware coarse basis (on a GPU one pixel per
