@@ -186,9 +186,8 @@ class CoarseBasisProblem:
             raise ValueError("CoarseBasisProblem evaluates its own buffers X and G only")
         p, be = self.problem, self.be
         self._set_shading()
-        value = p(p.X, p.G)
-        be.vecops.copy(p.G, self.g_s)
-        values = p.energy.gS
+        value = p.value_and_gradient(self.g_s)          # dE/ds = dE/dS, written in place
+        values = self.g_s.reshape(p.energy.shape)
         for f in self.fields:
             # the unscaled sums: P_0^T dE/dS, then each Q_k^T of the level below's (scaled after)
             be.zero(f.g_flat)

@@ -330,8 +330,13 @@ class ConstrainedEnergy:
         """Energy at ``X`` (must be ``self.X``); writes dE/dS along ``A = I - S`` into ``G``."""
         if X is not self.X or G is not self.G:
             raise ValueError("ConstrainedEnergy evaluates its own buffers X and G only")
+        return self.value_and_gradient(self.G)
+
+    def value_and_gradient(self, out) -> float:
+        """Energy at ``X``; writes dE/dS along ``A = I - S`` into ``out`` (flat, ``T*h*w``:
+        ``self.G``, or the buffer of a problem built on this one, which then needs no copy)."""
         e = self.energy
         self.sync_albedo()
         value = e.evaluate(self.TERMS)
-        e.be.energy_data.constrained_gradient(e.gA, e.gS, e.gS)
+        e.be.energy_data.constrained_gradient(e.gA, e.gS, out.reshape(e.shape))
         return value
