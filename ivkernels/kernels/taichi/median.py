@@ -127,6 +127,13 @@ def l1_quadratic_select(buf: ti.template(), row, n, vc: ti.template(), wc: ti.te
 
 
 @ti.func
+def window_bounds(y, x, radius, height, width):
+    """Rows ``[y_lo, y_hi)`` and columns ``[x_lo, x_hi)`` of the ``(2 radius + 1)^2`` window
+    around ``(y, x)`` that lie inside a ``height x width`` frame."""
+    return ti.max(y - radius, 0), ti.min(y + radius + 1, height), ti.max(x - radius, 0), ti.min(x + radius + 1, width)
+
+
+@ti.func
 def nearer_second(fx, fy, c0x, c0y, c1x, c1y):
     """1 if ``(fx, fy)`` is strictly nearer to centre 1 than to centre 0, else 0."""
     d0 = (fx - c0x) * (fx - c0x) + (fy - c0y) * (fy - c0y)
@@ -180,10 +187,7 @@ def surface_centres_rows(flow: nd4, w_bnd: nd3, centres: nd4, scratch: nd3, radi
             c1y = 0.0
             split = 0
             if w_bnd[t, y, x] >= 0.5:
-                y_lo = ti.max(y - radius, 0)
-                y_hi = ti.min(y + radius + 1, height)
-                x_lo = ti.max(x - radius, 0)
-                x_hi = ti.min(x + radius + 1, width)
+                y_lo, y_hi, x_lo, x_hi = window_bounds(y, x, radius, height, width)
                 # 2-means of the window's flow vectors, copied (row-major) into
                 # scratch[r, :m]; centre 1 starts at the vector farthest from flow(x)
                 c0x = flow[t, y, x, 0]
@@ -284,10 +288,7 @@ def weighted_median_shading_rows(S: nd3, flow: nd4, w_bnd: nd3, centres: nd4, ou
             s = S[t, y, x]
             out[t, y, x] = s
             if t < flow.shape[0] and w_bnd[t, y, x] >= 0.5:
-                y_lo = ti.max(y - radius, 0)
-                y_hi = ti.min(y + radius + 1, height)
-                x_lo = ti.max(x - radius, 0)
-                x_hi = ti.min(x + radius + 1, width)
+                y_lo, y_hi, x_lo, x_hi = window_bounds(y, x, radius, height, width)
                 # surf (Eq. 10): x's cluster of the window's flow vectors (surface_centres_rows)
                 c0x = centres[t, y, x, 0]
                 c0y = centres[t, y, x, 1]

@@ -293,6 +293,14 @@ def median25(v0: float, v1: float, v2: float, v3: float, v4: float, v5: float, v
 
 
 @wp.func
+def window_bounds(y: int, x: int, radius: int, height: int, width: int):
+    """Rows ``[y_lo, y_hi)`` and columns ``[x_lo, x_hi)`` of the ``(2 radius + 1)^2`` window
+    around ``(y, x)`` that lie inside a ``height x width`` frame."""
+    return (wp.max(y - radius, 0), wp.min(y + radius + 1, height), wp.max(x - radius, 0),
+            wp.min(x + radius + 1, width))
+
+
+@wp.func
 def nearer_second(fx: float, fy: float, c0x: float, c0y: float, c1x: float, c1y: float):
     """True if ``(fx, fy)`` is strictly nearer to centre 1 than to centre 0."""
     d0 = (fx - c0x) * (fx - c0x) + (fy - c0y) * (fy - c0y)
@@ -439,10 +447,7 @@ def surface_centres_rows(row_begin: int, tiles: int, flow: wp.array4d(dtype=floa
         c1 = c0
         split = False
         if w_bnd[t, y, x] >= 0.5:
-            y_lo = wp.max(y - radius, 0)
-            y_hi = wp.min(y + radius + 1, height)
-            x_lo = wp.max(x - radius, 0)
-            x_hi = wp.min(x + radius + 1, width)
+            y_lo, y_hi, x_lo, x_hi = window_bounds(y, x, radius, height, width)
             # 2-means of the window's flow vectors, copied (row-major) into
             # scratch[slot, :m]; centre 1 starts at the vector farthest from flow(x)
             c0 = wp.vec2(flow[t, y, x, 0], flow[t, y, x, 1])
@@ -527,10 +532,7 @@ def weighted_median_shading_rows(row_begin: int, tiles: int, S: wp.array3d(dtype
         if w_bnd[t, y, x] < 0.5:
             has_last = 0
             continue
-        y_lo = wp.max(y - radius, 0)
-        y_hi = wp.min(y + radius + 1, height)
-        x_lo = wp.max(x - radius, 0)
-        x_hi = wp.min(x + radius + 1, width)
+        y_lo, y_hi, x_lo, x_hi = window_bounds(y, x, radius, height, width)
         # surf (Eq. 10): x's cluster of the window's flow vectors (surface_centres_rows)
         c0x = centres[t, y, x, 0]
         c0y = centres[t, y, x, 1]
@@ -583,10 +585,7 @@ def weighted_median_flow_rows(row_begin: int, tiles: int, flow: wp.array4d(dtype
         l0 = lab[t, y, x, 0]
         l1 = lab[t, y, x, 1]
         l2 = lab[t, y, x, 2]
-        y_lo = wp.max(y - radius, 0)
-        y_hi = wp.min(y + radius + 1, height)
-        x_lo = wp.max(x - radius, 0)
-        x_hi = wp.min(x + radius + 1, width)
+        y_lo, y_hi, x_lo, x_hi = window_bounds(y, x, radius, height, width)
         n = int(0)
         for yy in range(y_lo, y_hi):
             k = (yy - y + radius) * side + x_lo - x + radius
