@@ -440,8 +440,7 @@ def surface_centres_rows(row_begin: int, tiles: int, flow: wp.array4d(dtype=floa
     r, x_begin, x_end = row_span(slot, tiles, flow.shape[2])
     height = flow.shape[1]
     width = flow.shape[2]
-    t = r // height
-    y = r - t * height
+    t, y = frame_row(r, height)
     for x in range(x_begin, x_end):
         c0 = wp.vec2(0.0, 0.0)
         c1 = c0
@@ -519,8 +518,7 @@ def weighted_median_shading_rows(row_begin: int, tiles: int, S: wp.array3d(dtype
     r, x_begin, x_end = row_span(slot, tiles, S.shape[2])
     height = S.shape[1]
     width = S.shape[2]
-    t = r // height
-    y = r - t * height
+    t, y = frame_row(r, height)
     side = 2 * radius + 1
     last = float(0.0)   # the answer at the previous pixel when it had one (has_last = 1):
     has_last = int(0)   # the first pivot tried, as neighbouring windows share most pixels
@@ -567,8 +565,7 @@ def weighted_median_flow_rows(row_begin: int, tiles: int, flow: wp.array4d(dtype
     r, x_begin, x_end = row_span(slot, tiles, flow.shape[2])
     height = flow.shape[1]
     width = flow.shape[2]
-    t = r // height
-    y = r - t * height
+    t, y = frame_row(r, height)
     side = 2 * radius + 1
     inv_i = 1.0 / (2.0 * sigma_i * sigma_i)
     last_u = float(0.0)   # the answers at the previous pixel when it had them (has_last = 1):
