@@ -29,6 +29,8 @@ FAMILY.declare("restrict_add(values, weights, out, spacing)", "``out += P^T valu
 
 _NODES = Array("T (H-1)//spacing+2 (W-1)//spacing+2 C",
                layout="(T, Hc, Wc, C) = (T, (H-1)//spacing + 2, (W-1)//spacing + 2, C)")
+
+
 def _frame_has_pixels(sizes, args):
     if sizes["H"] == 0 or sizes["W"] == 0:
         raise ValueError(f"src has frames of {sizes['H']} x {sizes['W']} pixels; the nodes need at least one "
