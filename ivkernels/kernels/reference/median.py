@@ -153,15 +153,15 @@ def surface_centres(flow, w_bnd, radius: int = 7):
     return out
 
 
-def shading_weights(flow_t, y: int, x: int, radius: int = 7, sigma_s: float = 7.0, centres="find"):
-    """Non-local weights ``w_nl(x, .)`` of Eq. 10 over the window of ``(y, x)``: (2r+1, 2r+1).
-    ``centres``: the window's 2-means centres ``(c0, c1)`` or ``None`` (one surface), or
-    ``"find"`` to run :func:`window_centres`."""
+def _spatial_weights(radius: int, sigma_s: float):
+    """``exp(-|d|^2 / (2 sigma_s^2))`` over the (2r+1, 2r+1) window offsets ``d``."""
     j, i = np.mgrid[-radius:radius + 1, -radius:radius + 1]
-    spatial = np.exp(-(i * i + j * j) / (2.0 * sigma_s**2))
-    if isinstance(centres, str):
-        centres = window_centres(flow_t, y, x, radius)
-    return spatial * surf_from_centres(flow_t, y, x, radius, centres)
+    return np.exp(-(i * i + j * j) / (2.0 * sigma_s**2))
+
+
+def shading_weights(flow_t, y: int, x: int, radius: int = 7, sigma_s: float = 7.0):
+    """Non-local weights ``w_nl(x, .)`` of Eq. 10 over the window of ``(y, x)``: (2r+1, 2r+1)."""
+    return _spatial_weights(radius, sigma_s) * flow_two_means(flow_t, y, x, radius)
 
 
 def _window(img, y: int, x: int, radius: int):
@@ -186,11 +186,12 @@ def weighted_median_shading(S, flow, w_bnd, radius: int = 7, sigma_s: float = 7.
     out = S.copy()
     for t in range(flow.shape[0]):
         for y, x in zip(*np.nonzero(np.asarray(w_bnd[t]) >= 0.5)):
-            found = "find"
-            if centres is not None:
+            if centres is None:
+                found = window_centres(flow[t], y, x, radius)
+            else:                                   # equal centres (zeros): one surface
                 c = np.asarray(centres[t, y, x], np.float64)
                 found = None if np.array_equal(c[:2], c[2:]) else (c[:2], c[2:])
-            wts = shading_weights(flow[t], y, x, radius, sigma_s, found)
+            wts = _spatial_weights(radius, sigma_s) * surf_from_centres(flow[t], y, x, radius, found)
             vals = _window(S[t], y, x, radius)
             out[t, y, x] = l1_quadratic_minimiser(vals.ravel(), wts.ravel(), S[t, y, x], lam)
     return out
