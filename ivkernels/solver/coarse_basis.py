@@ -73,10 +73,9 @@ class CoarseField:
     interpolation ``weights`` onto the level below (T, Hb, Wb, 16): the pixels for
     level 0, level ``k - 1``'s nodes for ``k >= 1``, and ``ratio``, its node spacing in
     the units of the level below (``spacing`` for level 0, ``LEVEL_RATIO`` above), a
-    buffer ``work`` (T, Hc, Wc) for the prolonged sums, the ``guide`` its weights are
-    made from (the albedo on the level below, set by :meth:`CoarseBasisProblem.start`),
-    and, where a coarser level nests on it, ``node_albedo`` (T, Hc, Wc, C): the guide
-    at its own nodes, the next level's guide."""
+    buffer ``work`` (T, Hc, Wc) for the prolonged sums, and, where a coarser level
+    nests on it, ``node_albedo`` (T, Hc, Wc, C): the albedo at its own nodes, from which
+    the next level's weights are made (:meth:`CoarseBasisProblem.start`)."""
 
     def __init__(self, be, frames: int, below: tuple[int, int], ratio: int, spacing: int, scale: float, X, G,
                  offset: int):
@@ -87,7 +86,6 @@ class CoarseField:
         self.z, self.g_z = self.z_flat.reshape((frames, hc, wc)), self.g_flat.reshape((frames, hc, wc))
         self.weights = be.empty((frames, *below, 16))
         self.work = be.empty((frames, hc, wc))
-        self.guide = None
         self.node_albedo = None
 
 
@@ -146,13 +144,12 @@ class CoarseBasisProblem:
         ``I - S``: ``P_0``'s at the pixels, each ``Q_k``'s at level ``k - 1``'s nodes."""
         p, be = self.problem, self.be
         p.sync_albedo()
-        guide = p.energy.A
+        guide = p.energy.A                  # what the level's weights are made from
         for below, f in zip([None] + self.fields[:-1], self.fields):
             if below is not None:
                 # the albedo at the level below's nodes, gathered on the backend's device
+                be.coarse_basis.node_samples(guide, below.node_albedo, below.ratio)
                 guide = below.node_albedo
-                be.coarse_basis.node_samples(below.guide, guide, below.ratio)
-            f.guide = guide
             be.coarse_basis.coarse_weights(guide, f.weights, f.ratio, self.sigma)
             be.zero(f.z_flat)
         be.vecops.copy(p.X, self.s)
