@@ -24,7 +24,7 @@ from ivkernels.kernels.thread_count import check_threads, get_threads, iterate_w
 from ivkernels.kernels.thread_count import threads as launch_threads
 from ivkernels.params import Params
 from ivkernels.priors import load_albedo_prior
-from ivkernels.solver.guide import guide_shape, guide_solve
+from ivkernels.solver.guide import guide_shape, guide_solve, scaled_shape
 from ivkernels.solver.motion_maps import motion_maps
 from ivkernels.solver.pyramid import downsample, level_shapes, resize_flow
 from ivkernels.solver.window_solver import SolveLog, solve_window
@@ -40,10 +40,11 @@ DEFAULT_FLOW_METHOD = "classic_nl_fast"
 DEFAULT_FLOW_PASSES = 2
 #: Frame pairs given to the flow method per call (bounds its working memory).
 FLOW_PAIRS_PER_CALL = 7
-#: Estimate the next window's first-pass flow on a second thread while this
-#: window is solved, on a backend whose launches from two Python threads run at
-#: once (``Backend.overlaps_python_threads``: Warp on the CPU); the results are
-#: the same.
+#: Estimate the next window's first-pass flow, and this window's backward flow
+#: (``Params.flow_round_trip_max``), on a second thread while this window is
+#: solved, on a backend whose launches from two Python threads run at once
+#: (``Backend.overlaps_python_threads``: Warp on the CPU); the results are the
+#: same.
 FLOW_AHEAD = True
 
 
@@ -227,11 +228,41 @@ class _Decomposer:
             del cached[t]
         return np.stack([cached[t] for t in range(start, stop - 1)])
 
-    def _flow_ahead(self, start: int, stop: int, cached: dict) -> None:
-        """:meth:`_flow_for` of a later window, on another thread, with this job's launch
-        threads; its seconds are logged as ``"flow ahead"`` (they overlap the solve's)."""
+    def _in_background(self, method, *args, **kwargs):
+        """``method(*args, **kwargs)`` with this job's launch threads, for a second Python
+        thread whose flow estimates overlap the solve's launches."""
         with launch_threads(self.threads):
-            self._flow_for(start, stop, cached, stage="flow ahead")
+            return method(*args, **kwargs)
+
+    @property
+    def checks_round_trip(self) -> bool:
+        """Whether ``w_occ`` gets the forward-backward check (an estimated flow,
+        ``Params.flow_round_trip_max`` > 0): a given flow is taken as it is."""
+        return self.flow is None and self.flow_method is not None and self.params.flow_round_trip_max > 0.0
+
+    def _back_flow_for(self, start: int, stop: int, cached: dict, stage: str = "back flow") -> np.ndarray | None:
+        """The backward flow of frames ``start..stop-1``, (stop-start-1, H, W, 2): entry ``t``
+        maps frame ``start+t+1`` to frame ``start+t``, estimated from the input frames at
+        ``Params.flow_round_trip_scale`` times their size (:func:`scaled_shape`); None where
+        the check is off.
+        ``cached`` (pair -> flow) keeps the pairs a later window shares."""
+        if not self.checks_round_trip or stop - start < 2:
+            return None
+        missing = [t for t in range(start, stop - 1) if t not in cached]
+        if missing:
+            t0 = time.perf_counter()
+            H, W = self.frames.shape[1:3]
+            shape = scaled_shape(H, W, self.params.flow_round_trip_scale)
+            for i in range(0, len(missing), FLOW_PAIRS_PER_CALL):
+                first, last = missing[i], missing[min(i + FLOW_PAIRS_PER_CALL, len(missing)) - 1]
+                # frames last+1, last, ..., first: their forward flow is the backward flow, last pair first
+                backward = self._flow_at(self.frames[first:last + 2][::-1].copy(), shape)[::-1]
+                for t in range(first, last + 1):
+                    cached[t] = backward[t - first]
+            self.log.add_time(stage, time.perf_counter() - t0)
+        for t in [t for t in cached if t < start]:
+            del cached[t]
+        return np.stack([cached[t] for t in range(start, stop - 1)])
 
     def _first_pass_flow(self, frames: np.ndarray) -> np.ndarray:
         """The flow of the first pass on ``frames`` (T, H, W, 3), at full size.
@@ -310,11 +341,12 @@ class _Decomposer:
         if self.progress:
             bar = tqdm(total=len(ranges) * n_levels, desc="solve (window x level)", unit="level")
         cached_flow: dict = {}
+        cached_back: dict = {}      # pair -> backward flow of the forward-backward check
         last_flow: dict = {}        # pair -> the previous window's last-pass flow
         carried = None
         ahead = pool = None
-        if FLOW_AHEAD and len(ranges) > 1 and self.flow is None and self.flow_method is not None \
-                and be.overlaps_python_threads:
+        if FLOW_AHEAD and (len(ranges) > 1 or self.checks_round_trip) and self.flow is None \
+                and self.flow_method is not None and be.overlaps_python_threads:
             pool = ThreadPoolExecutor(1, thread_name_prefix="ivkernels-flow-ahead")
         try:
             for index, (start, stop, n_carried) in enumerate(ranges):
@@ -322,8 +354,13 @@ class _Decomposer:
                 if ahead is not None:
                     ahead.result()          # the cache holds this window's first-pass flow now
                 flow_np = self._flow_for(start, stop, cached_flow)
+                back = None         # this window's backward flow, estimated while its guide is solved
+                if pool is not None and self.checks_round_trip:
+                    back = pool.submit(self._in_background, self._back_flow_for, start, stop, cached_back,
+                                       stage="back flow, overlapped")
                 if pool is not None and index + 1 < len(ranges):
-                    ahead = pool.submit(self._flow_ahead, *ranges[index + 1][:2], cached_flow)
+                    ahead = pool.submit(self._in_background, self._flow_for, *ranges[index + 1][:2], cached_flow,
+                                        stage="flow ahead")
                 occ_np = bnd_np = None
                 frames_be = be.asarray(frames_np)
                 guide_shading = None
@@ -338,11 +375,13 @@ class _Decomposer:
                         and flow_np is not None and len(flow_np):
                     # A given flow is final: one guide solve with it, the last solve's start.
                     _, guide_shading = guide_solve(be, frames_be, flow_np, p, self.prior, log=self.log)
+                back_np = back.result() if back is not None else self._back_flow_for(start, stop, cached_back)
                 t0 = time.perf_counter()
                 flow_be = occ_be = bnd_be = None
                 if flow_np is not None:
                     flow_be = be.asarray(flow_np)
-                    occ_be, bnd_be = motion_maps(be, frames_be, flow_be, p)
+                    occ_be, bnd_be = motion_maps(be, frames_be, flow_be, p,
+                                                 back_flow=None if back_np is None else be.asarray(back_np))
                     occ_np = np.array(be.numpy(occ_be), copy=True)
                     bnd_np = np.array(be.numpy(bnd_be), copy=True)
                 self.log.add_time("maps", time.perf_counter() - t0)

@@ -50,8 +50,36 @@ def test_flow_ahead_on_a_second_thread_gives_the_same_video(seq, monkeypatch):
     ahead = iv.decompose(frames, params=params, threads=2)
     assert len(ahead.diagnostics["windows"]) == 3
     assert "flow ahead" in ahead.diagnostics["seconds"] and "flow ahead" not in serial.diagnostics["seconds"]
+    # the forward-backward check's backward flow: on the second thread, or on the caller's
+    assert "back flow, overlapped" in ahead.diagnostics["seconds"] and "back flow" in serial.diagnostics["seconds"]
     for name in ("albedo", "shading", "flow", "occlusion", "boundary"):
         np.testing.assert_array_equal(getattr(ahead, name), getattr(serial, name), err_msg=name)
+
+
+@pytest.mark.parametrize("ahead", [False, True])
+def test_the_backward_flow_is_estimated_once_per_pair_from_the_reversed_frames(seq, monkeypatch, ahead):
+    """The check's backward flow runs at ``flow_round_trip_scale`` of the frames' size (40x48 ->
+    16x19, the floor of 16 px), on the frames in reverse order; pairs a later window shares
+    are not estimated again."""
+    shape = decompose_module.scaled_shape(40, 48, iv.Params().flow_round_trip_scale)
+    assert shape == (16, 19)
+    backward = []
+    real = decompose_module.estimate_flow
+
+    def spy(frames, *args, **options):
+        flow = real(frames, *args, **options)
+        if tuple(frames.shape[1:3]) == shape:
+            backward.append((np.array(frames), flow))
+        return flow
+
+    monkeypatch.setattr(decompose_module, "estimate_flow", spy)
+    monkeypatch.setattr(decompose_module, "FLOW_AHEAD", ahead)
+    iv.decompose(seq.frames, params=iv.Params(**FAST), threads=2)
+    assert sum(len(frames) - 1 for frames, _ in backward) == len(seq.frames) - 1    # 5 pairs, once each
+    small = decompose_module.downsample
+    be = iv.backends.get_backend("warp")
+    first = np.array(be.numpy(small(be, be.asarray(seq.frames[:4]), shape)))
+    np.testing.assert_array_equal(backward[0][0], first[::-1])       # frames 3, 2, 1, 0
 
 
 def test_an_error_on_the_flow_thread_reaches_the_caller(seq, monkeypatch):

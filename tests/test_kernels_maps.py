@@ -222,6 +222,56 @@ def test_motion_boundary_workspace_reused_across_shapes(kernel_backend, rng):
     assert len(ws) == 2
 
 
+# ------------------------------------------------ forward-backward check of the flow
+def round_trip(be, flow, back_flow, occ, max_distance):
+    out = be.asarray(occ.copy())
+    be.maps.round_trip_consistency(be.asarray(flow), be.asarray(back_flow), out, max_distance)
+    return be.numpy(out).copy()
+
+
+def test_round_trip_consistency_hand_cases(kernel_backend):
+    """A translation and its inverse keep w_occ; a block whose forward flow jumps one
+    texture period is cleared; the backward flow is read where the forward flow lands,
+    not at x; cleared pixels stay cleared; the distance is compared as >=."""
+    p, h, w = 2, 11, 15
+    occ = np.ones((p, h, w), np.float32)
+    occ[1, 0, 0] = 0.0
+    fwd = np.zeros((p, h, w, 2), np.float32)
+    fwd[..., 0] = 2.0
+    back = -fwd.copy()
+    np.testing.assert_array_equal(round_trip(kernel_backend, fwd, back, occ, 0.5), occ)
+    wrong = fwd.copy()
+    wrong[0, 3:6, 4:8, 0] += 6.0                          # a match one period (6 px) to the right
+    got = round_trip(kernel_backend, wrong, back, occ, 4.0)
+    assert not got[0, 3:6, 4:8].any()
+    got[0, 3:6, 4:8] = 1.0
+    np.testing.assert_array_equal(got, occ)
+    # The backward flow differs only at x + u = (6, 5): only the pixel landing there sees it.
+    moved = back.copy()
+    moved[0, 5, 6] = (3.0, 0.0)                         # round trip 2 + 3 = 5 px from (4, 5)
+    got = round_trip(kernel_backend, fwd, moved, occ, 4.0)
+    assert got[0, 5, 4] == 0.0 and got[0, 5, 6] == 1.0
+    assert got.sum() == occ.sum() - 1
+    half = fwd.copy()
+    half[0, 2, 2, 1] = 1.5                              # lands between rows 3 and 4 of the backward flow
+    d = ref.round_trip_distance(half, back)[0, 2, 2]
+    assert d > 1.0
+    assert round_trip(kernel_backend, half, back, occ, d * 1.01)[0, 2, 2] == 1.0
+    assert round_trip(kernel_backend, half, back, occ, d * 0.99)[0, 2, 2] == 0.0
+
+
+def test_round_trip_consistency_bad_input(kernel_backend):
+    be = kernel_backend
+    fwd = be.asarray(np.zeros((1, 4, 4, 2), np.float32))
+    occ = be.asarray(np.zeros((1, 4, 4), np.float32))
+    with pytest.raises(ValueError, match="back_flow"):
+        be.maps.round_trip_consistency(fwd, be.asarray(np.zeros((2, 4, 4, 2), np.float32)), occ, 1.0)
+    with pytest.raises(ValueError, match="occ must have shape"):
+        be.maps.round_trip_consistency(fwd, fwd, be.asarray(np.zeros((1, 4, 5), np.float32)), 1.0)
+    with pytest.raises(ValueError, match="max_distance"):
+        be.maps.round_trip_consistency(fwd, fwd, occ, 0.0)
+
+
 # ------------------------------------------------ shading gate (Eq. 9's local term)
 def gate(be, log_image, flow, tau):
     out = be.zeros(log_image.shape[:3])

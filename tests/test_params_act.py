@@ -94,6 +94,8 @@ MOVES = {
     "first_flow_at_guide_size": (False, {}, "classic_nl_fast"),
     "flow_refine_warps": (1, {}, "classic_nl_fast"),
     "flow_refine_guide_min_side": (1, {}, "classic_nl_fast"),
+    "flow_round_trip_max": (0.5, {}, "classic_nl_fast"),
+    "flow_round_trip_scale": (1.0, {"flow_round_trip_max": 0.5}, "classic_nl_fast"),
     "window": (4, {}, "truth"),
     "overlap": (1, {}, "truth"),
 }

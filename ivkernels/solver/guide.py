@@ -18,7 +18,7 @@ from ivkernels.solver.motion_maps import motion_maps
 from ivkernels.solver.pyramid import downsample, resize, resize_flow
 from ivkernels.solver.window_solver import SolveLog, solve_window
 
-__all__ = ["MIN_GUIDE_SIZE", "guide_albedo", "guide_shape", "guide_solve"]
+__all__ = ["MIN_GUIDE_SIZE", "guide_albedo", "guide_shape", "guide_solve", "scaled_shape"]
 
 #: The guide solve never goes below this many pixels on its shorter side.
 MIN_GUIDE_SIZE = 16
@@ -33,8 +33,14 @@ def guide_shape(height: int, width: int, params) -> tuple[int, int]:
     """(h, w) of the guide solve for frames of ``height`` x ``width``:
     ``params.flow_guide_scale`` times their size, the shorter side kept at
     :data:`MIN_GUIDE_SIZE` pixels or the frames' own, if smaller."""
+    return scaled_shape(height, width, float(params.flow_guide_scale))
+
+
+def scaled_shape(height: int, width: int, scale: float) -> tuple[int, int]:
+    """(h, w): ``scale`` (in (0, 1]) times ``height`` x ``width``, the shorter side kept
+    at :data:`MIN_GUIDE_SIZE` pixels or the frames' own, if smaller."""
     floor = min(MIN_GUIDE_SIZE, height, width)
-    scale = max(float(params.flow_guide_scale), floor / min(height, width))
+    scale = max(float(scale), floor / min(height, width))
     return max(1, int(round(height * scale))), max(1, int(round(width * scale)))
 
 

@@ -15,7 +15,7 @@ from ivkernels.params import Params
 from ivkernels.solver.pyramid import resize
 
 
-def motion_maps(be, frames_linear, flow, params: Params, *, workspace=None):
+def motion_maps(be, frames_linear, flow, params: Params, *, back_flow=None, workspace=None):
     """Occlusion and motion-boundary weights of a window.
 
     Parameters
@@ -23,6 +23,10 @@ def motion_maps(be, frames_linear, flow, params: Params, *, workspace=None):
     be : backend.
     frames_linear : (T, H, W, 3) backend array, linear RGB in [0, 1].
     flow : (T-1, H, W, 2) backend array, forward flow in pixels (x, y).
+    back_flow : optional (T-1, H, W, 2) backend array, the backward flow
+        (frame t+1 -> t, on frame t+1's grid); with
+        it and ``params.flow_round_trip_max`` > 0, the forward-backward check
+        (``maps.round_trip_consistency``) also clears the occlusion map.
     workspace : optional :class:`ivkernels.kernels.workspace.Workspace` of the
         caller for the kernels' scratch; without one it is allocated for this
         call and freed on return.
@@ -35,7 +39,9 @@ def motion_maps(be, frames_linear, flow, params: Params, *, workspace=None):
         bilinear warp there is reliable (``maps.warp_reliability`` with
         ``params.warp_spread_max``) and the input's chromaticity stays the
         same along the flow (``maps.chroma_consistency`` with
-        ``params.chroma_change_max``; skipped when that is 0), else 0.
+        ``params.chroma_change_max``; skipped when that is 0) and, with
+        ``back_flow``, the flow comes back within
+        ``params.flow_round_trip_max`` pixels, else 0.
     boundary : (T-1, H, W) backend array, 1 within ``params.boundary_radius``
         pixels of a flow Sobel magnitude above ``params.boundary_threshold``.
     """
@@ -55,6 +61,8 @@ def motion_maps(be, frames_linear, flow, params: Params, *, workspace=None):
     be.maps.warp_reliability(log_image, flow, occlusion, params.warp_spread_max)
     if params.chroma_change_max > 0.0:
         be.maps.chroma_consistency(log_image, flow, occlusion, params.chroma_change_max)
+    if back_flow is not None and params.flow_round_trip_max > 0.0:
+        be.maps.round_trip_consistency(flow, back_flow, occlusion, params.flow_round_trip_max)
     sobel = be.empty((n, H, W))
     be.derivatives.flow_sobel_magnitude(flow, sobel)
     boundary = be.empty((n, H, W))

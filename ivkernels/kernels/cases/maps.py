@@ -108,6 +108,30 @@ def _luminance(max_change, static):
                 updates=("occ",), tol=EXACT, ignore=tied)
 
 
+def _round_trip(max_distance, consistent):
+    def make(rng, T, H, W):
+        P = pairs(T)
+        if consistent:      # a translation per pair and its inverse, both with noise about max_distance
+            shift = normal(rng, (P, 1, 1, 2), 0.0, 3.0)
+            f = shift + normal(rng, (P, H, W, 2), 0.0, 0.5 * max_distance)
+            back = -shift + normal(rng, (P, H, W, 2), 0.0, 0.5 * max_distance)
+        else:               # unrelated flows, some vectors far outside the image (clamped samples)
+            f, back = flow(rng, P, H, W, far=0.1), flow(rng, P, H, W)
+        return {"flow": f, "back_flow": back.astype(F32), "occ": mask(rng, (pairs(T), H, W), 0.8),
+                "max_distance": max_distance}
+
+    def reference(v):
+        return {"occ": ref.round_trip_consistency(v["flow"], v["back_flow"], v["occ"], v["max_distance"])}
+
+    def tied(v):
+        """Distances within float32 rounding of ``max_distance``."""
+        return {"occ": np.abs(ref.round_trip_distance(v["flow"], v["back_flow"]) - v["max_distance"]) <= 1e-4}
+
+    return Case("maps", "round_trip_consistency", make, ("flow", "back_flow", "occ", "max_distance"), ("occ",),
+                reference, variant=f"max_distance={max_distance:g},{'consistent' if consistent else 'random'}",
+                updates=("occ",), tol=EXACT, ignore=tied)
+
+
 def _boundary(radius):
     def make(rng, T, H, W):
         P = pairs(T)
@@ -143,6 +167,8 @@ CASES = (
     _chroma(0.05, True),
     _luminance(0.2, False),
     _luminance(0.05, True),
+    _round_trip(1.0, True),
+    _round_trip(4.0, False),
     _boundary(0),
     _boundary(1),
     _boundary(3),

@@ -33,6 +33,10 @@ FAMILY.declare("luminance_consistency(log_image, flow, near, offsets, occ, max_c
                "or more beyond the pair's offset; ``max_change > 0``.",
                log_image="T H W 3", flow="T-1 H W 2", near="T-1 H W", offsets="T-1", occ=Out("T-1 H W"),
                max_change=Positive)
+FAMILY.declare("round_trip_consistency(flow, back_flow, occ, max_distance)",
+               "Clear occ where following flow and then back_flow misses the start by max_distance pixels or "
+               "more; ``max_distance > 0``.",
+               flow="T H W 2", back_flow="T H W 2", occ=Out("T H W"), max_distance=Positive)
 FAMILY.declare("shading_gate(log_image, flow, gate, tau, tau_chroma=0.0)",
                "Gate of Eq. 9's local term from the input's log change along the flow; ``tau > 0``.",
                log_image="T H W 3", flow="T-1 H W 2", gate=Out("T H W"), tau=Positive, tau_chroma=NonNegative,
@@ -103,6 +107,19 @@ def luminance_consistency(log_image, flow, near, offsets, occ, max_change: float
     change = np.abs(D - np.asarray(offsets, np.float64)[:, None, None])
     clear = (np.asarray(near) >= 0.5) & (change >= max_change)
     return np.where(clear, 0.0, np.asarray(occ, np.float64))
+
+
+def round_trip_distance(flow, back_flow) -> np.ndarray:
+    """(T, H, W): ``|u_t(x) + b_t(x + u_t(x))|`` (pixels), ``b_t`` the backward flow from frame
+    t+1 to frame t sampled bilinearly (clamped corners) where the forward flow ``u_t`` lands."""
+    flow = np.asarray(flow, np.float64)
+    back, _ = warp_bilinear(back_flow, flow)
+    return np.sqrt(((flow + back) ** 2).sum(-1))
+
+
+def round_trip_consistency(flow, back_flow, occ, max_distance: float) -> np.ndarray:
+    """``occ`` with 0 where :func:`round_trip_distance` reaches ``max_distance``."""
+    return np.where(round_trip_distance(flow, back_flow) >= max_distance, 0.0, np.asarray(occ, np.float64))
 
 
 def motion_boundary(sobel_mag, threshold: float, radius: int) -> np.ndarray:

@@ -117,6 +117,24 @@ def chroma_consistency_rows(img: nd4, flow: nd4, occ: nd3, max_change: ti.f32):
                 occ[t, y, x] = 0.0
 
 
+@ti.kernel
+def round_trip_consistency_rows(flow: nd4, back_flow: nd4, occ: nd3, max_distance: ti.f32):
+    height = flow.shape[1]
+    width = flow.shape[2]
+    for r in range(flow.shape[0] * height):
+        t = r // height
+        y = r - t * height
+        for x in range(width):
+            u = flow[t, y, x, 0]
+            v = flow[t, y, x, 1]
+            x0, x1, fx = clamped_corners(ti.cast(x, ti.f32) + u, width)
+            y0, y1, fy = clamped_corners(ti.cast(y, ti.f32) + v, height)
+            du = u + bilinear_at(back_flow, t, 0, x0, x1, fx, y0, y1, fy)
+            dv = v + bilinear_at(back_flow, t, 1, x0, x1, fx, y0, y1, fy)
+            if ti.sqrt(du * du + dv * dv) >= max_distance:
+                occ[t, y, x] = 0.0
+
+
 @ti.func
 def log_change_at(img: ti.template(), flow: ti.template(), p, y, x):
     """``(L_{p+1}(x + u) - L_p(x), inside)``, ``L`` the mean over channels of ``img``."""
@@ -284,6 +302,14 @@ def luminance_consistency(log_image, flow, near, offsets, occ, max_change: float
     """Clear ``occ`` where the brightness changes along the flow near a flow jump; see
     :func:`ivkernels.kernels.warp.maps.luminance_consistency`."""
     _clear_occlusion_where(luminance_consistency_rows, log_image, flow, occ, max_change, (near, offsets))
+
+
+@host("round_trip_consistency")
+def round_trip_consistency(flow, back_flow, occ, max_distance: float) -> None:
+    """Clear ``occ`` where the forward and the backward flow disagree; see
+    :func:`ivkernels.kernels.warp.maps.round_trip_consistency`."""
+    if occ.size:
+        round_trip_consistency_rows(flow, back_flow, occ, float(max_distance))
 
 
 @host("shading_gate")

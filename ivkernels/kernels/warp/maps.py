@@ -9,6 +9,8 @@
   next frame is not trustworthy (a sub-pixel sample across an edge),
 * :func:`chroma_consistency`: clears ``w_occ`` where the input's chromaticity
   changes along the flow (a flow that joins two different surfaces),
+* :func:`round_trip_consistency`: clears ``w_occ`` where the forward flow and
+  the backward flow disagree (the forward-backward check),
 * :func:`shading_gate`: the per-pixel weight of the local shading smoothness
   (Eq. 9), low where the input's log gradient changes along the flow.
 
@@ -178,6 +180,26 @@ def luminance_consistency_rows(row_begin: int, tiles: int, img: wp.array4d(dtype
             d, inside = log_change_at(img, flow, t, y, x)
             if wp.abs(d - offsets[t]) >= max_change:
                 occ[t, y, x] = 0.0
+
+
+@wp.kernel
+def round_trip_consistency_rows(row_begin: int, tiles: int, flow: wp.array4d(dtype=float),
+                                back_flow: wp.array4d(dtype=float), occ: wp.array3d(dtype=float),
+                                max_distance: float):
+    height = flow.shape[1]
+    width = flow.shape[2]
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
+    t = r // height
+    y = r - t * height
+    for x in range(x_begin, x_end):
+        u = flow[t, y, x, 0]
+        v = flow[t, y, x, 1]
+        x0, x1, fx = clamped_corners(float(x) + u, width)
+        y0, y1, fy = clamped_corners(float(y) + v, height)
+        du = u + bilinear_at(back_flow, t, 0, x0, x1, fx, y0, y1, fy)
+        dv = v + bilinear_at(back_flow, t, 1, x0, x1, fx, y0, y1, fy)
+        if wp.sqrt(du * du + dv * dv) >= max_distance:
+            occ[t, y, x] = 0.0
 
 
 @wp.func
@@ -415,6 +437,36 @@ def luminance_consistency(log_image, flow, near, offsets, occ, max_change: float
     On a GPU one pixel per thread (row tiles).
     """
     _clear_occlusion_where(luminance_consistency_rows, log_image, flow, occ, max_change, (near, offsets))
+
+
+@host("round_trip_consistency")
+def round_trip_consistency(flow, back_flow, occ, max_distance: float) -> None:
+    """Clear ``occ`` where the forward flow and the backward flow disagree.
+
+    Following ``u_t`` from ``x`` in frame t and then the backward flow
+    ``b_t`` (frame t+1 -> frame t) from where it lands should come back to
+    ``x``: ``u_t(x) + b_t(x + u_t(x)) = 0``.  Where the two estimates miss
+    each other by ``max_distance`` pixels or more, at least one of them is
+    wrong there (or ``x`` is hidden in frame t+1), and ``occ`` is set to 0.
+    The other tests of ``w_occ`` compare colours along the flow; a match one
+    period away on a periodic grey texture passes them all, but a flow
+    estimated from the other end rarely makes the same mistake.
+
+    Parameters
+    ----------
+    flow : wp.array float32 (T, H, W, 2), forward flow t -> t+1 in pixels.
+    back_flow : wp.array float32 (T, H, W, 2), backward flow t+1 -> t in pixels,
+        on frame t+1's grid; sampled bilinearly at ``x + u`` (clamped corners).
+    occ : wp.array float32 (T, H, W), ``w_occ``, updated in place.
+    max_distance : round-trip distance (pixels) from which the flow is not trusted, > 0.
+
+    On a GPU one pixel per thread (row tiles).
+    """
+    t, h, w, _ = flow.shape
+    dev = flow.device
+    tiles = row_tiles(w, dev)
+    launch_rows(round_trip_consistency_rows, t * h * tiles, [tiles, flow, back_flow, occ, float(max_distance)],
+                device=dev)
 
 
 @host("shading_gate")
