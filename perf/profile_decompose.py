@@ -12,6 +12,8 @@ kernels:
    plus the cost of one empty launch (8 array arguments) and of one launch
    split into row bands (:func:`ivkernels.kernels.launch.launch_rows`);
 2. **seconds per stage**: flow pass 1, the guide solve, flow pass 2+, the
+   backward flow of the forward-backward check (``Params.flow_round_trip_max``;
+   on the calling thread here, on a second thread in a plain run), the
    motion maps, the full solve and the rest (conversion, output); for each,
    the time inside kernel-family host functions, the estimated launch
    overhead (launches times the empty launch), host syncs and ``.numpy()``,
@@ -249,7 +251,7 @@ def _elements(args, kwargs, names, spec: str) -> int:
 class Recorder:
     """Counts and times of one decomposition, keyed by stage."""
 
-    STAGES = ("flow pass 1", "guide solve", "flow pass 2+", "maps", "full solve", "other")
+    STAGES = ("flow pass 1", "guide solve", "flow pass 2+", "back flow", "maps", "full solve", "other")
 
     def __init__(self, device: str = "cpu"):
         #: a CUDA device to wait on around every timed call (launches there return at once)
@@ -404,6 +406,8 @@ def instrumented(rec: Recorder, be):
     def staged(fn, label):
         @functools.wraps(fn)
         def inner(*args, **kwargs):
+            if threading.get_ident() != rec.main:         # the stage stack is the calling thread's
+                return fn(*args, **kwargs)
             name = label(args, kwargs) if callable(label) else label
             with rec.in_stage(name):
                 return fn(*args, **kwargs)
@@ -411,6 +415,10 @@ def instrumented(rec: Recorder, be):
 
     dec = importlib.import_module("ivkernels.decompose")     # the module, not the function
     patch(dec._Decomposer, "_first_pass_flow", staged(dec._Decomposer._first_pass_flow, "flow pass 1"))
+    patch(dec._Decomposer, "_back_flow_for", staged(dec._Decomposer._back_flow_for, "back flow"))
+    # the second thread's flows (the next window's, the backward flow) run on the calling
+    # thread here, so that every second has its stage
+    patch(dec, "FLOW_AHEAD", False)
 
     def patch_everywhere(name, original, replacement):
         """Replace ``original`` under ``name`` in every module of the package that holds it

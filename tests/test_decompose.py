@@ -106,23 +106,29 @@ def test_flow_passes_reestimate_the_flow_on_the_guide_albedo(seq, monkeypatch):
         return original(frames, method=method, **options)
 
     monkeypatch.setattr(flow_module, "estimate_flow", spy)
-    one = iv.decompose(seq.frames, flow="dis", params=FAST, flow_passes=1)
+    checked = iv.decompose(seq.frames, flow="dis", params=FAST, flow_passes=1)
+    # the forward-backward check's backward flow: the same method, at a quarter of the size (16 px floor)
+    assert len(calls) == 2 and calls[1][:2] == ("dis", False) and calls[1][3] == (16, 22)
+    FAST_NO_CHECK = dataclasses.replace(FAST, flow_round_trip_max=0.0)
+    calls.clear()
+    one = iv.decompose(seq.frames, flow="dis", params=FAST_NO_CHECK, flow_passes=1)
     assert len(calls) == 1 and one.diagnostics["flow_method"] == "dis"
     assert calls[0][3] == seq.frames.shape[1:3]                 # a single pass runs at full size
+    assert np.all(checked.occlusion <= one.occlusion)          # the check only clears w_occ
     calls.clear()
-    two = iv.decompose(seq.frames, flow="dis", params=FAST, flow_passes=3)
+    two = iv.decompose(seq.frames, flow="dis", params=FAST_NO_CHECK, flow_passes=3)
     # pass 1 on the input at the guide's size (it only feeds the guide), passes 2 and 3 at full
     # size on guide albedos (float32 in [0, 1]); DIS takes no init
     assert [c[0] for c in calls] == ["dis"] * 3 and not any(c[1] for c in calls)
     assert [c[3] for c in calls] == [(20, 28), seq.frames.shape[1:3], seq.frames.shape[1:3]]
     calls.clear()
-    full = iv.decompose(seq.frames, flow="dis", params=dataclasses.replace(FAST, first_flow_at_guide_size=False),
+    full = iv.decompose(seq.frames, flow="dis", params=dataclasses.replace(FAST_NO_CHECK, first_flow_at_guide_size=False),
                         flow_passes=2)
     assert [c[3] for c in calls] == [seq.frames.shape[1:3]] * 2 and full.flow.shape == seq.flow.shape
     # the later passes at the guide's size once its shorter side (20) reaches flow_refine_guide_min_side
     for least, later in ((20, (20, 28)), (21, seq.frames.shape[1:3]), (0, seq.frames.shape[1:3])):
         calls.clear()
-        small = iv.decompose(seq.frames, flow="dis", params=dataclasses.replace(FAST, flow_refine_guide_min_side=least),
+        small = iv.decompose(seq.frames, flow="dis", params=dataclasses.replace(FAST_NO_CHECK, flow_refine_guide_min_side=least),
                              flow_passes=3)
         assert [c[3] for c in calls] == [(20, 28), later, later] and small.flow.shape == seq.flow.shape
     assert two.diagnostics["flow_method"] == "dis, 3 passes with the intrinsic video"
@@ -148,7 +154,7 @@ def test_classic_flow_passes_refine_from_the_previous_flow_with_fewer_warps(seq,
         return original(frames, method=method, **options)
 
     monkeypatch.setattr(flow_module, "estimate_flow", spy)
-    params = dataclasses.replace(FAST, flow_refine_warps=1)
+    params = dataclasses.replace(FAST, flow_refine_warps=1, flow_round_trip_max=0.0)     # no backward flow
     iv.decompose(seq.frames, params=params, flow_passes=2)
     assert len(calls) == 2 and calls[0] == {}                  # pass 1: the method's own schedule
     assert calls[1]["warps"] == 1 and calls[1]["init"].shape == seq.flow.shape

@@ -28,7 +28,7 @@ def test_profile_prints_stages_families_kernels_and_host_steps():
     for heading in ("== machine roof", "== seconds per stage", "== seconds per kernel family",
                     "== kernel host functions", "== host steps under cProfile"):
         assert heading in out
-    for stage in ("flow pass 1", "guide solve", "flow pass 2+", "full solve"):
+    for stage in ("flow pass 1", "guide solve", "flow pass 2+", "back flow", "full solve"):
         assert f"\n  {stage} " in out
     # every family is seen, also one split into a package of modules (flow_classic)
     for family in ("flow_classic", "median", "vecops", "energy_albedo_gsm"):
