@@ -61,7 +61,10 @@ class IntrinsicVideo:
     flow : (T-1, H, W, 2) float32 forward flow t -> t+1 in pixels (dx, dy),
         or ``None`` when solved with ``temporal=False`` and no flow given.
     occlusion : (T-1, H, W) float32, the paper's w_occ (Eq. 6): 1 = visible
-        in t+1 (temporal terms on), 0 = occluded or leaves the image.
+        in t+1 (temporal terms on), 0 = occluded, leaves the image, or not
+        trusted (:func:`ivkernels.solver.motion_maps.motion_maps`: the warp's
+        reliability, chromaticity along the flow, an estimated flow's round
+        trip).
     boundary : (T-1, H, W) float32, the paper's w_bnd: 1 = near a motion boundary.
     diagnostics : dict with ``energy`` (rows of window, level, outer
         iteration, L-BFGS iteration, energy), ``terms`` (each term's energy
@@ -425,7 +428,10 @@ def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
         [0, 1].  A single frame (H, W, 3) is treated as T = 1.
     flow : ``None`` (estimate with :data:`DEFAULT_FLOW_METHOD`), the name of
         a method of :func:`ivkernels.estimate_flow`, or a (T-1, H, W, 2)
-        float array of forward flow in pixels (e.g. ground truth).
+        float array of forward flow in pixels (e.g. ground truth).  An
+        estimated flow is also estimated backwards, at a quarter of the size,
+        and the temporal terms leave out the pixels where the two miss each
+        other (``Params.flow_round_trip_max``); a given flow is taken as it is.
     temporal : ``False`` drops the temporal terms and the motion weights (the
         paper's "IV w/o flow" ablation); no flow is estimated then.
     backend : ``"warp"`` (default) or ``"taichi"``.
