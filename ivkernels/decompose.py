@@ -209,7 +209,15 @@ class _Decomposer:
             return self.flow[start:stop - 1]
         if self.flow_method is None or stop - start < 2:
             return None
+        return self._cached_pairs(start, stop, cached, stage, f"flow ({self.flow_method})",
+                                  lambda first, last: self._first_pass_flow(self.frames[first:last + 2]))
 
+    def _cached_pairs(self, start: int, stop: int, cached: dict, stage: str, desc: str | None,
+                      estimate) -> np.ndarray:
+        """The flows of pairs ``start..stop-2`` (stop-start-1, H, W, 2) from ``cached`` (pair ->
+        flow), the missing ones estimated by ``estimate(first, last)`` (the flows of pairs
+        first..last) and cached; pairs before ``start`` are dropped from the cache.  Seconds
+        are logged as ``stage``; ``desc`` names the progress bar (None: no bar)."""
         missing = [t for t in range(start, stop - 1) if t not in cached]
         if missing:
             t0 = time.perf_counter()
@@ -218,11 +226,11 @@ class _Decomposer:
             # moves a few times per window.
             batches = [missing[i:i + FLOW_PAIRS_PER_CALL]
                        for i in range(0, len(missing), FLOW_PAIRS_PER_CALL)]
-            with tqdm(total=len(missing), desc=f"flow ({self.flow_method})", unit="pair",
-                      disable=not self.progress, leave=False) as bar:
+            with tqdm(total=len(missing), desc=desc, unit="pair",
+                      disable=not self.progress or desc is None, leave=False) as bar:
                 for batch in batches:
                     first, last = batch[0], batch[-1]
-                    flows = self._first_pass_flow(self.frames[first:last + 2])
+                    flows = estimate(first, last)
                     for t in batch:
                         cached[t] = flows[t - first]
                     bar.update(len(batch))
@@ -251,21 +259,13 @@ class _Decomposer:
         ``cached`` (pair -> flow) keeps the pairs a later window shares."""
         if not self.checks_round_trip or stop - start < 2:
             return None
-        missing = [t for t in range(start, stop - 1) if t not in cached]
-        if missing:
-            t0 = time.perf_counter()
-            H, W = self.frames.shape[1:3]
-            shape = scaled_shape(H, W, self.params.flow_round_trip_scale)
-            for i in range(0, len(missing), FLOW_PAIRS_PER_CALL):
-                first, last = missing[i], missing[min(i + FLOW_PAIRS_PER_CALL, len(missing)) - 1]
-                # frames last+1, last, ..., first: their forward flow is the backward flow, last pair first
-                backward = self._flow_at(self.frames[first:last + 2][::-1].copy(), shape)[::-1]
-                for t in range(first, last + 1):
-                    cached[t] = backward[t - first]
-            self.log.add_time(stage, time.perf_counter() - t0)
-        for t in [t for t in cached if t < start]:
-            del cached[t]
-        return np.stack([cached[t] for t in range(start, stop - 1)])
+        shape = scaled_shape(*self.frames.shape[1:3], self.params.flow_round_trip_scale)
+
+        def backward(first: int, last: int) -> np.ndarray:
+            # frames last+1, last, ..., first: their forward flow is the backward flow, last pair first
+            return self._flow_at(self.frames[first:last + 2][::-1].copy(), shape)[::-1]
+
+        return self._cached_pairs(start, stop, cached, stage, None, backward)
 
     def _first_pass_flow(self, frames: np.ndarray) -> np.ndarray:
         """The flow of the first pass on ``frames`` (T, H, W, 3), at full size.

@@ -133,10 +133,13 @@ def test_the_round_trip_clears_a_match_one_period_away(any_backend, checkerboard
 
 
 def test_a_given_flow_gets_no_round_trip_check(checkerboard):
-    """The check needs an estimated backward flow; a flow the caller gives is taken as it is."""
+    """The check needs an estimated backward flow; a flow the caller gives is taken as it is,
+    even with a block one period off that the round trip would clear."""
     frames, forward, _ = checkerboard
+    wrong = forward.copy()
+    wrong[0, 6:12, 2:8, 0] += 12.0
     frames = np.concatenate([frames, frames[:1]])
-    flow = np.concatenate([forward, -forward])
+    flow = np.concatenate([wrong, -forward])
     small = iv.Params(lbfgs_iterations=3, outer_iterations=1, pyramid_min_size=12)
     a = iv.decompose(frames, flow=flow, params=small)
     b = iv.decompose(frames, flow=flow, params=small.replace(flow_round_trip_max=0.0))
