@@ -27,6 +27,7 @@ from ivkernels.priors import load_albedo_prior
 from ivkernels.solver.guide import guide_shape, guide_solve, scaled_shape
 from ivkernels.solver.motion_maps import motion_maps
 from ivkernels.solver.pyramid import downsample, level_shapes, resize_flow
+from ivkernels.solver.still_flow import camera_holds_still, hold_still_surfaces, still_surface_mask
 from ivkernels.solver.window_solver import SolveLog, solve_window
 
 #: Flow method used when ``flow=None``.
@@ -267,6 +268,20 @@ class _Decomposer:
 
         return self._cached_pairs(start, stop, cached, stage, None, backward)
 
+    def _still_surfaces(self, frames_be, flow_np: np.ndarray | None) -> np.ndarray | None:
+        """(H, W) bool: the pixels of a window whose frames ``frames_be`` show the same
+        surface (:func:`still_surface_mask`), where the flow is estimated,
+        ``Params.flow_still_surface_tau`` > 0 and the window's first-pass flow
+        ``flow_np`` says the camera holds still (:func:`camera_holds_still`); else None."""
+        p = self.params
+        if self.flow is not None or flow_np is None or not len(flow_np) or p.flow_still_surface_tau <= 0 \
+                or not camera_holds_still(flow_np):
+            return None
+        t0 = time.perf_counter()
+        still = still_surface_mask(self.be, frames_be, p)
+        self.log.add_time("maps", time.perf_counter() - t0)
+        return still
+
     def _first_pass_flow(self, frames: np.ndarray) -> np.ndarray:
         """The flow of the first pass on ``frames`` (T, H, W, 3), at full size.
 
@@ -357,6 +372,9 @@ class _Decomposer:
                 if ahead is not None:
                     ahead.result()          # the cache holds this window's first-pass flow now
                 flow_np = self._flow_for(start, stop, cached_flow)
+                frames_be = be.asarray(frames_np)
+                still = self._still_surfaces(frames_be, flow_np)
+                flow_np = hold_still_surfaces(flow_np, still)
                 back = None         # this window's backward flow, estimated while its guide is solved
                 if pool is not None and self.checks_round_trip:
                     back = pool.submit(self._in_background, self._back_flow_for, start, stop, cached_back,
@@ -365,7 +383,6 @@ class _Decomposer:
                     ahead = pool.submit(self._in_background, self._flow_for, *ranges[index + 1][:2], cached_flow,
                                         stage="flow ahead")
                 occ_np = bnd_np = None
-                frames_be = be.asarray(frames_np)
                 guide_shading = None
                 if flow_np is not None and self.joint:
                     shared = 0
@@ -373,12 +390,15 @@ class _Decomposer:
                         flow_np[shared] = last_flow[start + shared]
                         shared += 1
                     flow_np, guide_shading = self._joint_flow(frames_be, flow_np, shared)
+                    if still is not None:       # the shared pairs were held by the window before
+                        flow_np = np.concatenate([flow_np[:shared], hold_still_surfaces(flow_np[shared:], still)])
                     last_flow = {start + k: f for k, f in enumerate(flow_np)}
                 elif self.flow is not None and self.temporal and p.start_from_guide \
                         and flow_np is not None and len(flow_np):
                     # A given flow is final: one guide solve with it, the last solve's start.
                     _, guide_shading = guide_solve(be, frames_be, flow_np, p, self.prior, log=self.log)
                 back_np = back.result() if back is not None else self._back_flow_for(start, stop, cached_back)
+                back_np = hold_still_surfaces(back_np, still)
                 t0 = time.perf_counter()
                 flow_be = occ_be = bnd_be = None
                 if flow_np is not None:
@@ -431,7 +451,10 @@ def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
         float array of forward flow in pixels (e.g. ground truth).  An
         estimated flow is also estimated backwards, at a quarter of the size,
         and the temporal terms leave out the pixels where the two miss each
-        other (``Params.flow_round_trip_max``); a given flow is taken as it is.
+        other (``Params.flow_round_trip_max``); where a window's camera holds
+        still, both are zero at the pixels whose frames show the same surface
+        (``Params.flow_still_surface_tau``: a moving shadow does not drag the
+        flow of the floor it crosses).  A given flow is taken as it is.
     temporal : ``False`` drops the temporal terms and the motion weights (the
         paper's "IV w/o flow" ablation); no flow is estimated then.
     backend : ``"warp"`` (default) or ``"taichi"``.

@@ -98,6 +98,18 @@ class Params:
         0.525; the MIT objects pay 0.612 -> 0.621 (colour) and 0.711 ->
         0.713 (grey).  At 640x480 the backward flow runs while the guide is
         solved and adds no measurable time.
+    flow_still_surface_tau, flow_still_surface_share
+        Where the flow is estimated and a window's camera holds still (its
+        median flow under 0.1 px), the flow is set to zero (forward and the
+        check's backward flow) at the pixels whose frames show the same
+        surface: their log-luminance gradients (on ``log(i + 0.02)``, 5x5
+        mean) within ``flow_still_surface_tau`` of their median over the
+        window in at least ``flow_still_surface_share`` of the frames
+        (``maps.still_surface``, :mod:`ivkernels.solver.still_flow`; tau 0:
+        off).  A shadow sweeping over a still floor drags the estimated flow
+        with it; the floor's texture stays.  Chosen on training data
+        (perf/RESULTS.md, "A still camera's flow held on the surfaces that
+        stay").
     boundary_threshold, boundary_radius
         w_bnd (Sec. 3.3): flow Sobel magnitude (pixels / pixel) above the
         threshold, dilated by a square of this radius.  0.25 marks jumps of
@@ -447,6 +459,8 @@ class Params:
     luminance_change_radius: int = 6
     flow_round_trip_max: float = 4.0
     flow_round_trip_scale: float = 0.25
+    flow_still_surface_tau: float = 0.01
+    flow_still_surface_share: float = 0.5
     # w_bnd
     boundary_threshold: float = 0.25
     boundary_radius: int = 3
@@ -545,6 +559,9 @@ _RULES = {
     "flow_round_trip_max": Range(float, 0.0, why="pixels of round trip; 0 switches the test off"),
     "flow_round_trip_scale": Range(float, 0.0, 1.0, low_open=True,
                                    why="the size of the backward flow relative to the frames"),
+    "flow_still_surface_tau": Range(float, 0.0, why="log units per pixel; 0 switches the still-surface test off"),
+    "flow_still_surface_share": Range(float, 0.0, 1.0, low_open=True,
+                                      why="the share of a window's frames that must show the same surface"),
     "boundary_radius": Range(int, 0, 32, why="the dilation costs radius^2 per pixel"),
     "nonlocal_radius": Range(int, 1, 32, why="the weighted median costs radius^2 per pixel"),
     "pyramid_scale": Range(float, 0.0, 0.9, low_open=True,

@@ -14,7 +14,8 @@ kernels:
 2. **seconds per stage**: flow pass 1, the guide solve, flow pass 2+, the
    backward flow of the forward-backward check (``Params.flow_round_trip_max``;
    on the calling thread here, on a second thread in a plain run), the
-   motion maps, the full solve and the rest (conversion, output); for each,
+   motion maps (with the still-surface map of a still camera), the full
+   solve and the rest (conversion, output); for each,
    the time inside kernel-family host functions, the estimated launch
    overhead (launches times the empty launch), host syncs and ``.numpy()``,
    allocations, and the host work between launches (the stage's time
@@ -436,6 +437,8 @@ def instrumented(rec: Recorder, be):
     patch_everywhere("guide_solve", guide.guide_solve, staged(guide.guide_solve, "guide solve"))
     maps_mod = importlib.import_module("ivkernels.solver.motion_maps")
     patch_everywhere("motion_maps", maps_mod.motion_maps, staged(maps_mod.motion_maps, "maps"))
+    still = importlib.import_module("ivkernels.solver.still_flow")
+    patch_everywhere("still_surface_mask", still.still_surface_mask, staged(still.still_surface_mask, "maps"))
     ws = importlib.import_module("ivkernels.solver.window_solver")
     patch_everywhere("solve_window", ws.solve_window, staged(ws.solve_window, "full solve"))
     try:

@@ -272,6 +272,61 @@ def test_round_trip_consistency_bad_input(kernel_backend):
         be.maps.round_trip_consistency(fwd, fwd, occ, 0.0)
 
 
+# ------------------------------------------------ still surfaces (Weiss's median of the gradients)
+def still(be, log_image, tau, radius, share):
+    out = be.asarray(np.full(log_image.shape[1:3], np.nan, np.float32))
+    be.maps.still_surface(be.asarray(log_image), out, tau, radius, share)
+    return be.numpy(out).copy()
+
+
+def checkerboard(t, h, w, period=4):
+    y, x = np.mgrid[:h, :w]
+    board = np.where((y // period + x // period) % 2 == 0, -0.2, -1.6).astype(np.float32)
+    return np.repeat(np.repeat(board[None, :, :, None], t, 0), 3, 3)
+
+
+def test_still_surface_hand_cases(kernel_backend):
+    """A still checkerboard under a moving hard shadow and a changing light is still; a
+    print sliding three pixels a frame is not; a flat region
+    is still whether it moves or not; the share counts frames; one frame is still."""
+    t, h, w = 6, 16, 24
+    board = checkerboard(t, h, w)
+    lit = board + np.float32(0.2) * np.arange(t, dtype=np.float32)[:, None, None, None]
+    shadowed = lit.copy()
+    for k in range(t):
+        shadowed[k, :, 4 * k: 4 * k + 6] -= 2.5                    # a shadow band 4 px further each frame
+    got = still(kernel_backend, shadowed, 0.05, 1, 0.5)
+    np.testing.assert_array_equal(got, 1.0)
+    print_ = np.random.default_rng(3).normal(-1.0, 0.5, (h, w, 1)).astype(np.float32).repeat(3, 2)
+    sliding = np.stack([np.roll(print_, (k, 3 * k), axis=(0, 1)) for k in range(t)])
+    got = still(kernel_backend, sliding, 0.05, 1, 0.5)
+    assert got.sum() == 0
+    flat = np.full((t, h, w, 3), -0.7, np.float32)
+    np.testing.assert_array_equal(still(kernel_backend, flat, 0.05, 1, 0.5), 1.0)
+    np.testing.assert_array_equal(still(kernel_backend, sliding[:1], 0.05, 2, 1.0), 1.0)
+    # four frames of six show the board, two the print: a share of 0.6 (3.6 frames) holds
+    # everywhere, 0.7 (4.2) only where the print happens to agree
+    four = np.concatenate([board[:4], sliding[4:]])
+    np.testing.assert_array_equal(still(kernel_backend, four, 0.05, 1, 0.6), 1.0)
+    got = still(kernel_backend, four, 0.05, 1, 0.7)
+    assert got.mean() < 0.2
+    np.testing.assert_array_equal(got, ref.still_surface(four, 0.05, 1, 0.7))
+
+
+def test_still_surface_bad_input(kernel_backend):
+    be = kernel_backend
+    img = be.asarray(np.zeros((3, 4, 5, 3), np.float32))
+    out = be.asarray(np.zeros((4, 5), np.float32))
+    with pytest.raises(ValueError, match="out must have shape"):
+        be.maps.still_surface(img, be.asarray(np.zeros((3, 4, 5), np.float32)), 0.1, 1, 0.5)
+    with pytest.raises(ValueError, match="tau"):
+        be.maps.still_surface(img, out, 0.0, 1, 0.5)
+    with pytest.raises(ValueError, match="share"):
+        be.maps.still_surface(img, out, 0.1, 1, -1.0)
+    with pytest.raises(ValueError, match="radius"):
+        be.maps.still_surface(img, out, 0.1, -1, 0.5)
+
+
 # ------------------------------------------------ shading gate (Eq. 9's local term)
 def gate(be, log_image, flow, tau):
     out = be.zeros(log_image.shape[:3])

@@ -24,7 +24,8 @@ BASE = Params(window=3, overlap=2, pyramid_min_size=12, outer_iterations=2, lbfg
               lbfgs_iterations_coarse=30, guide_lbfgs_iterations=4)
 
 #: field -> (new value, extra changes to both runs, flow: "truth" (the ground truth, of
-#: objects_camera unless another kind follows the colon) or an estimated method)
+#: objects_camera unless another kind follows the colon) or an estimated method (on
+#: objects_camera unless another kind follows the colon))
 MOVES = {
     "eps_shading": (0.05, {}, "truth"),
     "lam_temporal_albedo": (5.0, {}, "truth"),
@@ -96,6 +97,8 @@ MOVES = {
     "flow_refine_guide_min_side": (1, {}, "classic_nl_fast"),
     "flow_round_trip_max": (0.5, {}, "classic_nl_fast"),
     "flow_round_trip_scale": (1.0, {"flow_round_trip_max": 0.5}, "classic_nl_fast"),
+    "flow_still_surface_tau": (0.0, {}, "classic_nl_fast:rotating_shadows"),
+    "flow_still_surface_share": (1.0, {}, "classic_nl_fast:rotating_shadows"),
     "window": (4, {}, "truth"),
     "overlap": (1, {}, "truth"),
 }
@@ -136,7 +139,8 @@ def _run(params: Params, flow: str):
             frames, true_flow = _sequence(flow.partition(":")[2] or "objects_camera")
             out = iv.decompose(frames, flow=true_flow, params=params)
         else:
-            out = iv.decompose(_sequence("objects_camera")[0], flow=flow, flow_passes=2, params=params)
+            method, _, kind = flow.partition(":")
+            out = iv.decompose(_sequence(kind or "objects_camera")[0], flow=method, flow_passes=2, params=params)
         _cache[key] = out
     return _cache[key]
 

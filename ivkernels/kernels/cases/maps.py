@@ -1,5 +1,5 @@
 """Cases of :mod:`ivkernels.kernels.warp.maps` (occlusion, warp reliability, chromaticity
-consistency, motion boundaries, shading gate)."""
+consistency, motion boundaries, shading gate, still surface)."""
 from __future__ import annotations
 
 import numpy as np
@@ -156,6 +156,23 @@ def _gate(tau, static, tau_chroma=0.0):
                 keywords=("tau_chroma",), tol=Tol(1e-4, 1e-5))
 
 
+def _still(tau, radius, share):
+    def make(rng, T, H, W):
+        img = normal(rng, (T, H, W, 3), -1.0, 0.3)
+        img[:, :, : W // 2] = img[:1, :, : W // 2]                       # a still half ...
+        img[:, :, : W // 2] += normal(rng, (T, 1, 1, 1), 0.0, 0.5)        # ... under a changing light
+        return {"log_image": img, "out": nans((H, W)), "tau": tau, "radius": radius, "share": share}
+
+    def tied(v):
+        """Window means within float32 rounding of ``tau``."""
+        means = ref.still_window_means(v["log_image"], v["radius"])
+        return {"out": (np.abs(means - v["tau"]) <= 1e-4).any(0)}
+
+    return Case("maps", "still_surface", make, ("log_image", "out", "tau", "radius", "share"), ("out",),
+                lambda v: {"out": ref.still_surface(v["log_image"], v["tau"], v["radius"], v["share"])},
+                variant=f"tau={tau:g},radius={radius},share={share:g}", tol=EXACT, ignore=tied)
+
+
 CASES = (
     _occlusion_soft(20.0, 0.3),
     _occlusion_soft(40.0, 1.0),
@@ -175,4 +192,7 @@ CASES = (
     _gate(0.1, True),
     _gate(0.5, False),
     _gate(0.5, False, 0.3),
+    _still(0.3, 1, 0.5),
+    _still(0.05, 2, 0.5),
+    _still(1.0, 0, 0.75),
 )

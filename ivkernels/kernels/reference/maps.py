@@ -37,6 +37,11 @@ FAMILY.declare("round_trip_consistency(flow, back_flow, occ, max_distance)",
                "Clear occ where following flow and then back_flow misses the start by max_distance pixels or "
                "more; ``max_distance > 0``.",
                flow="T H W 2", back_flow="T H W 2", occ=Out("T H W"), max_distance=Positive)
+FAMILY.declare("still_surface(log_image, out, tau, radius, share, *, workspace=None)",
+               "1 where the frames' log-luminance gradients agree with their median over the frames (within tau, "
+               "as a mean over a (2 radius + 1)^2 window) in at least share of the frames; ``tau, share > 0``.",
+               log_image="T H W 3", out=Out("H W"), tau=Positive, radius=Int(0), share=Positive,
+               workspace=Workspace())
 FAMILY.declare("shading_gate(log_image, flow, gate, tau, tau_chroma=0.0)",
                "Gate of Eq. 9's local term from the input's log change along the flow; ``tau > 0``.",
                log_image="T H W 3", flow="T-1 H W 2", gate=Out("T H W"), tau=Positive, tau_chroma=NonNegative,
@@ -120,6 +125,45 @@ def round_trip_distance(flow, back_flow) -> np.ndarray:
 def round_trip_consistency(flow, back_flow, occ, max_distance: float) -> np.ndarray:
     """``occ`` with 0 where :func:`round_trip_distance` reaches ``max_distance``."""
     return np.where(round_trip_distance(flow, back_flow) >= max_distance, 0.0, np.asarray(occ, np.float64))
+
+
+def log_luminance_gradients(log_image) -> np.ndarray:
+    """(T, H, W, 2): the forward differences ``L(x + 1) - L(x)``, ``L(y + 1) - L(y)`` of
+    ``L = mean_c log_image`` (0 on the last column / row)."""
+    L = np.asarray(log_image, np.float64).mean(-1)
+    g = np.zeros((*L.shape, 2))
+    g[:, :, :-1, 0] = L[:, :, 1:] - L[:, :, :-1]
+    g[:, :-1, :, 1] = L[:, 1:, :] - L[:, :-1, :]
+    return g
+
+
+def median_residual(log_image) -> np.ndarray:
+    """(T, H, W): ``|g_t(x) - m(x)|_1``, ``g`` :func:`log_luminance_gradients` and ``m`` their
+    median over the frames (the mean of the two middle values for an even count)."""
+    g = log_luminance_gradients(log_image)
+    return np.abs(g - np.median(g, axis=0)).sum(-1)
+
+
+def still_window_means(log_image, radius: int) -> np.ndarray:
+    """(T, H, W): :func:`median_residual` averaged over the ``(2 radius + 1)^2`` window
+    (the pixels of it inside the image)."""
+    r = median_residual(log_image)
+    t, h, w = r.shape
+    total = np.zeros_like(r)
+    count = np.zeros((h, w))
+    for dy in range(-radius, radius + 1):
+        for dx in range(-radius, radius + 1):
+            ys, xs, yn, xn = _pair_slices(dy, dx, h, w)
+            total[:, ys, xs] += r[:, yn, xn]
+            count[ys, xs] += 1.0
+    return total / count
+
+
+def still_surface(log_image, tau: float, radius: int, share: float) -> np.ndarray:
+    """(H, W): 1 where the frames whose :func:`still_window_means` is under ``tau`` number
+    at least ``share * T``, else 0."""
+    means = still_window_means(log_image, radius)
+    return ((means < tau).sum(0) >= share * means.shape[0]).astype(np.float64)
 
 
 def motion_boundary(sobel_mag, threshold: float, radius: int) -> np.ndarray:

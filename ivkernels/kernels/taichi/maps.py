@@ -1,6 +1,6 @@
 """Taichi mirror of :mod:`ivkernels.kernels.warp.maps`: occlusion maps (Eq. 6, 7)
-the motion-boundary map (Sec. 3.3) and the gate of the local shading
-smoothness (Eq. 9), same host functions and signatures,
+the motion-boundary map (Sec. 3.3), the gate of the local shading
+smoothness (Eq. 9) and the still-surface map, same host functions and signatures,
 NumPy arrays passed as ``ti.types.ndarray()``.
 
 The next frame's Lab colour at ``x + u`` is sampled with the bilinear helpers
@@ -18,6 +18,7 @@ from ivkernels.kernels.workspace import scratch_buffer
 host = implements(FAMILY, FRONT)
 
 nd1 = ti.types.ndarray(dtype=ti.f32, ndim=1)
+nd2 = ti.types.ndarray(dtype=ti.f32, ndim=2)
 nd3 = ti.types.ndarray(dtype=ti.f32, ndim=3)
 nd4 = ti.types.ndarray(dtype=ti.f32, ndim=4)
 
@@ -219,6 +220,95 @@ def edge_hit(magnitude: ti.template(), t, y, x, threshold):
     return hit
 
 
+@ti.func
+def luminance_gradient(img: ti.template(), t, y, x, axis):
+    """``L(x + e) - L(x)`` along ``axis`` (0: x, 1: y), ``L`` the channel mean; 0 past the edge."""
+    y1 = y
+    x1 = x
+    if axis == 0:
+        x1 = x + 1
+    else:
+        y1 = y + 1
+    g = 0.0
+    if x1 < img.shape[2] and y1 < img.shape[1]:
+        here = (img[t, y, x, 0] + img[t, y, x, 1] + img[t, y, x, 2]) / 3.0
+        there = (img[t, y1, x1, 0] + img[t, y1, x1, 1] + img[t, y1, x1, 2]) / 3.0
+        g = there - here
+    return g
+
+
+@ti.kernel
+def luminance_gradients_rows(img: nd4, gradients: nd4):
+    for r in range(img.shape[0] * img.shape[1]):
+        t = r // img.shape[1]
+        y = r - t * img.shape[1]
+        for x in range(img.shape[2]):
+            gradients[t, y, x, 0] = luminance_gradient(img, t, y, x, 0)
+            gradients[t, y, x, 1] = luminance_gradient(img, t, y, x, 1)
+
+
+@ti.func
+def frame_median(gradients: ti.template(), y, x, axis):
+    """The median over the frames of ``gradients[:, y, x, axis]`` (each value's rank counted)."""
+    frames = gradients.shape[0]
+    lower_at = (frames - 1) // 2
+    upper_at = frames // 2
+    lower = 0.0
+    upper = 0.0
+    for k in range(frames):
+        v = gradients[k, y, x, axis]
+        below = 0
+        equal = 0
+        for j in range(frames):
+            o = gradients[j, y, x, axis]
+            if o < v:
+                below += 1
+            elif o == v:
+                equal += 1
+        if below <= lower_at and lower_at < below + equal:
+            lower = v
+        if below <= upper_at and upper_at < below + equal:
+            upper = v
+    return 0.5 * (lower + upper)
+
+
+@ti.kernel
+def median_residual_rows(gradients: nd4, residual: nd3):
+    for y in range(gradients.shape[1]):
+        for x in range(gradients.shape[2]):
+            mx = frame_median(gradients, y, x, 0)
+            my = frame_median(gradients, y, x, 1)
+            for t in range(gradients.shape[0]):
+                residual[t, y, x] = (ti.abs(gradients[t, y, x, 0] - mx)
+                                     + ti.abs(gradients[t, y, x, 1] - my))
+
+
+@ti.kernel
+def still_surface_rows(residual: nd3, out: nd2, tau: ti.f32, radius: ti.i32, share: ti.f32):
+    frames = residual.shape[0]
+    height = residual.shape[1]
+    width = residual.shape[2]
+    for y in range(height):
+        y0 = ti.max(y - radius, 0)
+        y1 = ti.min(y + radius, height - 1)
+        for x in range(width):
+            x0 = ti.max(x - radius, 0)
+            x1 = ti.min(x + radius, width - 1)
+            count = ti.cast((y1 - y0 + 1) * (x1 - x0 + 1), ti.f32)
+            agree = 0.0
+            for t in range(frames):
+                total = 0.0
+                for yy in range(y0, y1 + 1):
+                    for xx in range(x0, x1 + 1):
+                        total += residual[t, yy, xx]
+                if total / count < tau:
+                    agree += 1.0
+            still = 0.0
+            if agree >= share * ti.cast(frames, ti.f32):
+                still = 1.0
+            out[y, x] = still
+
+
 @ti.kernel
 def boundary_dilate_x_rows(magnitude: nd3, hits: nd3, threshold: ti.f32, radius: ti.i32):
     """Row pass: running count of edge pixels in the sliding x window."""
@@ -334,3 +424,19 @@ def motion_boundary(sobel_mag, out, threshold: float, radius: int, *, workspace=
                               lambda: np.empty(shape, np.float32))
         boundary_dilate_x_rows(sobel_mag, hits, float(threshold), int(radius))
         boundary_dilate_y_rows(hits, out, int(radius))
+
+
+@host("still_surface")
+def still_surface(log_image, out, tau: float, radius: int, share: float, *, workspace=None) -> None:
+    """1 where the frames' log-luminance gradients agree with their median over the frames;
+    see :func:`ivkernels.kernels.warp.maps.still_surface` (the float32 gradients and
+    residual come from ``workspace``, or are allocated for this call)."""
+    if out.size:
+        shape = tuple(log_image.shape[:3])
+        gradients = scratch_buffer(workspace, f"{__name__}.still_gradients", (*shape, 2), np.float32,
+                                   lambda: np.empty((*shape, 2), np.float32))
+        residual = scratch_buffer(workspace, f"{__name__}.still_residual", shape, np.float32,
+                                  lambda: np.empty(shape, np.float32))
+        luminance_gradients_rows(log_image, gradients)
+        median_residual_rows(gradients, residual)
+        still_surface_rows(residual, out, float(tau), int(radius), float(share))

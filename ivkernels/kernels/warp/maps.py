@@ -12,7 +12,9 @@
 * :func:`round_trip_consistency`: clears ``w_occ`` where the forward flow and
   the backward flow disagree (the forward-backward check),
 * :func:`shading_gate`: the per-pixel weight of the local shading smoothness
-  (Eq. 9), low where the input's log gradient changes along the flow.
+  (Eq. 9), low where the input's log gradient changes along the flow,
+* :func:`still_surface`: 1 where a window's frames show the same surface at
+  the same pixel (Weiss's median of the log gradients), whatever the light does.
 
 The next frame's Lab colour at ``x + u`` is sampled inside the kernels with the
 bilinear helpers of :mod:`ivkernels.kernels.warp.sampling` (clamped corners).
@@ -247,6 +249,96 @@ def shading_gate_rows(row_begin: int, tiles: int, img: wp.array4d(dtype=float), 
             e = e * wp.exp(-qc * qc)
         q = e / tau
         gate[t, y, x] = wp.exp(-q * q)
+
+
+@wp.func
+def luminance_gradient(img: wp.array4d(dtype=float), t: int, y: int, x: int, axis: int):
+    """``L(x + e) - L(x)`` along ``axis`` (0: x, 1: y), ``L`` the channel mean of ``img``;
+    0 on the last column (axis 0) or row (axis 1)."""
+    y1 = y
+    x1 = x
+    if axis == 0:
+        x1 = x + 1
+    else:
+        y1 = y + 1
+    if x1 >= img.shape[2] or y1 >= img.shape[1]:
+        return 0.0
+    here = (img[t, y, x, 0] + img[t, y, x, 1] + img[t, y, x, 2]) / 3.0
+    there = (img[t, y1, x1, 0] + img[t, y1, x1, 1] + img[t, y1, x1, 2]) / 3.0
+    return there - here
+
+
+@wp.kernel
+def luminance_gradients_rows(row_begin: int, tiles: int, img: wp.array4d(dtype=float),
+                             gradients: wp.array4d(dtype=float)):
+    height = img.shape[1]
+    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, img.shape[2])
+    t = r // height
+    y = r - t * height
+    for x in range(x_begin, x_end):
+        gradients[t, y, x, 0] = luminance_gradient(img, t, y, x, 0)
+        gradients[t, y, x, 1] = luminance_gradient(img, t, y, x, 1)
+
+
+@wp.func
+def frame_median(gradients: wp.array4d(dtype=float), y: int, x: int, axis: int):
+    """The median over the frames of ``gradients[:, y, x, axis]`` (the mean of the two
+    middle values for an even count), without storage: each value's rank is counted."""
+    frames = gradients.shape[0]
+    lower_at = (frames - 1) // 2
+    upper_at = frames // 2
+    lower = float(0.0)
+    upper = float(0.0)
+    for k in range(frames):
+        v = gradients[k, y, x, axis]
+        below = int(0)
+        equal = int(0)
+        for j in range(frames):
+            o = gradients[j, y, x, axis]
+            if o < v:
+                below += 1
+            elif o == v:
+                equal += 1
+        if below <= lower_at and lower_at < below + equal:
+            lower = v
+        if below <= upper_at and upper_at < below + equal:
+            upper = v
+    return 0.5 * (lower + upper)
+
+
+@wp.kernel
+def median_residual_rows(row_begin: int, tiles: int, gradients: wp.array4d(dtype=float),
+                         residual: wp.array3d(dtype=float)):
+    y, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, gradients.shape[2])
+    for x in range(x_begin, x_end):
+        mx = frame_median(gradients, y, x, 0)
+        my = frame_median(gradients, y, x, 1)
+        for t in range(gradients.shape[0]):
+            residual[t, y, x] = wp.abs(gradients[t, y, x, 0] - mx) + wp.abs(gradients[t, y, x, 1] - my)
+
+
+@wp.kernel
+def still_surface_rows(row_begin: int, tiles: int, residual: wp.array3d(dtype=float), out: wp.array2d(dtype=float),
+                       tau: float, radius: int, share: float):
+    frames = residual.shape[0]
+    height = residual.shape[1]
+    width = residual.shape[2]
+    y, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
+    y0 = wp.max(y - radius, 0)
+    y1 = wp.min(y + radius, height - 1)
+    for x in range(x_begin, x_end):
+        x0 = wp.max(x - radius, 0)
+        x1 = wp.min(x + radius, width - 1)
+        count = float((y1 - y0 + 1) * (x1 - x0 + 1))
+        agree = float(0.0)
+        for t in range(frames):
+            total = float(0.0)
+            for yy in range(y0, y1 + 1):
+                for xx in range(x0, x1 + 1):
+                    total += residual[t, yy, xx]
+            if total / count < tau:
+                agree += 1.0
+        out[y, x] = wp.where(agree >= share * float(frames), 1.0, 0.0)
 
 
 @wp.func
@@ -542,3 +634,45 @@ def motion_boundary(sobel_mag, out, threshold: float, radius: int, *, workspace=
     launch_rows(boundary_dilate_x_rows, rows, [tiles, sobel_mag, hits, float(threshold), int(radius)], device=dev)
     launch_rows(boundary_dilate_y_rows, rows, [tiles, hits, out, int(radius)], device=dev)
 
+
+@host("still_surface")
+def still_surface(log_image, out, tau: float, radius: int, share: float, *, workspace=None) -> None:
+    """Where a window's frames show the same surface at the same pixel: Weiss's cue for a
+    still camera.
+
+    A still surface keeps its log-luminance gradients ``g_t(x)`` (a shadow or a
+    change of light multiplies the image and leaves them, except along the
+    shadow's own edge, which is at a different place in every frame), so they
+    agree with their median over the frames, ``m(x)`` (Weiss 2001); where a
+    surface moves past the pixel they change from frame to frame.  The
+    residual ``|g_t(x) - m(x)|_1`` is averaged over the ``(2 radius + 1)^2``
+    window (clipped to the image), and ``out(x) = 1`` where it is under
+    ``tau`` in at least ``share`` of the frames, else 0.  A flat region
+    agrees whether it moves or not: the cue reads a surface that stays, not
+    a flow.
+
+    Parameters
+    ----------
+    log_image : wp.array float32 (T, H, W, 3), log RGB (``L`` is its channel mean).
+    out : wp.array float32 (H, W), written, 0 or 1.
+    tau : log units per pixel, > 0.
+    radius : the window's radius in pixels, int >= 0.
+    share : the share of the T frames that must agree, > 0 (above 1: none).
+    workspace : optional :class:`ivkernels.kernels.workspace.Workspace` for the
+        (T, H, W, 2) gradients and the (T, H, W) residual; without one they are
+        allocated for this call.
+
+    Three row passes (the gradients, the residual, the window means); on a
+    GPU one pixel per thread.  The median counts each value's rank (T^2
+    reads a pixel and axis), for the few frames of a window.
+    """
+    shape, dev = tuple(log_image.shape[:3]), log_image.device
+    tiles = row_tiles(shape[2], dev)
+    gradients = scratch_buffer(workspace, f"{__name__}.still_gradients", (*shape, 2), wp.float32,
+                               lambda: wp.empty((*shape, 2), dtype=wp.float32, device=dev), dev)
+    residual = scratch_buffer(workspace, f"{__name__}.still_residual", shape, wp.float32,
+                              lambda: wp.empty(shape, dtype=wp.float32, device=dev), dev)
+    launch_rows(luminance_gradients_rows, shape[0] * shape[1] * tiles, [tiles, log_image, gradients], device=dev)
+    launch_rows(median_residual_rows, shape[1] * tiles, [tiles, gradients, residual], device=dev)
+    launch_rows(still_surface_rows, shape[1] * tiles,
+                [tiles, residual, out, float(tau), int(radius), float(share)], device=dev)

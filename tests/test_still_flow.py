@@ -1,0 +1,118 @@
+"""A still camera's flow held at zero on the surfaces that stay (ivkernels/solver/still_flow.py)
+and its place in decompose(): only an estimated flow, only under a still camera, forward and
+backward flow alike."""
+import numpy as np
+
+import ivkernels as iv
+from ivkernels.kernels.reference import maps as ref
+from ivkernels.kernels.reference.step_evidence import DARK_OFFSET
+from ivkernels.solver import still_flow
+
+decompose_module = __import__("ivkernels.decompose", fromlist=["FLOW_AHEAD"])
+
+FAST = dict(lbfgs_iterations=2, guide_lbfgs_iterations=2)
+T, H, W = 5, 48, 64
+
+
+def shadow_scene(camera_step: float = 0.0) -> np.ndarray:
+    """(T, H, W, 3) linear RGB: a still grey checkerboard (period 6) under a hard shadow band 6 px
+    wide that moves 6 px a frame, and a printed square that moves 2 px a frame; with
+    ``camera_step`` > 0 everything shifts by that many whole pixels a frame (a panning camera)."""
+    y, x = np.mgrid[:H, :W]
+    board = np.where((y // 6 + x // 6) % 2 == 0, 0.7, 0.25)
+    print_ = np.random.default_rng(5).uniform(0.1, 0.9, (12, 12))
+    frames = []
+    for k in range(T):
+        img = board.copy()
+        img[:, 8 + 6 * k: 14 + 6 * k] *= 0.4                     # the shadow's band
+        img[30:42, 10 + 2 * k: 22 + 2 * k] = print_               # the moving square
+        img = np.roll(img, int(camera_step * k), axis=1)
+        frames.append(np.repeat(img[..., None], 3, 2))
+    return np.asarray(frames, np.float32)
+
+
+def expected_mask(frames, params) -> np.ndarray:
+    """The reference's still pixels, and where float32 rounding may decide them."""
+    log_image = np.log(np.maximum(frames.astype(np.float64), params.log_floor) + DARK_OFFSET)
+    means = ref.still_window_means(log_image, still_flow.STILL_SURFACE_RADIUS)
+    want = ref.still_surface(log_image, params.flow_still_surface_tau, still_flow.STILL_SURFACE_RADIUS,
+                             params.flow_still_surface_share) > 0.5
+    return want, (np.abs(means - params.flow_still_surface_tau) <= 1e-4).any(0)
+
+
+def test_camera_holds_still_reads_the_median_flow():
+    flow = np.zeros((2, 6, 8, 2), np.float32)
+    assert still_flow.camera_holds_still(flow)
+    flow[:, :2] = (3.0, 4.0)                   # a third moves: the median is still 0
+    assert still_flow.camera_holds_still(flow)
+    flow[:, 2:, :5] = 5.0                      # most pixels move
+    assert not still_flow.camera_holds_still(flow)
+    assert not still_flow.camera_holds_still(np.zeros((0, 6, 8, 2), np.float32))
+
+
+def test_hold_still_surfaces_zeroes_every_pair_at_the_mask_only():
+    rng = np.random.default_rng(0)
+    flow = rng.normal(size=(3, 5, 7, 2)).astype(np.float32)
+    still = rng.uniform(size=(5, 7)) < 0.4
+    held = still_flow.hold_still_surfaces(flow, still)
+    assert held is not flow and held.dtype == flow.dtype
+    np.testing.assert_array_equal(held[:, still], 0.0)
+    np.testing.assert_array_equal(held[:, ~still], flow[:, ~still])
+    assert still_flow.hold_still_surfaces(flow, None) is flow
+    assert still_flow.hold_still_surfaces(None, still) is None
+
+
+def test_still_surface_mask_against_the_reference(any_backend):
+    frames = shadow_scene()
+    params = iv.Params()
+    be = any_backend
+    got = still_flow.still_surface_mask(be, be.asarray(frames), params)
+    want, undecided = expected_mask(frames, params)
+    np.testing.assert_array_equal(got[~undecided], want[~undecided])
+    # the shadowed board is still, the moving print is not
+    assert want[:24].mean() > 0.95
+    assert not want[33:39, 20:24].any()
+
+
+def test_decompose_holds_the_estimated_flow_at_still_surfaces():
+    frames = shadow_scene()
+    params = iv.Params(**FAST)
+    video = iv.decompose(frames, params=params, threads=2)
+    want, undecided = expected_mask(frames, params)
+    held = want & ~undecided
+    assert held.mean() > 0.5
+    np.testing.assert_array_equal(video.flow[:, held], 0.0)
+    # the square, which moves, keeps a flow
+    assert np.abs(video.flow[:, 33:39, 16:20, 0]).mean() > 0.5
+
+
+def test_the_backward_flow_is_held_too(monkeypatch):
+    """The forward-backward check then keeps w_occ at the held pixels: both flows are zero there."""
+    frames = shadow_scene()
+    seen = {}
+    real = decompose_module.motion_maps
+
+    def spy(be, frames_be, flow_be, params, back_flow=None, **kw):
+        seen["flow"], seen["back"] = np.array(be.numpy(flow_be)), np.array(be.numpy(back_flow))
+        return real(be, frames_be, flow_be, params, back_flow=back_flow, **kw)
+
+    monkeypatch.setattr(decompose_module, "motion_maps", spy)
+    params = iv.Params(**FAST)
+    iv.decompose(frames, params=params, threads=2)
+    want, undecided = expected_mask(frames, params)
+    held = want & ~undecided
+    np.testing.assert_array_equal(seen["flow"][:, held], 0.0)
+    np.testing.assert_array_equal(seen["back"][:, held], 0.0)
+
+
+def test_a_given_flow_and_a_moving_camera_are_left_alone():
+    frames = shadow_scene()
+    given = np.random.default_rng(1).normal(0.0, 0.05, (T - 1, H, W, 2)).astype(np.float32)
+    video = iv.decompose(frames, flow=given, params=iv.Params(**FAST), threads=2)
+    np.testing.assert_array_equal(video.flow, given)
+    panning = shadow_scene(camera_step=2.0)
+    on = iv.decompose(panning, params=iv.Params(**FAST), threads=2)
+    off = iv.decompose(panning, params=iv.Params(flow_still_surface_tau=0.0, **FAST), threads=2)
+    assert np.median(np.hypot(*np.moveaxis(on.flow, -1, 0))) > still_flow.STILL_CAMERA_FLOW
+    np.testing.assert_array_equal(on.flow, off.flow)
+    np.testing.assert_array_equal(on.albedo, off.albedo)
