@@ -27,7 +27,8 @@ from ivkernels.priors import load_albedo_prior
 from ivkernels.solver.guide import guide_shape, guide_solve, scaled_shape
 from ivkernels.solver.motion_maps import motion_maps
 from ivkernels.solver.pyramid import downsample, level_shapes, resize_flow
-from ivkernels.solver.still_flow import camera_holds_still, hold_still_surfaces, still_surface_mask
+from ivkernels.solver.still_flow import (MOVING_CAMERA_FLOW, camera_holds_still, hold_still_surfaces,
+                                         median_flow_length, still_surface_mask)
 from ivkernels.solver.window_solver import SolveLog, solve_window
 
 #: Flow method used when ``flow=None``.
@@ -272,15 +273,16 @@ class _Decomposer:
         """(H, W) bool: the pixels of a window whose frames ``frames_be`` show the same
         surface (:func:`still_surface_mask`), where the flow is estimated,
         ``Params.flow_still_surface_tau`` > 0 and the window's first-pass flow
-        ``flow_np`` says the camera holds still (:func:`camera_holds_still`); else None."""
+        ``flow_np`` says the camera holds still (:func:`camera_holds_still`); else None.
+        The mask is computed only where the median flow is under ``MOVING_CAMERA_FLOW``."""
         p = self.params
         if self.flow is not None or flow_np is None or not len(flow_np) or p.flow_still_surface_tau <= 0 \
-                or not camera_holds_still(flow_np):
+                or median_flow_length(flow_np) >= MOVING_CAMERA_FLOW:
             return None
         t0 = time.perf_counter()
         still = still_surface_mask(self.be, frames_be, p)
         self.log.add_time("maps", time.perf_counter() - t0)
-        return still
+        return still if camera_holds_still(flow_np, still) else None
 
     def _first_pass_flow(self, frames: np.ndarray) -> np.ndarray:
         """The flow of the first pass on ``frames`` (T, H, W, 3), at full size.

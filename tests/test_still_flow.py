@@ -50,6 +50,33 @@ def test_camera_holds_still_reads_the_median_flow():
     assert not still_flow.camera_holds_still(np.zeros((0, 6, 8, 2), np.float32))
 
 
+def test_a_light_pulling_the_flow_every_way_is_a_still_camera_a_pan_is_not():
+    """Between the two bounds the vector median over the still pixels decides: flow of random
+    directions (a moving light's pull) cancels out, a pan's sub-pixel drift does not."""
+    rng = np.random.default_rng(1)
+    angle = rng.uniform(0, 2 * np.pi, (3, 40, 50))
+    pulled = (0.3 * np.stack([np.cos(angle), np.sin(angle)], -1)).astype(np.float32)
+    still = np.ones((40, 50), bool)
+    assert still_flow.STILL_CAMERA_FLOW < still_flow.median_flow_length(pulled) < still_flow.MOVING_CAMERA_FLOW
+    assert still_flow.still_surface_drift(pulled, still) < still_flow.STILL_SURFACE_DRIFT
+    assert still_flow.camera_holds_still(pulled, still)
+    assert not still_flow.camera_holds_still(pulled)                # no mask: the median alone decides
+    assert not still_flow.camera_holds_still(pulled, np.zeros_like(still))     # no still pixel
+    panned = pulled.copy()
+    panned[..., 0] += 0.15                                            # a pan of 0.15 px a frame
+    assert still_flow.camera_holds_still(panned, still) is False
+    np.testing.assert_allclose(still_flow.still_surface_drift(panned, still), 0.15, atol=0.03)
+    # the drift reads the still pixels only: a moving object elsewhere does not count
+    object_ = np.zeros((40, 50), bool)
+    object_[:, :20] = True
+    moved = pulled.copy()
+    moved[:, object_] = (2.0, 0.0)
+    assert still_flow.still_surface_drift(moved, ~object_) < still_flow.STILL_SURFACE_DRIFT
+    assert still_flow.still_surface_drift(moved, still) > still_flow.STILL_SURFACE_DRIFT
+    # past the moving camera's bound nothing is still, whatever the drift
+    assert not still_flow.camera_holds_still(pulled * 2.0, still)
+
+
 def test_hold_still_surfaces_zeroes_every_pair_at_the_mask_only():
     rng = np.random.default_rng(0)
     flow = rng.normal(size=(3, 5, 7, 2)).astype(np.float32)
@@ -114,5 +141,32 @@ def test_a_given_flow_and_a_moving_camera_are_left_alone():
     on = iv.decompose(panning, params=iv.Params(**FAST), threads=2)
     off = iv.decompose(panning, params=iv.Params(flow_still_surface_tau=0.0, **FAST), threads=2)
     assert np.median(np.hypot(*np.moveaxis(on.flow, -1, 0))) > still_flow.STILL_CAMERA_FLOW
+    np.testing.assert_array_equal(on.flow, off.flow)
+    np.testing.assert_array_equal(on.albedo, off.albedo)
+
+
+def test_a_sub_pixel_pan_is_not_held(monkeypatch):
+    """A camera panning a quarter pixel a frame: the median flow lies between the two bounds and
+    some pixels look still, but they drift with the pan, so nothing is held."""
+    frames = shadow_scene()
+    step = 0.25
+    panned = []
+    for k, frame in enumerate(frames):
+        whole, part = divmod(step * k, 1.0)
+        panned.append((1 - part) * np.roll(frame, int(whole), axis=1) + part * np.roll(frame, int(whole) + 1, axis=1))
+    panned = np.asarray(panned, np.float32)
+    seen = {}
+    real = decompose_module.camera_holds_still
+
+    def spy(flow, still=None):
+        seen["length"] = still_flow.median_flow_length(flow)
+        seen["drift"] = still_flow.still_surface_drift(flow, still)
+        return real(flow, still)
+
+    monkeypatch.setattr(decompose_module, "camera_holds_still", spy)
+    on = iv.decompose(panned, params=iv.Params(**FAST), threads=2)
+    assert still_flow.STILL_CAMERA_FLOW < seen["length"] < still_flow.MOVING_CAMERA_FLOW
+    assert still_flow.STILL_SURFACE_DRIFT * 3 < seen["drift"] < 1.0
+    off = iv.decompose(panned, params=iv.Params(flow_still_surface_tau=0.0, **FAST), threads=2)
     np.testing.assert_array_equal(on.flow, off.flow)
     np.testing.assert_array_equal(on.albedo, off.albedo)
