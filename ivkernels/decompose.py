@@ -376,7 +376,9 @@ class _Decomposer:
                 flow_np = self._flow_for(start, stop, cached_flow)
                 frames_be = be.asarray(frames_np)
                 still = self._still_surfaces(frames_be, flow_np)
-                flow_np = hold_still_surfaces(flow_np, still)
+                # Short vectors are held in the final flow only: a later pass starts from this
+                # one, and a moving object whose first flow is patchy would lose its motion.
+                flow_np = hold_still_surfaces(flow_np, still, 0.0 if self.joint else p.flow_still_small)
                 back = None         # this window's backward flow, estimated while its guide is solved
                 if pool is not None and self.checks_round_trip:
                     back = pool.submit(self._in_background, self._back_flow_for, start, stop, cached_back,
@@ -393,14 +395,15 @@ class _Decomposer:
                         shared += 1
                     flow_np, guide_shading = self._joint_flow(frames_be, flow_np, shared)
                     if still is not None:       # the shared pairs were held by the window before
-                        flow_np = np.concatenate([flow_np[:shared], hold_still_surfaces(flow_np[shared:], still)])
+                        held = hold_still_surfaces(flow_np[shared:], still, p.flow_still_small)
+                        flow_np = np.concatenate([flow_np[:shared], held])
                     last_flow = {start + k: f for k, f in enumerate(flow_np)}
                 elif self.flow is not None and self.temporal and p.start_from_guide \
                         and flow_np is not None and len(flow_np):
                     # A given flow is final: one guide solve with it, the last solve's start.
                     _, guide_shading = guide_solve(be, frames_be, flow_np, p, self.prior, log=self.log)
                 back_np = back.result() if back is not None else self._back_flow_for(start, stop, cached_back)
-                back_np = hold_still_surfaces(back_np, still)
+                back_np = hold_still_surfaces(back_np, still, p.flow_still_small)
                 t0 = time.perf_counter()
                 flow_be = occ_be = bnd_be = None
                 if flow_np is not None:

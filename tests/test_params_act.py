@@ -98,7 +98,8 @@ MOVES = {
     "flow_round_trip_max": (0.5, {}, "classic_nl_fast"),
     "flow_round_trip_scale": (1.0, {"flow_round_trip_max": 0.5}, "classic_nl_fast"),
     "flow_still_surface_tau": (0.0, {}, "classic_nl_fast:rotating_shadows"),
-    "flow_still_surface_share": (1.0, {}, "classic_nl_fast:rotating_shadows"),
+    "flow_still_surface_share": (1.0, {"flow_still_small": 0.0}, "classic_nl_fast:rotating_shadows"),
+    "flow_still_small": (0.0, {}, "classic_nl_fast:rotating_shadows"),
     "window": (4, {}, "truth"),
     "overlap": (1, {}, "truth"),
 }

@@ -73,6 +73,18 @@ def test_a_light_pulling_the_flow_every_way_is_a_still_camera_a_pan_is_not():
     moved[:, object_] = (2.0, 0.0)
     assert still_flow.still_surface_drift(moved, ~object_) < still_flow.STILL_SURFACE_DRIFT
     assert still_flow.still_surface_drift(moved, still) > still_flow.STILL_SURFACE_DRIFT
+    # a light that pulls the still pixels one way in one pair and another way in the next:
+    # a common drift no larger than twice the pairs' scatter is not the camera's
+    erratic = pulled.copy()
+    erratic[0] += (0.3, 0.0)
+    erratic[1] += (0.0, 0.3)
+    erratic[2] += (-0.1, 0.1)
+    np.testing.assert_allclose(still_flow.pair_drifts(erratic, still), [[0.3, 0], [0, 0.3], [-0.1, 0.1]], atol=0.05)
+    assert still_flow.still_surface_drift(erratic, still) == 0.0
+    assert still_flow.camera_holds_still(erratic, still)
+    # the same drift in a window of one pair has no scatter to be told from: the camera's
+    assert still_flow.still_surface_drift(erratic[:1], still) > 0.25
+    assert not still_flow.camera_holds_still(erratic[:1], still)
     # past the moving camera's bound nothing is still, whatever the drift
     assert not still_flow.camera_holds_still(pulled * 2.0, still)
 
@@ -85,6 +97,13 @@ def test_hold_still_surfaces_zeroes_every_pair_at_the_mask_only():
     assert held is not flow and held.dtype == flow.dtype
     np.testing.assert_array_equal(held[:, still], 0.0)
     np.testing.assert_array_equal(held[:, ~still], flow[:, ~still])
+    # with ``small`` the short vectors go too, pair by pair
+    short = np.hypot(flow[..., 0], flow[..., 1]) < 0.8
+    held = still_flow.hold_still_surfaces(flow, still, small=0.8)
+    gone = still[None] | short
+    np.testing.assert_array_equal(held[gone], 0.0)
+    np.testing.assert_array_equal(held[~gone], flow[~gone])
+    assert 0 < short[:, ~still].mean() < 1
     assert still_flow.hold_still_surfaces(flow, None) is flow
     assert still_flow.hold_still_surfaces(None, still) is None
 
@@ -103,7 +122,7 @@ def test_still_surface_mask_against_the_reference(any_backend):
 
 def test_decompose_holds_the_estimated_flow_at_still_surfaces():
     frames = shadow_scene()
-    params = iv.Params(**FAST)
+    params = iv.Params(flow_still_small=0.0, **FAST)
     video = iv.decompose(frames, params=params, threads=2)
     want, undecided = expected_mask(frames, params)
     held = want & ~undecided
@@ -111,6 +130,26 @@ def test_decompose_holds_the_estimated_flow_at_still_surfaces():
     np.testing.assert_array_equal(video.flow[:, held], 0.0)
     # the square, which moves, keeps a flow
     assert np.abs(video.flow[:, 33:39, 16:20, 0]).mean() > 0.5
+
+
+def test_decompose_holds_short_vectors_under_a_still_camera():
+    """With ``flow_still_small`` every vector of the returned flow is 0 or at least that long;
+    the still pixels are 0 and the moving square keeps long vectors."""
+    frames = shadow_scene()
+    params = iv.Params(**FAST)
+    assert params.flow_still_small > 0
+    video = iv.decompose(frames, params=params, threads=2)
+    length = np.hypot(video.flow[..., 0], video.flow[..., 1])
+    assert np.all((length == 0) | (length >= params.flow_still_small))
+    want, undecided = expected_mask(frames, params)
+    np.testing.assert_array_equal(length[:, want & ~undecided], 0.0)
+    off = iv.decompose(frames, params=params.replace(flow_still_small=0.0), threads=2)
+    length_off = np.hypot(off.flow[..., 0], off.flow[..., 1])
+    assert ((length_off > 0) & (length_off < params.flow_still_small)).mean() > 0.05
+    # where the square's flow was long without the hold, it mostly stays long
+    long_off = length_off[:, 30:42, 10:26] >= 1.0
+    assert long_off.sum() > 20
+    assert (length[:, 30:42, 10:26][long_off] >= params.flow_still_small).mean() > 0.6
 
 
 def test_the_backward_flow_is_held_too(monkeypatch):

@@ -19,15 +19,20 @@ pixels are set to zero, forward and backward alike.  A flat moving region
 agrees whether it moves or not and is held too; inside it the zero flow
 joins the same flat albedo, as its own flow would.
 
-A light that moves fast lengthens the first pass's flow on a static scene
-(the light's steps pulled along, in every direction), so that its median
-may pass :data:`STILL_CAMERA_FLOW` while no surface moves.  Such a window
-is still read as filmed by a still camera when, over its still surfaces,
-the flow's vector median (the median of each component) stays under
-:data:`STILL_SURFACE_DRIFT`: a camera that pans drags every surface one way,
-by its own speed; the light's pull cancels out.  A camera that zooms or
-rolls about the centre slowly enough (median flow under
+A moving light lengthens the flow on a static scene (the light's steps
+pulled along by a fraction of a pixel), so that its median may pass
+:data:`STILL_CAMERA_FLOW` while no surface moves.  Such a window is still
+read as filmed by a still camera when its still surfaces do not drift in
+common (:func:`still_surface_drift`): a camera that pans drags every
+surface one way, by its own speed, pair after pair; the light pulls them
+one way in one pair and another in the next.  A camera that zooms or rolls
+about the centre slowly enough (median flow under
 :data:`MOVING_CAMERA_FLOW`) would pass that test too, and is held.
+
+Where the light changes the gradients of a still surface too much for it to
+be found still (the lit side of a curved object), its flow is the light's
+pull, a fraction of a pixel; under a still camera the final flow's vectors
+shorter than ``Params.flow_still_small`` are held at zero as well.
 """
 from __future__ import annotations
 
@@ -43,6 +48,9 @@ MOVING_CAMERA_FLOW = 0.5
 #: Pixels: the vector median of the flow over the still surfaces under which a window
 #: between the two bounds above is filmed by a still camera.
 STILL_SURFACE_DRIFT = 0.03
+#: A common drift of the still pixels counts as the camera's where it is larger than this
+#: many times the pairs' scatter about it.
+PAN_AGREEMENT = 2.0
 #: Pixels: the radius of the window over which the gradients' agreement is averaged.
 STILL_SURFACE_RADIUS = 2
 
@@ -55,21 +63,34 @@ def median_flow_length(flow: np.ndarray) -> float:
     return float(np.median(np.hypot(flow[..., 0], flow[..., 1])))
 
 
-def still_surface_drift(flow: np.ndarray, still: np.ndarray) -> float:
-    """The length, pixels, of the vector median of ``flow`` (T-1, H, W, 2) over the
-    ``still`` (H, W) pixels of every pair: the median of each component; inf where
-    no pixel is still."""
+def pair_drifts(flow: np.ndarray, still: np.ndarray) -> np.ndarray:
+    """(T-1, 2): per pair of ``flow`` (T-1, H, W, 2), the vector median (the median of each
+    component), pixels, over the ``still`` (H, W) pixels; (0, 2) where none is still."""
     flow = np.asarray(flow)
     if flow.shape[0] == 0 or not still.any():
+        return np.zeros((0, 2))
+    return np.median(flow[:, still], axis=1).astype(np.float64)
+
+
+def still_surface_drift(flow: np.ndarray, still: np.ndarray) -> float:
+    """How far the ``still`` (H, W) pixels of ``flow`` (T-1, H, W, 2) move in common, pixels:
+    the length of the mean of the pairs' drifts (:func:`pair_drifts`) where it exceeds
+    :data:`PAN_AGREEMENT` times their scatter about it (a camera's motion, the same from
+    pair to pair), else 0 (a light's pull, one way in one pair and another way in the next);
+    inf where no pixel is still."""
+    drifts = pair_drifts(flow, still)
+    if not len(drifts):
         return float("inf")
-    on_still = flow[:, still]                   # (T-1, N, 2)
-    return float(np.hypot(np.median(on_still[..., 0]), np.median(on_still[..., 1])))
+    common = drifts.mean(axis=0)
+    scatter = float(np.sqrt(np.mean(np.sum((drifts - common) ** 2, axis=1))))
+    length = float(np.hypot(*common))
+    return length if length > PAN_AGREEMENT * scatter else 0.0
 
 
 def camera_holds_still(flow: np.ndarray, still: np.ndarray | None = None) -> bool:
     """Whether ``flow`` (T-1, H, W, 2), pixels, was filmed by a still camera: its median
     length is under :data:`STILL_CAMERA_FLOW`, or under :data:`MOVING_CAMERA_FLOW` with the
-    vector median over the ``still`` (H, W) pixels under :data:`STILL_SURFACE_DRIFT`
+    common drift of the ``still`` (H, W) pixels under :data:`STILL_SURFACE_DRIFT`
     (:func:`still_surface_drift`; not tested where ``still`` is None).  False without a pair."""
     length = median_flow_length(flow)
     if length < STILL_CAMERA_FLOW:
@@ -92,9 +113,14 @@ def still_surface_mask(be, frames_linear, params: Params, *, workspace=None) -> 
     return np.asarray(be.numpy(still)) > 0.5
 
 
-def hold_still_surfaces(flow: np.ndarray | None, still: np.ndarray | None) -> np.ndarray | None:
+def hold_still_surfaces(flow: np.ndarray | None, still: np.ndarray | None,
+                        small: float = 0.0) -> np.ndarray | None:
     """``flow`` (T-1, H, W, 2) with the vectors of the ``still`` (H, W) pixels set to 0 in
-    every pair (a new array); ``flow`` itself where ``still`` or ``flow`` is None."""
+    every pair, and those shorter than ``small`` pixels (a new array); ``flow`` itself
+    where ``still`` or ``flow`` is None."""
     if flow is None or still is None:
         return flow
-    return np.where(still[None, :, :, None], np.zeros((), flow.dtype), flow)
+    held = still[None, :, :, None]
+    if small > 0:
+        held = held | (np.hypot(flow[..., 0], flow[..., 1]) < small)[..., None]
+    return np.where(held, np.zeros((), flow.dtype), flow)
