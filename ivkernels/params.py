@@ -100,12 +100,12 @@ class Params:
         solved and adds no measurable time.
     flow_still_surface_tau, flow_still_surface_share
         Where the flow is estimated and a window's camera holds still (its
-        median flow under 0.1 px, or under 0.5 px with the vector median over
-        the still pixels under 0.03 px: :func:`ivkernels.solver.still_flow.
-        camera_holds_still`), the flow is set to zero (forward and the
-        check's backward flow) at the pixels whose frames show the same
-        surface: their log-luminance gradients (on ``log(i + 0.02)``, 5x5
-        mean) within ``flow_still_surface_tau`` of their median over the
+        median flow under 0.1 px, or under 0.5 px with the still pixels
+        drifting in no common direction pair after pair:
+        :func:`ivkernels.solver.still_flow.camera_holds_still`), the flow is
+        set to zero (forward and the check's backward flow) at the pixels
+        whose frames show the same surface: their log-luminance gradients
+        (on ``log(i + 0.02)``, 5x5 mean) within ``flow_still_surface_tau`` of their median over the
         window in at least ``flow_still_surface_share`` of the frames
         (``maps.still_surface``, :mod:`ivkernels.solver.still_flow`; tau 0:
         off).  A shadow sweeping over a still floor drags the estimated flow

@@ -45,8 +45,8 @@ from ivkernels.params import Params
 STILL_CAMERA_FLOW = 0.1
 #: Pixels: a window whose median flow length is this or more is filmed by a moving camera.
 MOVING_CAMERA_FLOW = 0.5
-#: Pixels: the vector median of the flow over the still surfaces under which a window
-#: between the two bounds above is filmed by a still camera.
+#: Pixels: the common drift of the still surfaces (:func:`still_surface_drift`) under which
+#: a window between the two bounds above is filmed by a still camera.
 STILL_SURFACE_DRIFT = 0.03
 #: A common drift of the still pixels counts as the camera's where it is larger than this
 #: many times the pairs' scatter about it.
