@@ -105,8 +105,9 @@ class Params:
         :func:`ivkernels.solver.still_flow.camera_holds_still`), the flow is
         set to zero (forward and the check's backward flow) at the pixels
         whose frames show the same surface: their log-luminance gradients
-        (on ``log(i + 0.02)``, 5x5 mean) within ``flow_still_surface_tau`` of their median over the
-        window in at least ``flow_still_surface_share`` of the frames
+        (on ``log(i + 0.02)``, 5x5 mean) within ``flow_still_surface_tau``
+        of their median over the window in at least
+        ``flow_still_surface_share`` of the frames
         (``maps.still_surface``, :mod:`ivkernels.solver.still_flow`; tau 0:
         off).  A shadow sweeping over a still floor drags the estimated flow
         with it; the floor's texture stays.  0.01 and a half chosen on
