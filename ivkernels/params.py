@@ -101,7 +101,7 @@ class Params:
     flow_still_surface_tau, flow_still_surface_share
         Where the flow is estimated and a window's camera holds still (its
         median flow under 0.1 px, or under 0.5 px with the still pixels
-        drifting in no common direction pair after pair:
+        moving in no common way pair after pair:
         :func:`ivkernels.solver.still_flow.camera_holds_still`), the flow is
         set to zero (forward and the check's backward flow) at the pixels
         whose frames show the same surface: their log-luminance gradients

@@ -79,12 +79,25 @@ def test_a_light_pulling_the_flow_every_way_is_a_still_camera_a_pan_is_not():
     erratic[0] += (0.3, 0.0)
     erratic[1] += (0.0, 0.3)
     erratic[2] += (-0.1, 0.1)
-    np.testing.assert_allclose(still_flow.pair_drifts(erratic, still), [[0.3, 0], [0, 0.3], [-0.1, 0.1]], atol=0.05)
+    np.testing.assert_allclose(still_flow.pair_drifts(erratic, still)[:, :2], [[0.3, 0], [0, 0.3], [-0.1, 0.1]],
+                               atol=0.05)
     assert still_flow.still_surface_drift(erratic, still) == 0.0
     assert still_flow.camera_holds_still(erratic, still)
     # the same drift in a window of one pair has no scatter to be told from: the camera's
     assert still_flow.still_surface_drift(erratic[:1], still) > 0.25
     assert not still_flow.camera_holds_still(erratic[:1], still)
+    # a slow zoom or roll about the centre: the vector median is 0, but the radial or the
+    # rotational rate is the same pair after pair
+    y, x = np.mgrid[:40, :50]
+    x, y = x - 24.5, y - 19.5
+    for zoom, roll in ((0.01, 0.0), (0.0, 0.01)):
+        turned = pulled + np.stack([zoom * x - roll * y, zoom * y + roll * x], -1).astype(np.float32)
+        assert still_flow.median_flow_length(turned) < still_flow.MOVING_CAMERA_FLOW
+        drifts = still_flow.pair_drifts(turned, still)
+        assert np.abs(drifts[:, :2]).max() < 0.05
+        half_diagonal = np.hypot(40, 50) / 2
+        np.testing.assert_allclose(drifts[:, 2 if zoom else 3], (zoom or roll) * half_diagonal, rtol=0.2)
+        assert not still_flow.camera_holds_still(turned, still)
     # past the moving camera's bound nothing is still, whatever the drift
     assert not still_flow.camera_holds_still(pulled * 2.0, still)
 

@@ -22,12 +22,11 @@ joins the same flat albedo, as its own flow would.
 A moving light lengthens the flow on a static scene (the light's steps
 pulled along by a fraction of a pixel), so that its median may pass
 :data:`STILL_CAMERA_FLOW` while no surface moves.  Such a window is still
-read as filmed by a still camera when its still surfaces do not drift in
-common (:func:`still_surface_drift`): a camera that pans drags every
-surface one way, by its own speed, pair after pair; the light pulls them
-one way in one pair and another in the next.  A camera that zooms or rolls
-about the centre slowly enough (median flow under
-:data:`MOVING_CAMERA_FLOW`) would pass that test too, and is held.
+read as filmed by a still camera when its still surfaces do not move in
+common (:func:`still_surface_drift`): a camera that pans, zooms or rolls
+moves every surface the same way pair after pair (the same translation,
+the same radial or rotational rate about the centre); the light pulls them
+one way in one pair and another in the next.
 
 Where the light changes the gradients of a still surface too much for it to
 be found still (the lit side of a curved object), its flow is the light's
@@ -45,7 +44,7 @@ from ivkernels.params import Params
 STILL_CAMERA_FLOW = 0.1
 #: Pixels: a window whose median flow length is this or more is filmed by a moving camera.
 MOVING_CAMERA_FLOW = 0.5
-#: Pixels: the common drift of the still surfaces (:func:`still_surface_drift`) under which
+#: Pixels: the common motion of the still surfaces (:func:`still_surface_drift`) under which
 #: a window between the two bounds above is filmed by a still camera.
 STILL_SURFACE_DRIFT = 0.03
 #: A common drift of the still pixels counts as the camera's where it is larger than this
@@ -64,17 +63,37 @@ def median_flow_length(flow: np.ndarray) -> float:
 
 
 def pair_drifts(flow: np.ndarray, still: np.ndarray) -> np.ndarray:
-    """(T-1, 2): per pair of ``flow`` (T-1, H, W, 2), the vector median (the median of each
-    component), pixels, over the ``still`` (H, W) pixels; (0, 2) where none is still."""
+    """(T-1, 4): per pair of ``flow`` (T-1, H, W, 2), how the ``still`` (H, W) pixels move in
+    common, pixels: the vector median (the median of each component) of their flow, and the
+    medians of its radial and rotational rates about the picture's centre,
+    ``((x, y) . f) / r^2`` and ``((x, y) x f) / r^2``, times the half-diagonal (a zoom's and
+    a roll's motion at the corners; read where ``r`` is at least a quarter of it);
+    (0, 4) where none is still."""
     flow = np.asarray(flow)
     if flow.shape[0] == 0 or not still.any():
-        return np.zeros((0, 2))
-    return np.median(flow[:, still], axis=1).astype(np.float64)
+        return np.zeros((0, 4))
+    H, W = still.shape
+    y, x = np.mgrid[0:H, 0:W]
+    x = x - (W - 1) / 2.0
+    y = y - (H - 1) / 2.0
+    half_diagonal = float(np.hypot(W, H)) / 2.0
+    r2 = x * x + y * y
+    outer = still & (r2 >= (half_diagonal / 4.0) ** 2)
+    f = flow[:, still].astype(np.float64)               # (T-1, N, 2)
+    drifts = np.median(f, axis=1)
+    if not outer.any():
+        return np.concatenate([drifts, np.zeros_like(drifts)], axis=1)
+    u, v = flow[:, outer, 0].astype(np.float64), flow[:, outer, 1].astype(np.float64)
+    xo, yo, r2o = x[outer], y[outer], r2[outer]
+    radial = np.median((xo * u + yo * v) / r2o, axis=1) * half_diagonal
+    rotational = np.median((xo * v - yo * u) / r2o, axis=1) * half_diagonal
+    return np.concatenate([drifts, radial[:, None], rotational[:, None]], axis=1)
 
 
 def still_surface_drift(flow: np.ndarray, still: np.ndarray) -> float:
     """How far the ``still`` (H, W) pixels of ``flow`` (T-1, H, W, 2) move in common, pixels:
-    the length of the mean of the pairs' drifts (:func:`pair_drifts`) where it exceeds
+    the length of the mean of the pairs' motions (:func:`pair_drifts`: translation, zoom and
+    roll) where it exceeds
     :data:`PAN_AGREEMENT` times their scatter about it (a camera's motion, the same from
     pair to pair), else 0 (a light's pull, one way in one pair and another way in the next);
     inf where no pixel is still."""
@@ -83,7 +102,7 @@ def still_surface_drift(flow: np.ndarray, still: np.ndarray) -> float:
         return float("inf")
     common = drifts.mean(axis=0)
     scatter = float(np.sqrt(np.mean(np.sum((drifts - common) ** 2, axis=1))))
-    length = float(np.hypot(*common))
+    length = float(np.linalg.norm(common))
     return length if length > PAN_AGREEMENT * scatter else 0.0
 
 
