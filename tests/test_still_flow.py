@@ -54,7 +54,7 @@ def test_a_light_pulling_the_flow_every_way_is_a_still_camera_a_pan_is_not():
     """Between the two bounds the vector median over the still pixels decides: flow of random
     directions (a moving light's pull) cancels out, a pan's sub-pixel drift does not."""
     rng = np.random.default_rng(1)
-    angle = rng.uniform(0, 2 * np.pi, (3, 40, 50))
+    angle = rng.uniform(0, 2 * np.pi, (5, 40, 50))
     pulled = (0.3 * np.stack([np.cos(angle), np.sin(angle)], -1)).astype(np.float32)
     still = np.ones((40, 50), bool)
     assert still_flow.STILL_CAMERA_FLOW < still_flow.median_flow_length(pulled) < still_flow.MOVING_CAMERA_FLOW
@@ -79,13 +79,16 @@ def test_a_light_pulling_the_flow_every_way_is_a_still_camera_a_pan_is_not():
     erratic[0] += (0.3, 0.0)
     erratic[1] += (0.0, 0.3)
     erratic[2] += (-0.1, 0.1)
-    np.testing.assert_allclose(still_flow.pair_drifts(erratic, still)[:, :2], [[0.3, 0], [0, 0.3], [-0.1, 0.1]],
+    np.testing.assert_allclose(still_flow.pair_drifts(erratic, still)[:3, :2], [[0.3, 0], [0, 0.3], [-0.1, 0.1]],
                                atol=0.05)
     assert still_flow.still_surface_drift(erratic, still) == 0.0
     assert still_flow.camera_holds_still(erratic, still)
     # the same drift in a window of one pair has no scatter to be told from: the camera's
     assert still_flow.still_surface_drift(erratic[:1], still) > 0.25
     assert not still_flow.camera_holds_still(erratic[:1], still)
+    # nor do three pairs, too few to tell a common drift from their scatter
+    assert still_flow.still_surface_drift(erratic[:3], still) == 0.0
+    assert not still_flow.camera_holds_still(erratic[:3], still)
     # a slow zoom or roll about the centre: the vector median is 0, but the radial or the
     # rotational rate is the same pair after pair
     y, x = np.mgrid[:40, :50]

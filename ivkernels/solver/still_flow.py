@@ -50,6 +50,10 @@ STILL_SURFACE_DRIFT = 0.03
 #: A common drift of the still pixels counts as the camera's where it is larger than this
 #: many times the pairs' scatter about it.
 PAN_AGREEMENT = 2.0
+#: Fewest pairs whose scatter the common drift is told from; a shorter window is still
+#: only under :data:`STILL_CAMERA_FLOW` (two or three pairs of a moving camera can
+#: scatter as much as a light's pull).
+DRIFT_MIN_PAIRS = 4
 #: Pixels: the radius of the window over which the gradients' agreement is averaged.
 STILL_SURFACE_RADIUS = 2
 
@@ -110,11 +114,12 @@ def camera_holds_still(flow: np.ndarray, still: np.ndarray | None = None) -> boo
     """Whether ``flow`` (T-1, H, W, 2), pixels, was filmed by a still camera: its median
     length is under :data:`STILL_CAMERA_FLOW`, or under :data:`MOVING_CAMERA_FLOW` with the
     common drift of the ``still`` (H, W) pixels under :data:`STILL_SURFACE_DRIFT`
-    (:func:`still_surface_drift`; not tested where ``still`` is None).  False without a pair."""
+    (:func:`still_surface_drift`; tested only with ``still`` and at least
+    :data:`DRIFT_MIN_PAIRS` pairs).  False without a pair."""
     length = median_flow_length(flow)
     if length < STILL_CAMERA_FLOW:
         return True
-    return still is not None and length < MOVING_CAMERA_FLOW \
+    return still is not None and len(flow) >= DRIFT_MIN_PAIRS and length < MOVING_CAMERA_FLOW \
         and still_surface_drift(flow, still) < STILL_SURFACE_DRIFT
 
 
