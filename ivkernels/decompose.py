@@ -459,7 +459,9 @@ def decompose(frames, flow=None, temporal: bool = True, backend: str = "warp",
         other (``Params.flow_round_trip_max``); where a window's camera holds
         still, both are zero at the pixels whose frames show the same surface
         (``Params.flow_still_surface_tau``: a moving shadow does not drag the
-        flow of the floor it crosses).  A given flow is taken as it is.
+        flow of the floor it crosses) and wherever the final flow is shorter
+        than ``Params.flow_still_small`` (a moving light's pull on a static
+        scene).  A given flow is taken as it is.
     temporal : ``False`` drops the temporal terms and the motion weights (the
         paper's "IV w/o flow" ablation); no flow is estimated then.
     backend : ``"warp"`` (default) or ``"taichi"``.

@@ -97,10 +97,9 @@ def pair_drifts(flow: np.ndarray, still: np.ndarray) -> np.ndarray:
 def still_surface_drift(flow: np.ndarray, still: np.ndarray) -> float:
     """How far the ``still`` (H, W) pixels of ``flow`` (T-1, H, W, 2) move in common, pixels:
     the length of the mean of the pairs' motions (:func:`pair_drifts`: translation, zoom and
-    roll) where it exceeds
-    :data:`PAN_AGREEMENT` times their scatter about it (a camera's motion, the same from
-    pair to pair), else 0 (a light's pull, one way in one pair and another way in the next);
-    inf where no pixel is still."""
+    roll) where it exceeds :data:`PAN_AGREEMENT` times their scatter about it (a camera's
+    motion, the same from pair to pair), else 0 (a light's pull, one way in one pair and
+    another way in the next); inf where no pixel is still."""
     drifts = pair_drifts(flow, still)
     if not len(drifts):
         return float("inf")
