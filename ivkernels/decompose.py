@@ -24,6 +24,7 @@ from ivkernels.kernels.thread_count import check_threads, get_threads, iterate_w
 from ivkernels.kernels.thread_count import threads as launch_threads
 from ivkernels.params import Params
 from ivkernels.priors import load_albedo_prior
+from ivkernels.solver.denoise import denoise_layers
 from ivkernels.solver.guide import guide_shape, guide_solve, scaled_shape
 from ivkernels.solver.motion_maps import motion_maps
 from ivkernels.solver.pyramid import downsample, level_shapes, resize_flow
@@ -59,7 +60,9 @@ class IntrinsicVideo:
     albedo : (T, H, W, 3) float32, linear RGB reflectance; its 99th
         percentile (over the first window's pixels and channels) is 1.
     shading : (T, H, W) float32, linear grey shading;
-        ``albedo * shading[..., None]`` reconstructs the linear input.
+        ``albedo * shading[..., None]`` reconstructs the linear input, less
+        the sensor noise taken out of both where the input is noisy
+        (``Params.layer_denoise``).
     flow : (T-1, H, W, 2) float32 forward flow t -> t+1 in pixels (dx, dy),
         or ``None`` when solved with ``temporal=False`` and no flow given.
     occlusion : (T-1, H, W) float32, the paper's w_occ (Eq. 6): 1 = visible
@@ -74,7 +77,11 @@ class IntrinsicVideo:
         run stopped and ``converged``, i.e. stopped on its tolerance rather than
         its iteration budget), ``seconds`` (per stage), ``windows`` (frame ranges),
         ``independent_shadings`` (per window, the number its albedo priors
-        were divided by; ``Params.independent_shading_gain``).
+        were divided by; ``Params.independent_shading_gain``),
+        ``noise_levels`` (per window, the median noise step of its frames in
+        log units, ``None`` with ``Params.layer_denoise = 0``; at 0.01 or
+        more its albedo and shading were smoothed,
+        :mod:`ivkernels.solver.denoise`).
     """
 
     albedo: np.ndarray
@@ -85,7 +92,7 @@ class IntrinsicVideo:
     diagnostics: dict = field(default_factory=dict)
 
     def reconstruct(self) -> np.ndarray:
-        """Linear RGB frames ``albedo * shading`` (T, H, W, 3)."""
+        """Linear RGB frames ``albedo * shading`` (T, H, W, 3): the input, less the noise taken out."""
         return self.albedo * self.shading[..., None]
 
 
@@ -423,6 +430,10 @@ class _Decomposer:
                     progress=None if bar is None else bar.update,
                     start_shading=guide_shading if use_flow and p.start_from_guide else None)
                 carried = (A, S)
+                t0 = time.perf_counter()
+                A, S, noise = denoise_layers(be, frames_be, flow_be, A, S, p)
+                self.log.noise_levels.append(noise)
+                self.log.add_time("denoise", time.perf_counter() - t0)
                 albedo, shading = np.exp(A), np.exp(S)
                 if self.scale is None:
                     # Scale ambiguity of A + S: albedo's 99th percentile = 1 (DESIGN sec. 2).
@@ -558,6 +569,7 @@ def _collect(job: _Decomposer) -> IntrinsicVideo:
     diagnostics = {"energy": job.log.energy, "terms": job.log.terms, "levels": job.log.levels,
                    "seconds": dict(job.log.seconds), "windows": windows,
                    "independent_shadings": [n for _, n in job.log.shadings],
+                   "noise_levels": list(job.log.noise_levels),
                    "flow_method": _flow_label(job),
                    "albedo_scale": job.scale}
     return IntrinsicVideo(albedo, shading, flow_out, occ_out, bnd_out, diagnostics)

@@ -289,3 +289,22 @@ def test_the_capped_noise_floor_in_the_gpu_layout_matches_the_cpu_layout(be, mon
     cpu, gpu = both_layouts(monkeypatch, call)
     np.testing.assert_array_equal(gpu[1], cpu[1])
     np.testing.assert_array_equal(gpu[0], cpu[0])
+
+
+@pytest.mark.parametrize("shape, channels", [((2, 9, 13), 3), ((1, 1, 5), 1), ((2, 6, 1), 1)])
+def test_denoise_in_tiles_is_the_cpu_layout_bitwise(be, monkeypatch, shape, channels):
+    rng = np.random.default_rng(sum(shape) + channels)
+    t, h, w = shape
+    src = rng.normal(-1, 0.5, (t, h, w, channels)).astype(np.float32)
+    offset_image = rng.uniform(-3.5, 0, (t, h, w, 3)).astype(np.float32)
+    level = rng.uniform(0, 0.2, (t, h, w, 2)).astype(np.float32)
+
+    def smoothed():
+        rs, out = be.empty(shape), be.empty((t, h, w, channels))
+        be.denoise.range_sigma(be.asarray(offset_image), be.asarray(level), rs, 2.0, 0.02)
+        be.denoise.bilateral(be.asarray(src), rs, out, 2, 1.5)
+        return [be.numpy(rs).copy(), be.numpy(out).copy()]
+
+    cpu, gpu = both_layouts(monkeypatch, smoothed)
+    for a, b in zip(cpu, gpu):
+        np.testing.assert_array_equal(b, a)

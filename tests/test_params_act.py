@@ -102,6 +102,8 @@ MOVES = {
     "flow_still_small": (0.0, {}, "classic_nl_fast:rotating_shadows"),
     "window": (4, {}, "truth"),
     "overlap": (1, {}, "truth"),
+    # the layers are smoothed only where the frames are noisy
+    "layer_denoise": (0.0, {}, "truth:noisy"),
 }
 
 #: Fields that change no result, and why.  The data term (Eq. 3) is a hard
@@ -116,11 +118,11 @@ _cache: dict = {}
 
 
 def _sequence(kind: str):
-    """``(frames, true flow)`` of a synthetic kind, or "relit": a static scene whose
-    light pattern changes strongly from frame to frame."""
+    """``(frames, true flow)`` of a synthetic kind, "relit": a static scene whose light
+    pattern changes strongly from frame to frame, or "noisy": objects_camera with noise."""
     if kind not in _sequences:
-        seq = synthetic.render_sequence("objects_camera" if kind == "relit" else kind, n_frames=5,
-                                        size=(24, 32), seed=4)
+        seq = synthetic.render_sequence("objects_camera" if kind in ("relit", "noisy") else kind, n_frames=5,
+                                        size=(24, 32), seed=4, noise=("gaussian", 0.03) if kind == "noisy" else None)
         frames, flow = seq.frames, seq.flow
         if kind == "relit":
             T, H, W, _ = frames.shape

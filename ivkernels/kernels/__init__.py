@@ -76,5 +76,5 @@ bands never write the same memory (Warp's CPU atomics are plain read-modify-writ
 FAMILIES = (
     "colour", "sampling", "derivatives", "maps", "pyramid", "vecops", "median",
     "energy_data", "energy_temporal", "energy_shading", "step_evidence", "energy_albedo_gsm",
-    "energy_albedo_entropy", "flow_classic", "coarse_basis",
+    "energy_albedo_entropy", "flow_classic", "coarse_basis", "denoise",
 )

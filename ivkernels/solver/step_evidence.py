@@ -176,6 +176,30 @@ def grey_step_gate(log_image: np.ndarray, gain: float, tau: float, tau_chroma: f
     return (1.0 + gain * (1.0 - chromatic_share(log_image, tau, tau_chroma)) ** 2 * evidence).astype(np.float32)
 
 
+def noise_steps(be, offset_image, flow=None):
+    """(T, h, w, 2) backend array: the steps the noise floor is read from (:func:`noise_floor`):
+    ``step_evidence.temporal_steps`` along ``flow`` (T-1, h, w, 2) where there is one and more
+    than one frame, else ``step_evidence.typical_steps`` of each frame."""
+    T, h, w, _ = offset_image.shape
+    steps = be.empty((T, h, w, 2))
+    if flow is not None and T > 1:
+        be.step_evidence.temporal_steps(offset_image, flow, steps)
+    else:
+        be.step_evidence.typical_steps(offset_image, steps)
+    return steps
+
+
+def noise_level_function(be, offset_image, steps):
+    """(2, NOISE_LEVEL_BINS) backend array: the window's noise level function, per channel of
+    ``steps`` (:func:`noise_steps`) the median step of each brightness bin of ``offset_image``
+    (``step_evidence.step_histogram``, ``level_medians``)."""
+    counts = be.empty((2, ref.NOISE_LEVEL_BINS, ref.NOISE_STEP_BINS), np.int32)
+    be.step_evidence.step_histogram(offset_image, steps, counts)
+    table = be.empty((2, ref.NOISE_LEVEL_BINS))
+    be.step_evidence.level_medians(counts, table)
+    return table
+
+
 def noise_floor(be, offset_image, flow=None, cap: float = 0.0):
     """The local noise floor of the steps of ``offset_image`` (T, h, w, 3), ``log(i + DARK_OFFSET)``.
 
@@ -196,17 +220,8 @@ def noise_floor(be, offset_image, flow=None, cap: float = 0.0):
     minority of every bin.  Returns a (T, h, w, 2) backend array."""
     T, h, w, _ = offset_image.shape
     kernels = be.step_evidence
-    steps = be.empty((T, h, w, 2))
-    if flow is not None and T > 1:
-        kernels.temporal_steps(offset_image, flow, steps)
-    else:
-        kernels.typical_steps(offset_image, steps)
-    table = None
-    if cap > 0:
-        counts = be.empty((2, ref.NOISE_LEVEL_BINS, ref.NOISE_STEP_BINS), np.int32)
-        kernels.step_histogram(offset_image, steps, counts)
-        table = be.empty((2, ref.NOISE_LEVEL_BINS))
-        kernels.level_medians(counts, table)
+    steps = noise_steps(be, offset_image, flow)
+    table = noise_level_function(be, offset_image, steps) if cap > 0 else None
     floor = be.empty((T, h, w, 2))
     for _ in range(NOISE_FLOOR_PASSES):
         be.median.median5x5(steps, floor)

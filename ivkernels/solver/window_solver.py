@@ -34,6 +34,7 @@ class SolveLog:
     levels: list = field(default_factory=list)     # one dict per (window, level): see solve_window
     terms: list = field(default_factory=list)      # (window, level, {term: E}) after each level
     shadings: list = field(default_factory=list)   # (window, n): independent shadings, see solve_window
+    noise_levels: list = field(default_factory=list)   # per window: median noise step (solver.denoise)
     seconds: dict = field(default_factory=dict)    # stage -> seconds
 
     def add_time(self, stage: str, seconds: float) -> None:
