@@ -2,6 +2,7 @@
 the case table, plus what the filter is for: noise averaged out, a step far above the range kept,
 a constant layer and a zero range left as they are, and the conversion of the noise's step."""
 import numpy as np
+import pytest
 
 from kernel_harness import contract, pytest_generate_tests  # noqa: F401  (the kernel_backend fixture)
 
@@ -55,3 +56,9 @@ def test_range_sigma_converts_a_step_of_the_offset_log(kernel_backend):
     np.testing.assert_allclose(got, want, rtol=1e-5)
     np.testing.assert_allclose(got[-1], 2.0 * 0.01 * 0.021 / 0.002, rtol=1e-5)
     np.testing.assert_allclose(ref.range_sigma(img, level, 2.0, offset)[0, 0], want, rtol=1e-6)
+
+
+def test_more_than_three_channels_are_refused(kernel_backend):
+    src = kernel_backend.zeros((1, 4, 5, 4))
+    with pytest.raises(ValueError, match="1 to 3 channels"):
+        kernel_backend.denoise.bilateral(src, kernel_backend.zeros((1, 4, 5)), kernel_backend.zeros((1, 4, 5, 4)), 1, 1.0)

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ivkernels.kernels.contract import Family, FinitePositive, Int, NonNegative, Out
+from ivkernels.kernels.contract import Family, FinitePositive, Int, NonNegative, Out, Rule
 
 FAMILY = Family("denoise", "Edge-preserving smoothing of the solved layers at the input's noise level.")
 
@@ -29,11 +29,20 @@ FAMILY.declare("range_sigma(offset_image, level, out, scale, offset)",
                "``out = scale * level[..., 0] * e / max(e - offset, offset / 10)``, ``e = exp(mean_c "
                "offset_image)``: the noise level's log-luminance step in units of ``log i``.",
                offset_image="T H W 3", level="T H W 2", out=Out("T H W"), scale=NonNegative, offset=FinitePositive)
+
+
+def _channels(sizes, args):
+    if not 1 <= sizes["C"] <= 3:
+        raise ValueError(f"src must have 1 to 3 channels (a log shading or a log albedo), "
+                         f"got shape {tuple(args['src'].shape)}")
+
+
 FAMILY.declare("bilateral(src, range_sigma, out, radius, sigma_space)",
                "``out(x) = sum_y w src(y) / sum_y w`` over the ``(2 radius + 1)^2`` window inside the frame, "
                "``w = exp(-|y - x|^2 / (2 sigma_space^2) - mean_c (src(y) - src(x))^2 / (2 range_sigma(x)^2))``; "
                "a pixel with ``range_sigma <= 0`` keeps its value.",
                src="T H W C", range_sigma="T H W", out=Out("T H W C"), radius=Int(0), sigma_space=FinitePositive,
+               rules=(Rule(_channels),),
                separate=(("out", "src", "every output pixel reads its neighbours in src"),
                          ("out", "range_sigma", "the output is written while range_sigma is read")))
 

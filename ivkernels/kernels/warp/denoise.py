@@ -9,9 +9,9 @@ shadows) keep their sides apart.  See :mod:`ivkernels.solver.denoise` for
 where the solver uses them.
 
 One thread per tile of a row (one tile per row on the CPU, one pixel on a
-GPU); each output pixel visits its ``(2 radius + 1)^2`` window once, the
-weighted channels and the weights' sum in registers (one channel, the
-shading, and three, the albedo; other counts accumulate in the output).  Runs once per window on the outputs, not in the
+GPU); each output pixel visits its ``(2 radius + 1)^2`` window once, its
+one to three channels (the shading, the albedo) and the weights' sum in
+registers.  Runs once per window on the outputs, not in the
 solver's loop, so no CPU row loop is written for it.
 """
 from __future__ import annotations
@@ -41,94 +41,44 @@ def range_sigma_rows(row_begin: int, tiles: int, offset_image: wp.array4d(dtype=
         out[t, y, x] = scale * level[t, y, x, 0] * e / brightness
 
 
-@wp.kernel
-def bilateral_grey_rows(row_begin: int, tiles: int, src: wp.array4d(dtype=float), rs: wp.array3d(dtype=float),
-                        out: wp.array4d(dtype=float), radius: int, inv_space: float):
-    """One channel (the shading): the sums in registers."""
-    height = src.shape[1]
-    width = src.shape[2]
-    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
-    t, y = frame_row(r, height)
-    for x in range(x_begin, x_end):
-        centre = src[t, y, x, 0]
-        sigma = rs[t, y, x]
-        if not (sigma > 0.0):              # 0, negative or NaN: the pixel keeps its value
-            out[t, y, x, 0] = centre
-            continue
-        inv_range = 1.0 / (2.0 * sigma * sigma)
-        num = float(0.0)
-        den = float(0.0)
-        for dy in range(wp.max(-radius, -y), wp.min(radius, height - 1 - y) + 1):
-            for dx in range(wp.max(-radius, -x), wp.min(radius, width - 1 - x) + 1):
-                value = src[t, y + dy, x + dx, 0]
-                d = value - centre
-                w = wp.exp(-float(dy * dy + dx * dx) * inv_space - d * d * inv_range)
-                den += w
-                num += w * value
-        out[t, y, x, 0] = num / den
-
-
-@wp.kernel
-def bilateral_rgb_rows(row_begin: int, tiles: int, src: wp.array4d(dtype=float), rs: wp.array3d(dtype=float),
-                       out: wp.array4d(dtype=float), radius: int, inv_space: float):
-    """Three channels (the albedo): the sums in registers."""
-    height = src.shape[1]
-    width = src.shape[2]
-    r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
-    t, y = frame_row(r, height)
-    for x in range(x_begin, x_end):
-        centre = wp.vec3(src[t, y, x, 0], src[t, y, x, 1], src[t, y, x, 2])
-        sigma = rs[t, y, x]
-        if not (sigma > 0.0):              # 0, negative or NaN: the pixel keeps its value
-            for c in range(3):
-                out[t, y, x, c] = centre[c]
-            continue
-        inv_range = 1.0 / (2.0 * sigma * sigma) / 3.0
-        num = wp.vec3(0.0)
-        den = float(0.0)
-        for dy in range(wp.max(-radius, -y), wp.min(radius, height - 1 - y) + 1):
-            for dx in range(wp.max(-radius, -x), wp.min(radius, width - 1 - x) + 1):
-                value = wp.vec3(src[t, y + dy, x + dx, 0], src[t, y + dy, x + dx, 1], src[t, y + dy, x + dx, 2])
-                d = value - centre
-                w = wp.exp(-float(dy * dy + dx * dx) * inv_space - wp.dot(d, d) * inv_range)
-                den += w
-                num += w * value
-        for c in range(3):
-            out[t, y, x, c] = num[c] / den
+@wp.func
+def pixel_channels(src: wp.array4d(dtype=float), t: int, y: int, x: int, channels: int):
+    """The pixel's 1 to 3 channels as a vector, the missing ones 0."""
+    green = float(0.0)
+    blue = float(0.0)
+    if channels > 1:
+        green = src[t, y, x, 1]
+    if channels > 2:
+        blue = src[t, y, x, 2]
+    return wp.vec3(src[t, y, x, 0], green, blue)
 
 
 @wp.kernel
 def bilateral_rows(row_begin: int, tiles: int, src: wp.array4d(dtype=float), rs: wp.array3d(dtype=float),
                    out: wp.array4d(dtype=float), radius: int, inv_space: float):
-    """Any number of channels: the sums in the output."""
     height = src.shape[1]
     width = src.shape[2]
     channels = src.shape[3]
     r, x_begin, x_end = row_span(row_begin + wp.tid(), tiles, width)
     t, y = frame_row(r, height)
-    inv_channels = 1.0 / float(channels)
     for x in range(x_begin, x_end):
+        centre = pixel_channels(src, t, y, x, channels)
         sigma = rs[t, y, x]
-        if not (sigma > 0.0):
-            for c in range(channels):
-                out[t, y, x, c] = src[t, y, x, c]
-            continue
-        inv_range = 1.0 / (2.0 * sigma * sigma)
+        total = centre
+        if sigma > 0.0:                    # else (0, negative or NaN) the pixel keeps its value
+            inv_range = 1.0 / (2.0 * sigma * sigma * float(channels))
+            num = wp.vec3(0.0)
+            den = float(0.0)
+            for dy in range(wp.max(-radius, -y), wp.min(radius, height - 1 - y) + 1):
+                for dx in range(wp.max(-radius, -x), wp.min(radius, width - 1 - x) + 1):
+                    value = pixel_channels(src, t, y + dy, x + dx, channels)
+                    d = value - centre
+                    w = wp.exp(-float(dy * dy + dx * dx) * inv_space - wp.dot(d, d) * inv_range)
+                    den += w
+                    num += w * value
+            total = num / den
         for c in range(channels):
-            out[t, y, x, c] = 0.0
-        den = float(0.0)
-        for dy in range(wp.max(-radius, -y), wp.min(radius, height - 1 - y) + 1):
-            for dx in range(wp.max(-radius, -x), wp.min(radius, width - 1 - x) + 1):
-                d2 = float(0.0)
-                for c in range(channels):
-                    d = src[t, y + dy, x + dx, c] - src[t, y, x, c]
-                    d2 += d * d
-                w = wp.exp(-float(dy * dy + dx * dx) * inv_space - d2 * inv_channels * inv_range)
-                den += w
-                for c in range(channels):
-                    out[t, y, x, c] = out[t, y, x, c] + w * src[t, y + dy, x + dx, c]
-        for c in range(channels):
-            out[t, y, x, c] = out[t, y, x, c] / den
+            out[t, y, x, c] = total[c]
 
 
 @host("range_sigma")
@@ -152,7 +102,7 @@ def range_sigma(offset_image, level, out, scale: float, offset: float) -> None:
 def bilateral(src, range_sigma, out, radius: int, sigma_space: float) -> None:
     """Bilateral filter of a log layer with a per-pixel range.
 
-    src : wp.array float32 (T, H, W, C), e.g. log albedo (C = 3) or log shading (C = 1).
+    src : wp.array float32 (T, H, W, C), 1 <= C <= 3: log albedo (C = 3) or log shading (C = 1).
     range_sigma : wp.array float32 (T, H, W), the range at each centre pixel, log units
         (:func:`range_sigma`); where it is not positive the pixel keeps its value.
     out : wp.array float32 (T, H, W, C), ``sum_y w src(y) / sum_y w`` over the window inside the
@@ -160,9 +110,8 @@ def bilateral(src, range_sigma, out, radius: int, sigma_space: float) -> None:
         may not alias ``src``.
     radius : >= 0, the window's half width in pixels; sigma_space : > 0, pixels.
     """
-    t, h, w, channels = src.shape
+    t, h, w, _ = src.shape
     tiles = row_tiles(w, src.device)
-    kernel = {1: bilateral_grey_rows, 3: bilateral_rgb_rows}.get(channels, bilateral_rows)
-    launch_rows(kernel, t * h * tiles,
+    launch_rows(bilateral_rows, t * h * tiles,
                 [tiles, src, range_sigma, out, int(radius), 1.0 / (2.0 * float(sigma_space) ** 2)],
                 device=src.device)
