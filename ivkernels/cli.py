@@ -117,6 +117,9 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--window", type=int, default=None,
                    help=f"frames per solved window (default: {Params().window}, sharing "
                         f"{Params().overlap} with the previous one)")
+    d.add_argument("--denoise", type=float, default=None, metavar="K",
+                   help=f"smooth the albedo and shading of a noisy video at K times its noise's step "
+                        f"(default: {Params().layer_denoise:g}; 0 keeps albedo * shading = input exactly)")
     d.add_argument("--fps", type=float, default=10.0, help="frame rate of preview.mp4")
     d.add_argument("--force", action="store_true",
                    help="replace OUT if it exists and ivkernels wrote it (never the input or the "
@@ -172,6 +175,10 @@ def _check_arguments(args):
         if args.window < 2:
             raise ValueError(f"--window must be at least 2 frames, got {args.window}")
         params = params.replace(window=args.window, overlap=min(params.overlap, args.window - 1))
+    if args.denoise is not None:
+        if not (math.isfinite(args.denoise) and 0 <= args.denoise <= 20):
+            raise ValueError(f"--denoise must be a multiple of the noise's step in [0, 20], got {args.denoise}")
+        params = params.replace(layer_denoise=args.denoise)
     check_device(args.backend, args.device)
     if args.threads is not None:
         check_threads(args.threads, name="--threads")
