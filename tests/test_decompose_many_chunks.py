@@ -185,8 +185,11 @@ def test_local_engine_gives_decompose_results_and_a_chunked_solve_near_the_seque
 
 def test_local_chunked_solve_stays_near_the_sequential_one():
     seq = _clip(4, T=9, kind="static_moving_light")
-    whole = iv.decompose(seq.frames, flow=seq.flow, params=SMALL)
-    chunked = iv.decompose_many([seq.frames], engine="local", flow=[seq.flow], params=SMALL,
+    # the layers as solved: at 24x32 in three-frame chunks the light's change between frames
+    # reads as noise, and the noise taken out would leave albedo * shading short of the input
+    exact = SMALL.replace(layer_denoise=0.0)
+    whole = iv.decompose(seq.frames, flow=seq.flow, params=exact)
+    chunked = iv.decompose_many([seq.frames], engine="local", flow=[seq.flow], params=exact,
                                 chunk_frames=3)[0]
     assert chunked.diagnostics["chunks"] == [(0, 3), (2, 6), (5, 9)]
     assert chunked.albedo.shape == whole.albedo.shape and chunked.flow.shape == whole.flow.shape
