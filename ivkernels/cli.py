@@ -50,6 +50,7 @@ from ivkernels.io import (Interrupted, NpzWriter, OutputFolder, VideoWriter, pro
 from ivkernels.kernels.thread_count import check_threads, default_threads
 from ivkernels.parallel import iter_decompose_many
 from ivkernels.params import Params
+from ivkernels.solver.denoise import NOISE_TO_SMOOTH
 from ivkernels.validation import check_memory, decompose_nbytes
 from ivkernels.viz import albedo_to_srgb8, contact_sheet, flow_to_color, gray_to_rgb8, shading_to_srgb8
 
@@ -276,8 +277,9 @@ class _PanelQueue:
         return [(name, np.stack(images)) for name, images in self.sheet.items() if images]
 
 
-def _write_outputs(tmp: Path, frames: np.ndarray, windows, args, with_flow: bool, bar, n_windows: int) -> None:
-    """Write every output of a run into the partial folder ``tmp``, window by window."""
+def _write_outputs(tmp: Path, frames: np.ndarray, windows, args, with_flow: bool, bar, n_windows: int) -> list:
+    """Write every output of a run into the partial folder ``tmp``, window by window; returns the
+    windows' median noise steps (``WindowResult.noise_levels``)."""
     T, H, W, _ = frames.shape
     npz = None
     if args.npz != "none":
@@ -290,7 +292,9 @@ def _write_outputs(tmp: Path, frames: np.ndarray, windows, args, with_flow: bool
     try:
         queue = _PanelQueue(T, video, sheet_frames, with_flow)
         flow_max = None
+        noise_levels = []
         for index, res in enumerate(windows):
+            noise_levels.extend(res.noise_levels)
             new = slice(res.n_carried, res.stop - res.start)       # frames not written yet
             first = res.start + res.n_carried
             albedo8 = albedo_to_srgb8(res.albedo[new])
@@ -329,6 +333,7 @@ def _write_outputs(tmp: Path, frames: np.ndarray, windows, args, with_flow: bool
             npz.close(tmp / "intrinsics.npz")
             npz = None
         imageio.imwrite(tmp / "contact_sheet.png", contact_sheet(queue.sheet_rows()))
+        return noise_levels
     except BaseException:
         video.abort()
         if npz is not None:
@@ -379,10 +384,24 @@ def run_decompose(args, windows=None) -> Path:
         with target as tmp:
             n_windows = len(window_ranges(T, int(params.window), int(params.overlap)))
             with tqdm(total=T, unit="frame", desc="decompose", disable=args.quiet, file=sys.stderr) as bar:
-                _write_outputs(tmp, frames, windows, args, with_flow, bar, n_windows)
+                noise_levels = _write_outputs(tmp, frames, windows, args, with_flow, bar, n_windows)
+            note = _noise_note(noise_levels)
+            if note and not args.quiet:
+                print(f"ivkernels: {note}", file=sys.stderr)
             return target.commit()
     finally:
         target.release()
+
+
+def _noise_note(noise_levels) -> str | None:
+    """What the user is told when the noise was taken out of some windows' layers, else ``None``."""
+    smoothed = [n for n in noise_levels if n is not None and n >= NOISE_TO_SMOOTH]
+    if not smoothed:
+        return None
+    return (f"the input is noisy (median noise step {max(smoothed):.3f} in log units): the noise was taken "
+            f"out of the albedo and shading of {len(smoothed)} of {len(noise_levels)} window"
+            f"{'s' if len(noise_levels) != 1 else ''}, so albedo * shading is the input less that noise "
+            f"(--denoise 0 keeps it)")
 
 
 def run_decompose_many(args) -> int:
@@ -454,7 +473,8 @@ def run_decompose_many(args) -> int:
             failed[src] = _one_line(video.cause)
         else:
             solved = [WindowResult(0, video.albedo.shape[0], 0, video.albedo, video.shading, video.flow,
-                                   video.occlusion, video.boundary)]
+                                   video.occlusion, video.boundary,
+                                   tuple(video.diagnostics.get("noise_levels", ())))]
             try:
                 print(f"wrote {run_decompose(sub_args[src], windows=solved)}")
             except (ValueError, TypeError, OSError, MemoryError) as err:

@@ -109,6 +109,7 @@ class WindowResult:
     flow: np.ndarray | None  # (stop-start-1, H, W, 2)
     occlusion: np.ndarray | None
     boundary: np.ndarray | None
+    noise_levels: tuple = ()  # the median noise step of each window solved (solver.denoise), None if not read
 
 
 def window_ranges(n_frames: int, window: int, overlap: int) -> list[tuple[int, int, int]]:
@@ -441,7 +442,7 @@ class _Decomposer:
                 albedo /= self.scale
                 shading *= self.scale
                 yield WindowResult(start, stop, n_carried, albedo.astype(np.float32),
-                                   shading.astype(np.float32), flow_np, occ_np, bnd_np)
+                                   shading.astype(np.float32), flow_np, occ_np, bnd_np, (noise,))
         finally:
             if pool is not None:
                 pool.shutdown(wait=True, cancel_futures=True)
