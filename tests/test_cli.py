@@ -50,10 +50,15 @@ def test_failure_leaves_no_output(image_folder, tmp_path, capsys):
     assert not out.exists() and not list(tmp_path.glob("*.partial"))
 
 
-def test_flow_passes_is_checked_before_any_output(image_folder, tmp_path, capsys):
+@pytest.mark.parametrize("option, value, message", [
+    ("--flow-passes", "0", "flow_passes must be an int >= 1"),
+    ("--denoise", "-1", "--denoise must be a multiple of the noise's step in [0, 20]"),
+    ("--denoise", "nan", "--denoise must be"),
+])
+def test_bad_option_is_checked_before_any_output(image_folder, tmp_path, capsys, option, value, message):
     out = tmp_path / "out"
-    rc = cli.main(["decompose", str(image_folder), "-o", str(out), "--flow-passes", "0"])
-    assert rc == 2 and "flow_passes must be an int >= 1" in capsys.readouterr().err
+    rc = cli.main(["decompose", str(image_folder), "-o", str(out), option, value])
+    assert rc == 2 and message in capsys.readouterr().err
     assert not out.exists() and not list(tmp_path.glob("*.partial"))
 
 
@@ -165,13 +170,6 @@ def test_help_shows_the_defaults(capsys):
                     "(default: 1.0)", "(default: 10.0)", "(default: float16)", "(default: classic_nl_fast",
                     "(default: 8, sharing 2"]:
         assert default in text, default
-
-
-def test_denoise_is_checked_before_any_output(image_folder, tmp_path, capsys):
-    out = tmp_path / "out"
-    rc = cli.main(["decompose", str(image_folder), "-o", str(out), "--denoise", "-1"])
-    assert rc == 2 and "--denoise must be" in capsys.readouterr().err
-    assert not out.exists() and not list(tmp_path.glob("*.partial"))
 
 
 @pytest.mark.slow
