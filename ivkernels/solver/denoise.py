@@ -55,7 +55,8 @@ def noise_step(be, frames_linear, flow, params: Params, scale: float = 1.0):
     be.step_evidence.offset_log(log_image, offset, DARK_OFFSET)
     steps = noise_steps(be, offset, flow)
     table = noise_level_function(be, offset, steps)
-    level = be.asarray(np.full((T, h, w, 2), np.finfo(np.float32).max, np.float32))
+    level = be.empty((T, h, w, 2))
+    be.vecops.fill(level.reshape((T * h * w * 2,)), float(np.finfo(np.float32).max))
     be.step_evidence.cap_at_level(offset, table, 1.0, level)        # the function itself at each pixel
     out = be.empty((T, h, w))
     be.denoise.range_sigma(offset, level, out, scale, DARK_OFFSET)
